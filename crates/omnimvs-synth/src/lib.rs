@@ -1,0 +1,28 @@
+//! Synthetic omnidirectional stereo datasets (OmniThings / OmniHouse style)
+//! for any rig of fisheye cameras.
+//!
+//! * [`things::generate`] and [`house::generate`] make a [`SceneSpec`]
+//!   deterministically from a seed and a frame index.
+//! * [`Tracer`] puts the scene in the rig frame under a BVH and shades rays.
+//! * [`render_fisheye`] renders one camera through its exact model;
+//!   [`render_inverse_depth`] the ground truth on the equirectangular grid.
+//!
+//! Frames: the rig frame of `FORMATS.md` (x right, y down, z forward);
+//! scenes are built in a "world" frame with the same axes (y down) and the
+//! rig placed in it by [`SceneSpec::world_from_rig`]. Distances in metres,
+//! inverse depths in 1/m.
+
+mod error;
+pub mod mesh;
+mod ply;
+pub mod primitive;
+pub mod render;
+pub mod rng;
+pub mod scene;
+pub mod texture;
+mod tracer;
+
+pub use error::SynthError;
+pub use render::{equirect_ray, render_fisheye, render_fisheye_into, render_inverse_depth};
+pub use scene::{LightSpec, ObjectSpec, Placement, SceneKind, SceneSpec, ShapeSpec, SkySpec};
+pub use tracer::{Hit, MeshLibrary, Tracer};

@@ -1,0 +1,379 @@
+//! Triangle meshes in an object's unit space (inside the unit ball): the
+//! generated shapes (cylinder, cone, torus, displaced sphere, extrusion) and
+//! user meshes loaded from OBJ or PLY files.
+
+use std::path::Path;
+
+use fastnoise_lite::{FastNoiseLite, FractalType, NoiseType};
+use glam::Vec3A;
+
+use crate::SynthError;
+use crate::rng::Rng;
+
+/// An indexed triangle mesh.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TriMesh {
+    pub positions: Vec<Vec3A>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TriMesh {
+    fn push(&mut self, p: Vec3A) -> u32 {
+        self.positions.push(p);
+        (self.positions.len() - 1) as u32
+    }
+
+    fn tri(&mut self, a: u32, b: u32, c: u32) {
+        self.triangles.push([a, b, c]);
+    }
+
+    /// Recentres the mesh on the centre of its bounding box and scales it so
+    /// that its farthest vertex lies on the unit sphere.
+    pub fn normalize_to_unit_ball(&mut self) {
+        let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        for p in &self.positions {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        let c = (lo + hi) * 0.5;
+        let r = self
+            .positions
+            .iter()
+            .map(|p| (*p - c).length())
+            .fold(0.0f32, f32::max);
+        if r > 0.0 && r.is_finite() {
+            for p in &mut self.positions {
+                *p = (*p - c) / r;
+            }
+        }
+    }
+}
+
+/// A closed cylinder of radius 1 around the y axis, `y` in `[-1, 1]`.
+pub fn cylinder(segments: u32) -> TriMesh {
+    frustum(segments, 1.0, 1.0)
+}
+
+/// A closed cone: apex at `y = -1`, base of radius 1 at `y = 1`.
+pub fn cone(segments: u32) -> TriMesh {
+    frustum(segments, 0.0, 1.0)
+}
+
+/// A closed frustum around the y axis, radius `r_top` at `y = -1` and
+/// `r_bottom` at `y = 1` (y points down, as in the camera frame).
+fn frustum(segments: u32, r_top: f32, r_bottom: f32) -> TriMesh {
+    let n = segments.max(3);
+    let mut m = TriMesh::default();
+    let ring = |m: &mut TriMesh, r: f32, y: f32| -> u32 {
+        let first = m.positions.len() as u32;
+        for i in 0..n {
+            let a = i as f32 / n as f32 * std::f32::consts::TAU;
+            m.push(Vec3A::new(r * a.cos(), y, r * a.sin()));
+        }
+        first
+    };
+    let top = ring(&mut m, r_top, -1.0);
+    let bottom = ring(&mut m, r_bottom, 1.0);
+    let top_c = m.push(Vec3A::new(0.0, -1.0, 0.0));
+    let bottom_c = m.push(Vec3A::new(0.0, 1.0, 0.0));
+    for i in 0..n {
+        let j = (i + 1) % n;
+        if r_top > 0.0 {
+            m.tri(top + i, top + j, bottom + i);
+            m.tri(top_c, top + j, top + i);
+        }
+        m.tri(top + j, bottom + j, bottom + i);
+        m.tri(bottom_c, bottom + i, bottom + j);
+    }
+    m
+}
+
+/// A torus in the xz plane, tube radius `minor` (in `(0, 0.5)`), outer
+/// radius 1.
+pub fn torus(major_segments: u32, minor_segments: u32, minor: f32) -> TriMesh {
+    let (nu, nv) = (major_segments.max(3), minor_segments.max(3));
+    let major = 1.0 - minor;
+    let mut m = TriMesh::default();
+    for i in 0..nu {
+        let u = i as f32 / nu as f32 * std::f32::consts::TAU;
+        for j in 0..nv {
+            let v = j as f32 / nv as f32 * std::f32::consts::TAU;
+            let r = major + minor * v.cos();
+            m.push(Vec3A::new(r * u.cos(), minor * v.sin(), r * u.sin()));
+        }
+    }
+    for i in 0..nu {
+        for j in 0..nv {
+            let a = i * nv + j;
+            let b = ((i + 1) % nu) * nv + j;
+            let c = ((i + 1) % nu) * nv + (j + 1) % nv;
+            let d = i * nv + (j + 1) % nv;
+            m.tri(a, b, c);
+            m.tri(a, c, d);
+        }
+    }
+    m
+}
+
+/// A unit icosphere with `subdivisions` levels of 4:1 splitting.
+pub fn icosphere(subdivisions: u32) -> TriMesh {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut m = TriMesh::default();
+    for p in [
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ] {
+        m.push(Vec3A::from_array(p).normalize());
+    }
+    m.triangles = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..subdivisions.min(6) {
+        let mut cache = std::collections::HashMap::new();
+        let mut tris = Vec::with_capacity(m.triangles.len() * 4);
+        let old = std::mem::take(&mut m.triangles);
+        for [a, b, c] in old {
+            let mut mid = |x: u32, y: u32, m: &mut TriMesh| -> u32 {
+                let key = (x.min(y), x.max(y));
+                *cache.entry(key).or_insert_with(|| {
+                    let p = (m.positions[x as usize] + m.positions[y as usize]).normalize();
+                    m.push(p)
+                })
+            };
+            let ab = mid(a, b, &mut m);
+            let bc = mid(b, c, &mut m);
+            let ca = mid(c, a, &mut m);
+            tris.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        m.triangles = tris;
+    }
+    m
+}
+
+/// An irregular closed surface: an icosphere whose vertices are moved along
+/// their radius by fractal noise (`amplitude` relative to the radius), then
+/// rescaled into the unit ball.
+pub fn blob(seed: i32, amplitude: f32, frequency: f32, subdivisions: u32) -> TriMesh {
+    let mut m = icosphere(subdivisions);
+    let mut noise = FastNoiseLite::with_seed(seed);
+    noise.set_noise_type(Some(NoiseType::OpenSimplex2));
+    noise.set_frequency(Some(frequency));
+    noise.set_fractal_type(Some(FractalType::FBm));
+    noise.set_fractal_octaves(Some(3));
+    for p in &mut m.positions {
+        let k = (1.0 + amplitude * noise.get_noise_3d(p.x, p.y, p.z)).max(0.2);
+        *p *= k;
+    }
+    m.normalize_to_unit_ball();
+    m
+}
+
+/// An irregular prism: a random star-shaped polygon of `corners` corners
+/// (radii in `[0.35, 1]`) swept along y from -1 to 1 in `layers` steps,
+/// twisted by `twist` radians and tapered by `taper` (radius factor at the
+/// bottom).
+pub fn extrusion(seed: u64, corners: u32, layers: u32, twist: f32, taper: f32) -> TriMesh {
+    let n = corners.max(3);
+    let layers = layers.max(1);
+    let mut rng = Rng::new(seed);
+    let radii: Vec<f32> = (0..n).map(|_| rng.range(0.35, 1.0) as f32).collect();
+    let mut m = TriMesh::default();
+    for l in 0..=layers {
+        let s = l as f32 / layers as f32;
+        let y = -1.0 + 2.0 * s;
+        let (rot, scale) = (twist * s, 1.0 + (taper - 1.0) * s);
+        for (i, r) in radii.iter().enumerate() {
+            let a = i as f32 / n as f32 * std::f32::consts::TAU + rot;
+            m.push(Vec3A::new(r * scale * a.cos(), y, r * scale * a.sin()));
+        }
+    }
+    for l in 0..layers {
+        for i in 0..n {
+            let j = (i + 1) % n;
+            let (a, b) = (l * n + i, l * n + j);
+            let (c, d) = ((l + 1) * n + j, (l + 1) * n + i);
+            m.tri(a, b, c);
+            m.tri(a, c, d);
+        }
+    }
+    let top_c = m.push(Vec3A::new(0.0, -1.0, 0.0));
+    let bottom_c = m.push(Vec3A::new(0.0, 1.0, 0.0));
+    for i in 0..n {
+        let j = (i + 1) % n;
+        m.tri(top_c, j, i);
+        m.tri(bottom_c, layers * n + i, layers * n + j);
+    }
+    m.normalize_to_unit_ball();
+    m
+}
+
+/// Loads a user mesh (`.obj` or `.ply`, ASCII or binary little-endian),
+/// triangulated and normalised into the unit ball.
+///
+/// # Errors
+/// [`SynthError::Mesh`] for an unreadable or malformed file, an unknown
+/// extension, a mesh without triangles or with non-finite coordinates.
+pub fn load_mesh(path: &Path) -> Result<TriMesh, SynthError> {
+    let err = |message: String| SynthError::Mesh {
+        path: path.to_path_buf(),
+        message,
+    };
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let mut mesh = match ext.as_str() {
+        "obj" => load_obj(path).map_err(err)?,
+        "ply" => {
+            let bytes =
+                std::fs::read(path).map_err(|e| SynthError::io(path, "cannot read mesh", e))?;
+            crate::ply::parse_ply(&bytes).map_err(err)?
+        }
+        _ => {
+            return Err(err(format!(
+                "unknown mesh format {ext:?}, expected .obj or .ply"
+            )));
+        }
+    };
+    if mesh.triangles.is_empty() {
+        return Err(err("the file holds no triangles".to_string()));
+    }
+    if mesh.positions.iter().any(|p| !p.is_finite()) {
+        return Err(err("a vertex has a non-finite coordinate".to_string()));
+    }
+    let n = mesh.positions.len() as u32;
+    if let Some(bad) = mesh.triangles.iter().flatten().find(|&&i| i >= n) {
+        return Err(err(format!(
+            "a face refers to vertex {bad} but there are only {n}"
+        )));
+    }
+    mesh.normalize_to_unit_ball();
+    Ok(mesh)
+}
+
+fn load_obj(path: &Path) -> Result<TriMesh, String> {
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, _materials) = tobj::load_obj(path, &opts).map_err(|e| e.to_string())?;
+    let mut mesh = TriMesh::default();
+    for model in models {
+        let base = mesh.positions.len() as u32;
+        let pos = &model.mesh.positions;
+        for p in pos.chunks_exact(3) {
+            mesh.positions.push(Vec3A::new(p[0], p[1], p[2]));
+        }
+        for t in model.mesh.indices.chunks_exact(3) {
+            mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
+        }
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn max_radius(m: &TriMesh) -> f32 {
+        m.positions.iter().map(|p| p.length()).fold(0.0, f32::max)
+    }
+
+    /// Signed volume by the divergence theorem: positive and close to the
+    /// analytic volume for a closed, consistently oriented mesh.
+    fn volume(m: &TriMesh) -> f32 {
+        m.triangles
+            .iter()
+            .map(|&[a, b, c]| {
+                let (a, b, c) = (
+                    m.positions[a as usize],
+                    m.positions[b as usize],
+                    m.positions[c as usize],
+                );
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    #[test]
+    fn generated_shapes_fit_the_unit_ball_and_are_closed() {
+        let shapes = [
+            ("cylinder", cylinder(64), 2.0 * std::f32::consts::PI),
+            ("cone", cone(64), 2.0 * std::f32::consts::PI / 3.0),
+            (
+                "torus",
+                torus(64, 32, 0.25),
+                2.0 * std::f32::consts::PI.powi(2) * 0.75 * 0.25f32.powi(2),
+            ),
+            ("icosphere", icosphere(4), 4.0 / 3.0 * std::f32::consts::PI),
+        ];
+        for (name, m, want) in shapes {
+            assert!(max_radius(&m) <= 1.0 * 2f32.sqrt() + 1e-5, "{name}");
+            let v = volume(&m).abs();
+            assert!(
+                (v - want).abs() / want < 0.03,
+                "{name}: volume {v} want {want}"
+            );
+        }
+        for m in [blob(5, 0.4, 1.5, 3), extrusion(9, 7, 4, 1.0, 0.6)] {
+            assert!((max_radius(&m) - 1.0).abs() < 1e-5);
+            assert!(volume(&m).abs() > 0.1);
+        }
+    }
+
+    #[test]
+    fn load_mesh_reads_obj_and_rejects_bad_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let obj = dir.path().join("quad.obj");
+        std::fs::write(&obj, "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nf 1 2 3 4\n").unwrap();
+        let m = load_mesh(&obj).unwrap();
+        assert_eq!(m.triangles.len(), 2);
+        assert!((max_radius(&m) - 1.0).abs() < 1e-6);
+
+        let bad = dir.path().join("x.stl");
+        std::fs::write(&bad, "solid").unwrap();
+        assert!(
+            load_mesh(&bad)
+                .unwrap_err()
+                .to_string()
+                .contains("unknown mesh format")
+        );
+        let missing = dir.path().join("missing.obj");
+        assert!(
+            load_mesh(&missing)
+                .unwrap_err()
+                .to_string()
+                .contains("missing.obj")
+        );
+    }
+}
