@@ -1,0 +1,38 @@
+//! Camera models and multi-camera rigs for omnidirectional stereo.
+//!
+//! * [`OcamModel`]: Scaramuzza's OCamCalib fisheye model, exactly as the public
+//!   OmniMVS reference code evaluates it (see `FORMATS.md`).
+//! * [`Rig`]: any number of cameras, each with its `rig_from_cam` pose.
+//! * Readers for the reference `config.yaml` ([`read_config_rig`]) and for the
+//!   released datasets' `ocamN.txt` + `poses.txt` ([`read_ocam_txt_rig`]).
+//! * [`ValidityMask`]: the pixels of a fisheye image that carry scene content.
+//!
+//! Frames: the camera frame has x right (image columns), y down (image rows),
+//! z forward (optical axis). Pixel positions are [`Pixel`] `(col, row)`,
+//! 0-based, in pixel units; OCamCalib's `(row, col)` order is converted where
+//! files are read.
+
+mod config_yaml;
+mod error;
+pub mod fs;
+mod mask;
+mod model;
+mod ocam;
+mod ocam_txt;
+mod pixel;
+mod pose;
+mod rig;
+pub mod yaml;
+
+pub use config_yaml::{parse_config_rig, read_config_rig};
+pub use error::CameraError;
+pub use mask::ValidityMask;
+pub use model::CameraModel;
+pub use ocam::OcamModel;
+pub use ocam_txt::{parse_ocam_txt, read_ocam_txt_rig};
+pub use pixel::Pixel;
+pub use pose::{Pose, isometry_from_pose};
+pub use rig::{Camera, Rig};
+
+/// Re-exported so that callers use the same nalgebra version.
+pub use nalgebra;

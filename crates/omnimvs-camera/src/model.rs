@@ -1,0 +1,63 @@
+use nalgebra::Vector3;
+
+use crate::{OcamModel, Pixel};
+
+/// A camera's intrinsic model. An enum rather than a trait object so that a
+/// rig stays `Clone + PartialEq + Send + Sync` and can be hashed for caching;
+/// further models (double sphere, Kannala-Brandt) become further variants.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CameraModel {
+    /// OCamCalib (`model: ocam` in `config.yaml`).
+    Ocam(OcamModel),
+}
+
+impl CameraModel {
+    /// Projects a point in the camera frame to a pixel; `None` outside the FOV.
+    pub fn project(&self, p_cam: &Vector3<f64>) -> Option<Pixel> {
+        match self {
+            Self::Ocam(m) => m.project(p_cam),
+        }
+    }
+
+    /// The unit ray (camera frame) of a pixel; `None` outside the FOV.
+    pub fn unproject(&self, px: Pixel) -> Option<Vector3<f64>> {
+        match self {
+            Self::Ocam(m) => m.unproject(px),
+        }
+    }
+
+    /// Image width in pixels.
+    pub fn width(&self) -> u32 {
+        match self {
+            Self::Ocam(m) => m.width,
+        }
+    }
+
+    /// Image height in pixels.
+    pub fn height(&self) -> u32 {
+        match self {
+            Self::Ocam(m) => m.height,
+        }
+    }
+
+    /// Full field of view, degrees.
+    pub fn max_fov_deg(&self) -> f64 {
+        match self {
+            Self::Ocam(m) => m.max_fov_deg,
+        }
+    }
+
+    /// Whether a pixel position lies inside the image rectangle.
+    pub fn contains(&self, px: Pixel) -> bool {
+        match self {
+            Self::Ocam(m) => m.contains(px),
+        }
+    }
+
+    /// A short name of the model, as written in `config.yaml`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Ocam(_) => "ocam",
+        }
+    }
+}

@@ -1,0 +1,157 @@
+use nalgebra::Vector3;
+
+use crate::Pixel;
+
+/// Scaramuzza's OCamCalib fisheye model, evaluated exactly as the public OmniMVS
+/// reference code does (`FORMATS.md`, "OCamCalib").
+///
+/// OCamCalib names the image row `x` and the column `y`; this struct keeps the
+/// file's parameters as they are and converts to [`Pixel`] `(col, row)` at the
+/// boundary of [`project`](Self::project) / [`unproject`](Self::unproject).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OcamModel {
+    /// `cam2world` polynomial `z(rho) = sum poly[i] rho^i` (ascending powers).
+    pub poly: Vec<f64>,
+    /// `world2cam` polynomial `rho(theta) = sum inv_poly[i] theta^i`, with
+    /// `theta` the angle from the image plane in radians.
+    pub inv_poly: Vec<f64>,
+    /// Distortion centre row `xc`, pixels, 0-based.
+    pub center_row: f64,
+    /// Distortion centre column `yc`, pixels, 0-based.
+    pub center_col: f64,
+    /// Affine term `c`.
+    pub c: f64,
+    /// Affine term `d`.
+    pub d: f64,
+    /// Affine term `e`.
+    pub e: f64,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Full field of view in degrees (220 for the published rigs).
+    pub max_fov_deg: f64,
+}
+
+/// Horner evaluation of `sum coeffs[i] x^i`.
+fn polyval(coeffs: &[f64], x: f64) -> f64 {
+    coeffs.iter().rev().fold(0.0, |acc, &a| acc * x + a)
+}
+
+impl OcamModel {
+    /// Half the field of view, radians: the largest angle from the optical
+    /// axis that the camera sees.
+    pub fn half_fov_rad(&self) -> f64 {
+        self.max_fov_deg.to_radians() / 2.0
+    }
+
+    /// Projects a point in the camera frame to a pixel (`world2cam`).
+    ///
+    /// Returns `None` when the point's angle from the optical axis exceeds
+    /// half the field of view. A point inside the field of view may still
+    /// project outside the image rectangle; see [`Self::contains`].
+    pub fn project(&self, p_cam: &Vector3<f64>) -> Option<Pixel> {
+        let norm = (p_cam.x * p_cam.x + p_cam.y * p_cam.y).sqrt() + f64::EPSILON;
+        let theta = (-p_cam.z).atan2(norm);
+        if theta + std::f64::consts::FRAC_PI_2 > self.half_fov_rad() {
+            return None;
+        }
+        let rho = polyval(&self.inv_poly, theta);
+        let x = p_cam.y / norm * rho;
+        let y = p_cam.x / norm * rho;
+        let row = self.c * x + self.d * y + self.center_row;
+        let col = self.e * x + y + self.center_col;
+        Some(Pixel::new(col, row))
+    }
+
+    /// The unit ray (camera frame) of a pixel (`cam2world`).
+    ///
+    /// Returns `None` when the ray's angle from the optical axis exceeds half
+    /// the field of view.
+    pub fn unproject(&self, px: Pixel) -> Option<Vector3<f64>> {
+        let u = px.row - self.center_row;
+        let v = px.col - self.center_col;
+        let inv_det = 1.0 / (self.c - self.d * self.e);
+        let x = inv_det * (u - self.d * v);
+        let y = inv_det * (-self.e * u + self.c * v);
+        let rho = (x * x + y * y).sqrt();
+        let z = polyval(&self.poly, rho);
+        if rho.atan2(-z) > self.half_fov_rad() {
+            return None;
+        }
+        Some(Vector3::new(y, x, -z).normalize())
+    }
+
+    /// Whether a pixel position lies inside the image rectangle
+    /// `[0, width-1] x [0, height-1]`.
+    pub fn contains(&self, px: Pixel) -> bool {
+        px.col >= 0.0
+            && px.row >= 0.0
+            && px.col <= f64::from(self.width) - 1.0
+            && px.row <= f64::from(self.height) - 1.0
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// Camera 1 of the published "Sunny" rig (`sunny_single/config.yaml`).
+    pub(crate) fn sunny_cam1() -> OcamModel {
+        OcamModel {
+            poly: vec![
+                -1.966560e+02,
+                0.0,
+                3.053428e-03,
+                -9.784996e-06,
+                2.278718e-08,
+            ],
+            inv_poly: vec![
+                300.888356, 180.967781, -21.353055, 14.896848, 31.786100, -12.778866, -10.889768,
+                20.862822, 6.557302, -10.383775, -2.519069, 2.891402, 1.028544,
+            ],
+            center_row: 383.0,
+            center_col: 399.0,
+            c: 1.0,
+            d: 0.0,
+            e: 0.0,
+            width: 800,
+            height: 768,
+            max_fov_deg: 220.0,
+        }
+    }
+
+    #[test]
+    fn principal_point_looks_along_optical_axis() {
+        let cam = sunny_cam1();
+        let ray = cam.unproject(Pixel::new(399.0, 383.0)).unwrap();
+        assert!((ray - Vector3::new(0.0, 0.0, 1.0)).norm() < 1e-12);
+        let px = cam.project(&Vector3::new(0.0, 0.0, 5.0)).unwrap();
+        assert!((px.col - 399.0).abs() < 1e-9 && (px.row - 383.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn axes_map_to_columns_and_rows() {
+        let cam = sunny_cam1();
+        // +x (right) moves the projection right in columns, +y (down) down in rows.
+        let right = cam.project(&Vector3::new(1.0, 0.0, 2.0)).unwrap();
+        assert!(right.col > 399.0 + 10.0 && (right.row - 383.0).abs() < 1e-9);
+        let down = cam.project(&Vector3::new(0.0, 1.0, 2.0)).unwrap();
+        assert!(down.row > 383.0 + 10.0 && (down.col - 399.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn field_of_view_limits_projection() {
+        let cam = sunny_cam1();
+        // 109 degrees from the axis: inside the 220-degree FOV.
+        let a = 109f64.to_radians();
+        assert!(cam.project(&Vector3::new(a.sin(), 0.0, a.cos())).is_some());
+        // 111 degrees: outside.
+        let a = 111f64.to_radians();
+        assert!(cam.project(&Vector3::new(a.sin(), 0.0, a.cos())).is_none());
+        // Straight behind.
+        assert!(cam.project(&Vector3::new(0.0, 0.0, -1.0)).is_none());
+        // Image corners of a 220-degree circular fisheye are outside the FOV.
+        assert!(cam.unproject(Pixel::new(0.0, 0.0)).is_none());
+    }
+}

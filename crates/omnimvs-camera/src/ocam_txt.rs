@@ -1,0 +1,176 @@
+//! Reader for the released datasets' calibration files: `ocam1.txt` ...
+//! `ocamN.txt` (OCamCalib's `calib_results.txt` layout) and `poses.txt`
+//! (`rx ry rz tx ty tz` per camera, camera-to-rig, translation in centimetres).
+
+use std::path::Path;
+
+use crate::config_yaml::{split_counted_poly, validate_ocam};
+use crate::{Camera, CameraError, CameraModel, OcamModel, Pose, Rig};
+
+/// The non-comment lines of a file, with their 1-based line numbers.
+fn data_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    text.lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+}
+
+fn parse_numbers(path: &Path, line: usize, text: &str) -> Result<Vec<f64>, CameraError> {
+    text.split_whitespace()
+        .map(|tok| {
+            tok.parse::<f64>().map_err(|_| CameraError::Line {
+                path: path.to_path_buf(),
+                line,
+                message: format!("expected a number, found {tok:?}"),
+            })
+        })
+        .collect()
+}
+
+/// Parses one OCamCalib text file (five data lines: poly with its count,
+/// inverse poly with its count, `xc yc`, `c d e`, `height width`).
+///
+/// # Errors
+/// [`CameraError`] naming the file and the line or field.
+pub fn parse_ocam_txt(path: &Path, text: &str, max_fov_deg: f64) -> Result<OcamModel, CameraError> {
+    let lines: Vec<(usize, &str)> = data_lines(text).collect();
+    const FIELDS: [&str; 5] = [
+        "poly",
+        "inv_poly",
+        "center (xc yc)",
+        "affine (c d e)",
+        "image size (height width)",
+    ];
+    if lines.len() < FIELDS.len() {
+        return Err(CameraError::field(
+            path,
+            FIELDS[lines.len()],
+            format!(
+                "expected 5 data lines (poly, inv_poly, xc yc, c d e, height width), found {}",
+                lines.len()
+            ),
+        ));
+    }
+    let mut rows = Vec::with_capacity(5);
+    for &(line, text) in &lines[..5] {
+        rows.push(parse_numbers(path, line, text)?);
+    }
+    let expect_len = |k: usize, n: usize| -> Result<(), CameraError> {
+        if rows[k].len() == n {
+            Ok(())
+        } else {
+            Err(CameraError::Line {
+                path: path.to_path_buf(),
+                line: lines[k].0,
+                message: format!(
+                    "{}: expected {n} numbers, found {}",
+                    FIELDS[k],
+                    rows[k].len()
+                ),
+            })
+        }
+    };
+    expect_len(2, 2)?;
+    expect_len(3, 3)?;
+    expect_len(4, 2)?;
+    let poly = split_counted_poly(path, "poly", &rows[0])?;
+    let inv_poly = split_counted_poly(path, "inv_poly", &rows[1])?;
+    let size = &rows[4];
+    if size.iter().any(|v| v.fract() != 0.0 || *v < 1.0) {
+        return Err(CameraError::field(
+            path,
+            "image size",
+            format!("expected positive whole numbers, found {size:?}"),
+        ));
+    }
+    let model = OcamModel {
+        poly,
+        inv_poly,
+        center_row: rows[2][0],
+        center_col: rows[2][1],
+        c: rows[3][0],
+        d: rows[3][1],
+        e: rows[3][2],
+        height: size[0] as u32,
+        width: size[1] as u32,
+        max_fov_deg,
+    };
+    validate_ocam(path, "", &model)?;
+    Ok(model)
+}
+
+/// Reads a rig from a released dataset's folder: `ocam1.txt`, `ocam2.txt`, ...
+/// (as many as exist, consecutively) and `poses.txt` with one line per camera.
+/// Poses are converted from centimetres to metres. Every camera gets
+/// `max_fov_deg` (the text files do not carry it) and `img_dir = camK`.
+///
+/// # Errors
+/// [`CameraError`] naming the file: no `ocam1.txt`, a malformed file, or a
+/// `poses.txt` whose line count differs from the number of `ocamK.txt` files.
+pub fn read_ocam_txt_rig(dir: &Path, max_fov_deg: f64) -> Result<Rig, CameraError> {
+    let read = |path: &Path| {
+        std::fs::read_to_string(path).map_err(|source| CameraError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    };
+    let mut models = Vec::new();
+    loop {
+        let path = dir.join(format!("ocam{}.txt", models.len() + 1));
+        if !path.exists() {
+            break;
+        }
+        models.push(parse_ocam_txt(&path, &read(&path)?, max_fov_deg)?);
+    }
+    if models.is_empty() {
+        let path = dir.join("ocam1.txt");
+        return Err(CameraError::Io {
+            path,
+            source: std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "no ocam1.txt calibration file",
+            ),
+        });
+    }
+    let poses_path = dir.join("poses.txt");
+    let poses_text = read(&poses_path)?;
+    let mut poses = Vec::new();
+    for (line, text) in data_lines(&poses_text) {
+        let v = parse_numbers(&poses_path, line, text)?;
+        if v.len() != 6 {
+            return Err(CameraError::Line {
+                path: poses_path,
+                line,
+                message: format!(
+                    "expected 6 numbers (rx ry rz tx ty tz, cm), found {}",
+                    v.len()
+                ),
+            });
+        }
+        poses.push(Pose {
+            rvec: [v[0], v[1], v[2]],
+            t_m: [v[3] / 100.0, v[4] / 100.0, v[5] / 100.0],
+        });
+    }
+    if poses.len() != models.len() {
+        return Err(CameraError::field(
+            &poses_path,
+            "poses",
+            format!(
+                "expected one pose per camera ({} ocamK.txt files), found {} lines",
+                models.len(),
+                poses.len()
+            ),
+        ));
+    }
+    let cameras = models
+        .into_iter()
+        .zip(poses)
+        .enumerate()
+        .map(|(i, (model, pose))| {
+            let id = i as u32 + 1;
+            Camera::new(id, format!("cam{id}"), CameraModel::Ocam(model), pose, None)
+        })
+        .collect();
+    Ok(Rig::new(cameras))
+}

@@ -1,0 +1,122 @@
+use std::fmt::Write as _;
+
+use nalgebra::{Isometry3, Point3, Vector3};
+
+use crate::{CameraModel, Pixel, Pose};
+
+/// One camera of a rig: intrinsics, pose and where its images live.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    /// `cam_id` of the configuration (1-based in the published files).
+    pub id: u32,
+    /// Folder of this camera's images, relative to the dataset folder.
+    pub img_dir: String,
+    /// Intrinsic model.
+    pub model: CameraModel,
+    /// Camera-to-rig pose as stored in the files.
+    pub pose: Pose,
+    /// `X_rig = rig_from_cam * X_cam`, derived from [`Self::pose`].
+    pub rig_from_cam: Isometry3<f64>,
+    /// File name (relative to the dataset folder) of the PNG marking pixels to
+    /// ignore (non-zero = invalid), if the configuration names one.
+    pub invalid_mask: Option<String>,
+}
+
+impl Camera {
+    /// Builds a camera, deriving `rig_from_cam` from the pose.
+    pub fn new(
+        id: u32,
+        img_dir: impl Into<String>,
+        model: CameraModel,
+        pose: Pose,
+        invalid_mask: Option<String>,
+    ) -> Self {
+        Self {
+            id,
+            img_dir: img_dir.into(),
+            model,
+            pose,
+            rig_from_cam: pose.rig_from_cam(),
+            invalid_mask,
+        }
+    }
+
+    /// Projects a point in the rig frame (metres) to a pixel of this camera;
+    /// `None` outside the field of view.
+    pub fn project_rig(&self, p_rig: &Point3<f64>) -> Option<Pixel> {
+        let p_cam = self.rig_from_cam.inverse_transform_point(p_rig);
+        self.model.project(&p_cam.coords)
+    }
+
+    /// The unit ray of a pixel, expressed in the rig frame (a direction: it
+    /// starts at [`Self::center_in_rig`]); `None` outside the field of view.
+    pub fn ray_in_rig(&self, px: Pixel) -> Option<Vector3<f64>> {
+        let ray_in_cam = self.model.unproject(px)?;
+        Some(self.rig_from_cam.rotation * ray_in_cam)
+    }
+
+    /// The optical centre in the rig frame, metres.
+    pub fn center_in_rig(&self) -> Point3<f64> {
+        Point3::from(self.rig_from_cam.translation.vector)
+    }
+}
+
+/// A rig of any number of fisheye cameras, in the order of the configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rig {
+    pub cameras: Vec<Camera>,
+}
+
+impl Rig {
+    pub fn new(cameras: Vec<Camera>) -> Self {
+        Self { cameras }
+    }
+
+    /// Number of cameras.
+    pub fn len(&self) -> usize {
+        self.cameras.len()
+    }
+
+    /// Whether the rig has no camera.
+    pub fn is_empty(&self) -> bool {
+        self.cameras.is_empty()
+    }
+
+    /// Distances in metres between the optical centres of every pair `(i, j)`,
+    /// `i < j`.
+    pub fn baselines_m(&self) -> Vec<(usize, usize, f64)> {
+        let mut out = Vec::new();
+        for (i, a) in self.cameras.iter().enumerate() {
+            for (j, b) in self.cameras.iter().enumerate().skip(i + 1) {
+                out.push((i, j, (a.center_in_rig() - b.center_in_rig()).norm()));
+            }
+        }
+        out
+    }
+
+    /// A canonical text of every geometric parameter of the rig (intrinsics,
+    /// image sizes, FOV and poses, at full precision). Two rigs with the same
+    /// text give the same lookup tables; used as a cache key.
+    pub fn content_key(&self) -> String {
+        let mut s = String::new();
+        for cam in &self.cameras {
+            let CameraModel::Ocam(m) = &cam.model;
+            let _ = write!(
+                s,
+                "ocam;poly={:?};inv={:?};center={:?},{:?};affine={:?},{:?},{:?};size={}x{};fov={:?};pose={:?}|",
+                m.poly,
+                m.inv_poly,
+                m.center_row,
+                m.center_col,
+                m.c,
+                m.d,
+                m.e,
+                m.width,
+                m.height,
+                m.max_fov_deg,
+                cam.pose.to_array()
+            );
+        }
+        s
+    }
+}

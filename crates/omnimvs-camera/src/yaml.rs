@@ -1,0 +1,45 @@
+//! YAML helpers shared by the configuration readers: parse once into a
+//! generic value, then deserialise with the path of the failing field.
+
+use std::path::Path;
+
+use serde::de::DeserializeOwned;
+
+use crate::CameraError;
+
+/// Parses YAML text into a generic value.
+///
+/// # Errors
+/// [`CameraError::Yaml`] naming the file, for malformed or empty YAML.
+pub fn parse_yaml(path: &Path, text: &str) -> Result<serde_json::Value, CameraError> {
+    if text.trim().is_empty() {
+        return Err(CameraError::Yaml {
+            path: path.to_path_buf(),
+            message: "the file is empty".to_string(),
+        });
+    }
+    serde_saphyr::from_str::<serde_json::Value>(text).map_err(|e| CameraError::Yaml {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
+}
+
+/// Deserialises a typed structure from a parsed value, naming the failing
+/// field (`cameras[1].poly[3]`) in the error.
+///
+/// # Errors
+/// [`CameraError::Field`] for a missing field or a value of the wrong type.
+pub fn from_value<T: DeserializeOwned>(
+    path: &Path,
+    value: serde_json::Value,
+) -> Result<T, CameraError> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let field = e.path().to_string();
+        let field = if field == "." {
+            "(top level)".to_string()
+        } else {
+            field
+        };
+        CameraError::field(path, field, e.into_inner().to_string())
+    })
+}

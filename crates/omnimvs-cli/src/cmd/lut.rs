@@ -1,0 +1,74 @@
+//! `omnimvs lut`: write the lookup table in the reference `.hwd` layout.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use omnimvs_data::Dataset;
+use omnimvs_sweep::{EquirectGrid, LookupTable, SphereSet};
+
+use crate::args::Size;
+
+/// Build the spherical-sweep lookup table of a dataset's rig and write it as
+/// the reference `lt_(h,w,N).hwd` file: raw little-endian f32 of shape
+/// [cameras, N/2, h, w, 2], sampling positions normalised for
+/// grid_sample(align_corners=True); invalid entries far outside [-1, 1].
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Dataset folder (or its config.yaml).
+    pub dataset: PathBuf,
+    /// Output grid, HEIGHTxWIDTH.
+    #[arg(long, default_value = "160x640")]
+    pub size: Size,
+    /// Number of inverse-depth hypotheses N (the file holds every other one).
+    #[arg(long, default_value_t = 192)]
+    pub ndepth: usize,
+    /// Latitude range of the grid, +-degrees.
+    #[arg(long, default_value_t = 45.0)]
+    pub phi_deg: f64,
+    /// Write all N spheres instead of every other one (not the reference layout).
+    #[arg(long)]
+    pub all_spheres: bool,
+    /// Output file (conventionally named lt_(h,w,N).hwd).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let ds = Dataset::open(&args.dataset)?;
+    if args.ndepth < 2 || (!args.all_spheres && !args.ndepth.is_multiple_of(2)) {
+        bail!(
+            "--ndepth {}: expected an even number of at least 2 (the file holds every other sphere)",
+            args.ndepth
+        );
+    }
+    let grid = EquirectGrid::new(args.size.height, args.size.width, args.phi_deg)?;
+    let hyps = ds.hypotheses(args.ndepth)?;
+    let set = if args.all_spheres {
+        SphereSet::All
+    } else {
+        SphereSet::EveryOther
+    };
+    let t0 = Instant::now();
+    let lut = LookupTable::build(&ds.rig, &grid, &hyps, set)?;
+    let build_s = t0.elapsed().as_secs_f64();
+    lut.write_hwd(&args.out)
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    let invalid = lut
+        .data
+        .chunks_exact(2)
+        .filter(|p| p[0] < -2.0 || p[1] < -2.0)
+        .count();
+    println!(
+        "wrote {} ({} cameras x {} spheres x {}x{} x 2 f32, {:.1} MB) in {:.2} s build; {:.1}% of entries invalid",
+        args.out.display(),
+        lut.num_cameras(),
+        lut.num_spheres(),
+        grid.height,
+        grid.width,
+        lut.byte_len() as f64 / 1e6,
+        build_s,
+        100.0 * invalid as f64 / (lut.data.len() / 2) as f64
+    );
+    Ok(())
+}

@@ -1,0 +1,5 @@
+//! One module per subcommand.
+
+pub mod info;
+pub mod lut;
+pub mod pano;

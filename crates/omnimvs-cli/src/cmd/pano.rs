@@ -1,0 +1,92 @@
+//! `omnimvs pano`: the gray panorama of a frame at a given depth.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use omnimvs_data::Dataset;
+use omnimvs_data::gt::read_inv_depth;
+use omnimvs_data::image_io::write_gray_png;
+use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
+
+use crate::args::Size;
+
+/// Compose the equirectangular panorama of one frame: every pixel is the mean
+/// of the cameras that see the point at the given depth along its ray. Use a
+/// constant depth (--depth) or an inverse-depth map (--invdepth, e.g. a
+/// result TIFF of `omnimvs sgm`/`infer`, or ground truth).
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Dataset folder (or its config.yaml).
+    pub dataset: PathBuf,
+    /// Frame index.
+    #[arg(long)]
+    pub frame: u32,
+    /// Constant depth in metres (0 or inf = at infinity).
+    #[arg(
+        long,
+        conflicts_with = "invdepth",
+        required_unless_present = "invdepth"
+    )]
+    pub depth: Option<f64>,
+    /// Inverse-depth map (1/m): .tiff (f32), 16-bit .png, or raw f32 640 wide.
+    /// The panorama takes its size; latitudes +-180*h/w degrees unless --phi-deg.
+    #[arg(long)]
+    pub invdepth: Option<PathBuf>,
+    /// Panorama size for --depth, HEIGHTxWIDTH.
+    #[arg(long, default_value = "500x1000")]
+    pub size: Size,
+    /// Latitude range, +-degrees (default: 90 with --depth, from the map's shape with --invdepth).
+    #[arg(long)]
+    pub phi_deg: Option<f64>,
+    /// Output PNG.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let ds = Dataset::open(&args.dataset)?;
+    let images = ds.read_frame(args.frame)?;
+    let masks = ds.masks()?;
+    let map;
+    let (grid, source) = match (&args.invdepth, args.depth) {
+        (Some(path), _) => {
+            map = read_inv_depth(path)?;
+            let phi = args.phi_deg.unwrap_or_else(|| map.phi_deg());
+            let grid = EquirectGrid::new(map.height, map.width, phi)
+                .with_context(|| format!("grid of {}", path.display()))?;
+            (grid, InvDepthSource::Map(&map.data))
+        }
+        (None, Some(depth_m)) => {
+            if depth_m.is_nan() || depth_m < 0.0 {
+                bail!("--depth {depth_m}: expected a non-negative depth in metres");
+            }
+            let inv = if depth_m == 0.0 || depth_m.is_infinite() {
+                0.0
+            } else {
+                1.0 / depth_m
+            };
+            let grid = EquirectGrid::new(
+                args.size.height,
+                args.size.width,
+                args.phi_deg.unwrap_or(90.0),
+            )?;
+            (grid, InvDepthSource::Constant(inv))
+        }
+        (None, None) => bail!("give --depth or --invdepth"),
+    };
+    let pano = compose_panorama(&ds.rig, &grid, &images, Some(&masks), source)?;
+    write_gray_png(&args.out, &pano.image)
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    let seen = pano.count.iter().filter(|&&c| c > 0).count();
+    let multi = pano.count.iter().filter(|&&c| c > 1).count();
+    println!(
+        "wrote {} ({}x{}, +-{} deg): {:.1}% of pixels seen, {:.1}% by two or more cameras",
+        args.out.display(),
+        grid.height,
+        grid.width,
+        grid.phi_deg,
+        100.0 * seen as f64 / grid.len() as f64,
+        100.0 * multi as f64 / grid.len() as f64
+    );
+    Ok(())
+}

@@ -1,0 +1,46 @@
+//! `omnimvs`: 360-degree depth from a rig of ultra-wide fisheye cameras.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod args;
+mod cmd;
+
+/// 360-degree depth maps from a rig of ultra-wide (220-degree) fisheye cameras,
+/// after OmniMVS (ICCV 2019).
+///
+/// A DATASET is a folder with a reference-layout `config.yaml` (the rig and
+/// the image file pattern) and the camera images, e.g.
+/// `../shared/data/omnimvs-samples/itbt_sample`. Dataset folders are only
+/// read, never written. Lookup tables are cached in `$OMNIMVS_CACHE_DIR`
+/// (default `~/.cache/omnimvs`).
+#[derive(Debug, Parser)]
+#[command(name = "omnimvs", version, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    Info(cmd::info::Args),
+    Lut(cmd::lut::Args),
+    Pano(cmd::pano::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Info(a) => cmd::info::run(&a),
+        Command::Lut(a) => cmd::lut::run(&a),
+        Command::Pano(a) => cmd::pano::run(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,172 @@
+use std::fmt::Write as _;
+use std::path::Path;
+
+use omnimvs_camera::yaml::{from_value, parse_yaml};
+use omnimvs_camera::{CameraModel, Rig};
+use serde::Deserialize;
+
+use crate::DataError;
+
+/// The frame indices `start, start+step, ..., <= end` of a dataset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameRange {
+    pub start: u32,
+    pub step: u32,
+    pub end: u32,
+}
+
+impl FrameRange {
+    /// The indices of the range.
+    pub fn indices(&self) -> Vec<u32> {
+        (self.start..=self.end)
+            .step_by(self.step.max(1) as usize)
+            .collect()
+    }
+}
+
+/// The non-camera parts of a reference `config.yaml`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DatasetConfig {
+    /// `config.omnimvs_sweep_min_depth`, metres.
+    pub min_depth_m: f64,
+    /// `dataset.img_fmt`: printf pattern of an image, camera index (1-based)
+    /// then frame index, e.g. `cam%d/%05d.png`.
+    pub img_fmt: String,
+    /// `dataset.start/step/end`.
+    pub frames: FrameRange,
+    /// `dataset.gt_fmt` if present: printf pattern of a ground-truth file by
+    /// frame index, relative to the dataset folder.
+    pub gt_fmt: Option<String>,
+}
+
+#[derive(Deserialize)]
+struct ConfigSection {
+    omnimvs_sweep_min_depth: f64,
+}
+
+#[derive(Deserialize)]
+struct DatasetSection {
+    img_fmt: String,
+    start: Option<u32>,
+    step: Option<u32>,
+    end: Option<u32>,
+    gt_fmt: Option<String>,
+}
+
+#[derive(Deserialize)]
+struct Sections {
+    config: ConfigSection,
+    dataset: DatasetSection,
+}
+
+impl DatasetConfig {
+    /// Parses the `config:` and `dataset:` sections.
+    ///
+    /// # Errors
+    /// [`DataError`] naming the file and the field.
+    pub fn parse(path: &Path, text: &str) -> Result<Self, DataError> {
+        let value = parse_yaml(path, text)?;
+        let s: Sections = from_value(path, value)?;
+        let field = |field: &str, message: String| DataError::Field {
+            path: path.to_path_buf(),
+            field: field.to_string(),
+            message,
+        };
+        let min_depth_m = s.config.omnimvs_sweep_min_depth;
+        if !(min_depth_m.is_finite() && min_depth_m > 0.0) {
+            return Err(field(
+                "config.omnimvs_sweep_min_depth",
+                format!("expected a positive depth in metres, found {min_depth_m}"),
+            ));
+        }
+        if crate::format_printf(&s.dataset.img_fmt, &[1, 1]).is_none() {
+            return Err(field(
+                "dataset.img_fmt",
+                format!(
+                    "expected a pattern with two integer fields (camera, frame) such as \"cam%d/%05d.png\", found {:?}",
+                    s.dataset.img_fmt
+                ),
+            ));
+        }
+        if let Some(g) = &s.dataset.gt_fmt
+            && crate::format_printf(g, &[1]).is_none()
+        {
+            return Err(field(
+                "dataset.gt_fmt",
+                format!("expected a pattern with one integer field (frame), found {g:?}"),
+            ));
+        }
+        let start = s.dataset.start.unwrap_or(1);
+        let step = s.dataset.step.unwrap_or(1);
+        let end = s.dataset.end.unwrap_or(start);
+        if step == 0 {
+            return Err(field(
+                "dataset.step",
+                "expected a positive step, found 0".into(),
+            ));
+        }
+        if end < start {
+            return Err(field(
+                "dataset.end",
+                format!("expected end >= start ({start}), found {end}"),
+            ));
+        }
+        Ok(Self {
+            min_depth_m,
+            img_fmt: s.dataset.img_fmt,
+            frames: FrameRange { start, step, end },
+            gt_fmt: s.dataset.gt_fmt,
+        })
+    }
+}
+
+fn list(values: &[f64]) -> String {
+    let items: Vec<String> = values.iter().map(|v| format!("{v:?}")).collect();
+    format!("[{}]", items.join(", "))
+}
+
+/// The text of a reference-layout `config.yaml` for `rig` (the inverse of
+/// [`crate::Dataset::open`]'s reader; numbers are written at full precision,
+/// so reading the file back gives the same rig bit for bit).
+pub fn write_config_yaml(rig: &Rig, config: &DatasetConfig) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# written by omnimvs");
+    let _ = writeln!(
+        s,
+        "config:\n  omnimvs_sweep_min_depth: {:?}",
+        config.min_depth_m
+    );
+    let _ = writeln!(s, "dataset:");
+    let _ = writeln!(s, "  img_fmt: {:?}", config.img_fmt);
+    if let Some(g) = &config.gt_fmt {
+        let _ = writeln!(s, "  gt_fmt: {g:?}");
+    }
+    let f = config.frames;
+    let _ = writeln!(
+        s,
+        "  start: {}\n  step: {}\n  end: {}",
+        f.start, f.step, f.end
+    );
+    let _ = writeln!(s, "cameras:");
+    for cam in &rig.cameras {
+        let CameraModel::Ocam(m) = &cam.model;
+        let mut poly = vec![m.poly.len() as f64];
+        poly.extend(&m.poly);
+        let mut inv = vec![m.inv_poly.len() as f64];
+        inv.extend(&m.inv_poly);
+        let _ = writeln!(s, "  - cam_id: {}", cam.id);
+        let _ = writeln!(s, "    img_dir: {:?}", cam.img_dir);
+        let _ = writeln!(s, "    model: ocam");
+        let _ = writeln!(s, "    poly: {}", list(&poly));
+        let _ = writeln!(s, "    inv_poly: {}", list(&inv));
+        let _ = writeln!(s, "    center: {}", list(&[m.center_row, m.center_col]));
+        let _ = writeln!(s, "    affine: {}", list(&[m.c, m.d, m.e]));
+        let _ = writeln!(s, "    image_size: [{}, {}]", m.height, m.width);
+        if let Some(mask) = &cam.invalid_mask {
+            let _ = writeln!(s, "    invalid_mask: {mask:?}");
+        }
+        let _ = writeln!(s, "    pose: {}", list(&cam.pose.to_array()));
+        let _ = writeln!(s, "    max_fov: {:?}", m.max_fov_deg);
+    }
+    s
+}

@@ -1,0 +1,214 @@
+use std::path::{Path, PathBuf};
+
+use omnimvs_camera::{Rig, ValidityMask, parse_config_rig};
+use omnimvs_sweep::{GrayImage, InvDepthHypotheses};
+
+use crate::gt::{GroundTruth, InvDepthMap, ground_truth_index, read_inv_depth};
+use crate::image_io::read_gray_sized;
+use crate::{DataError, DatasetConfig, format_printf};
+
+/// A dataset folder in the reference layout. Opening it reads only
+/// `config.yaml`; nothing is ever written into the folder.
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    pub root: PathBuf,
+    pub config_path: PathBuf,
+    pub config: DatasetConfig,
+    pub rig: Rig,
+}
+
+/// Folders and extensions searched for ground truth when `dataset.gt_fmt`
+/// is not set, in order.
+const GT_DIRS: [&str; 2] = ["omnidepth_gt_640", "depth_train_640"];
+const GT_EXTS: [&str; 5] = ["tiff", "tif", "png", "bin", "raw"];
+
+impl Dataset {
+    /// Opens a dataset from its folder or its `config.yaml`.
+    ///
+    /// # Errors
+    /// [`DataError`] naming `config.yaml` and the field that is wrong.
+    pub fn open(path: &Path) -> Result<Self, DataError> {
+        let (root, config_path) = if path.is_dir() {
+            (path.to_path_buf(), path.join("config.yaml"))
+        } else {
+            let root = path.parent().map(Path::to_path_buf).unwrap_or_default();
+            (root, path.to_path_buf())
+        };
+        let text =
+            std::fs::read_to_string(&config_path).map_err(|e| DataError::io(&config_path, e))?;
+        let rig = parse_config_rig(&config_path, &text)?;
+        let config = DatasetConfig::parse(&config_path, &text)?;
+        Ok(Self {
+            root,
+            config_path,
+            config,
+            rig,
+        })
+    }
+
+    /// The hypotheses of this dataset for `ndepth` spheres.
+    ///
+    /// # Errors
+    /// [`DataError::Sweep`] for `ndepth < 2`.
+    pub fn hypotheses(&self, ndepth: usize) -> Result<InvDepthHypotheses, DataError> {
+        Ok(InvDepthHypotheses::new(ndepth, self.config.min_depth_m)?)
+    }
+
+    /// Candidate paths of an image: the configured pattern, then the same
+    /// with the frame number zero-padded to 4 and 5 digits (released sets mix
+    /// `0001.png` and `00001.png`).
+    fn image_candidates(&self, camera: usize, frame: u32) -> Vec<PathBuf> {
+        let fmt = &self.config.img_fmt;
+        let mut out = Vec::new();
+        let args = [camera as i64 + 1, i64::from(frame)];
+        if let Some(p) = format_printf(fmt, &args) {
+            out.push(self.root.join(p));
+        }
+        // Replace the frame conversion (the last `%...d`) with other paddings.
+        if let Some(pos) = fmt.rfind('%') {
+            let tail = fmt[pos..].find('d').map(|k| pos + k + 1);
+            if let Some(end) = tail {
+                for alt in ["%04d", "%05d", "%d"] {
+                    let f = format!("{}{}{}", &fmt[..pos], alt, &fmt[end..]);
+                    if let Some(p) = format_printf(&f, &args) {
+                        let p = self.root.join(p);
+                        if !out.contains(&p) {
+                            out.push(p);
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The existing image file of `camera` (0-based) at `frame`.
+    ///
+    /// # Errors
+    /// [`DataError::MissingFrame`] listing the paths tried.
+    pub fn image_path(&self, camera: usize, frame: u32) -> Result<PathBuf, DataError> {
+        let candidates = self.image_candidates(camera, frame);
+        candidates
+            .iter()
+            .find(|p| p.is_file())
+            .cloned()
+            .ok_or_else(|| DataError::MissingFrame {
+                frame,
+                camera: camera + 1,
+                tried: candidates
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
+    }
+
+    /// Whether every camera has an image for `frame`.
+    pub fn has_frame(&self, frame: u32) -> bool {
+        (0..self.rig.len()).all(|c| self.image_path(c, frame).is_ok())
+    }
+
+    /// The frames of the configured range whose images all exist.
+    pub fn frames_found(&self) -> Vec<u32> {
+        self.config
+            .frames
+            .indices()
+            .into_iter()
+            .filter(|&f| self.has_frame(f))
+            .collect()
+    }
+
+    /// The gray image of `camera` (0-based) at `frame`, size-checked.
+    ///
+    /// # Errors
+    /// Missing or corrupt file, or a size that differs from the camera's.
+    pub fn read_image(&self, camera: usize, frame: u32) -> Result<GrayImage, DataError> {
+        let path = self.image_path(camera, frame)?;
+        let model = &self.rig.cameras[camera].model;
+        read_gray_sized(
+            &path,
+            model.width() as usize,
+            model.height() as usize,
+            &format!(
+                "camera {} image_size in {}",
+                camera + 1,
+                self.config_path.display()
+            ),
+        )
+    }
+
+    /// The gray images of every camera at `frame`.
+    ///
+    /// # Errors
+    /// As [`Self::read_image`].
+    pub fn read_frame(&self, frame: u32) -> Result<Vec<GrayImage>, DataError> {
+        (0..self.rig.len())
+            .map(|c| self.read_image(c, frame))
+            .collect()
+    }
+
+    /// The validity mask of every camera.
+    ///
+    /// # Errors
+    /// A mask PNG that exists but is corrupt or of the wrong size.
+    pub fn masks(&self) -> Result<Vec<ValidityMask>, DataError> {
+        self.rig
+            .cameras
+            .iter()
+            .map(|c| ValidityMask::for_camera(c, &self.root).map_err(DataError::from))
+            .collect()
+    }
+
+    /// The ground-truth file of `frame`, if there is one.
+    pub fn gt_path(&self, frame: u32) -> Option<PathBuf> {
+        if let Some(fmt) = &self.config.gt_fmt {
+            let p = self.root.join(format_printf(fmt, &[i64::from(frame)])?);
+            return p.is_file().then_some(p);
+        }
+        for dir in GT_DIRS {
+            for digits in [5usize, 4] {
+                for ext in GT_EXTS {
+                    let p = self.root.join(dir).join(format!("{frame:0digits$}.{ext}"));
+                    if p.is_file() {
+                        return Some(p);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// The ground-truth inverse depth of `frame` (full height), if present.
+    ///
+    /// # Errors
+    /// A ground-truth file that exists but cannot be read.
+    pub fn read_gt(&self, frame: u32) -> Result<Option<InvDepthMap>, DataError> {
+        self.gt_path(frame).map(|p| read_inv_depth(&p)).transpose()
+    }
+
+    /// The ground truth of `frame` as indices for an output of `height x
+    /// width` and `hyps`, cropped and masked as for evaluation.
+    ///
+    /// # Errors
+    /// An unreadable file, or a width that differs from the output's.
+    pub fn ground_truth(
+        &self,
+        frame: u32,
+        height: usize,
+        width: usize,
+        hyps: &InvDepthHypotheses,
+    ) -> Result<Option<GroundTruth>, DataError> {
+        let Some(map) = self.read_gt(frame)? else {
+            return Ok(None);
+        };
+        if map.width != width {
+            return Err(DataError::mismatch(
+                format!("frame {frame} ground-truth width"),
+                format!("{width} (the output width)"),
+                map.width,
+            ));
+        }
+        let cropped = map.crop_rows_centered(height)?;
+        Ok(Some(ground_truth_index(&cropped, hyps)))
+    }
+}

@@ -1,0 +1,83 @@
+use std::path::PathBuf;
+
+use omnimvs_camera::CameraError;
+use omnimvs_sweep::SweepError;
+
+/// Errors of the data crate; each names the file and, where there is one,
+/// the field or what was expected.
+#[derive(Debug, thiserror::Error)]
+pub enum DataError {
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    #[error(transparent)]
+    Sweep(#[from] SweepError),
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: cannot decode image: {source}")]
+    Image {
+        path: PathBuf,
+        #[source]
+        source: image::ImageError,
+    },
+    #[error("{path}: image is {found_w}x{found_h} pixels, expected {want_w}x{want_h} ({what})")]
+    ImageSize {
+        path: PathBuf,
+        found_w: usize,
+        found_h: usize,
+        want_w: usize,
+        want_h: usize,
+        what: String,
+    },
+    #[error("frame {frame} of camera {camera} not found: tried {tried}")]
+    MissingFrame {
+        frame: u32,
+        camera: usize,
+        tried: String,
+    },
+    #[error("{path}: {message}")]
+    Format { path: PathBuf, message: String },
+    #[error("{path}: field `{field}`: {message}")]
+    Field {
+        path: PathBuf,
+        field: String,
+        message: String,
+    },
+    #[error("{what}: expected {expected}, found {found}")]
+    Mismatch {
+        what: String,
+        expected: String,
+        found: String,
+    },
+}
+
+impl DataError {
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.into(),
+            source,
+        }
+    }
+
+    pub(crate) fn format(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        Self::Format {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn mismatch(
+        what: impl Into<String>,
+        expected: impl ToString,
+        found: impl ToString,
+    ) -> Self {
+        Self::Mismatch {
+            what: what.into(),
+            expected: expected.to_string(),
+            found: found.to_string(),
+        }
+    }
+}

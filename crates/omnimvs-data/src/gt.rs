@@ -1,0 +1,320 @@
+//! Ground-truth inverse depth (1/m) on the equirectangular grid: the three
+//! encodings of `FORMATS.md`, centre cropping, and the invalid-pixel rule.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use omnimvs_sweep::InvDepthHypotheses;
+use tiff::decoder::{Decoder, DecodingResult};
+use tiff::encoder::{Compression, DeflateLevel, TiffEncoder, colortype};
+
+use crate::DataError;
+
+/// Width of the published ground-truth panoramas.
+pub const GT_WIDTH: usize = 640;
+
+/// Scale of the released 16-bit PNG encoding: `invdepth = v / 65500 / 0.55`.
+pub const PNG16_MAX_INV_DEPTH: f64 = 1.0 / 0.55;
+
+/// An inverse-depth map (1/m), row-major; 0 = at infinity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InvDepthMap {
+    pub width: usize,
+    pub height: usize,
+    pub data: Vec<f32>,
+}
+
+impl InvDepthMap {
+    /// The latitude range `±phi_deg` that an equirectangular map of this
+    /// shape covers (square pixels: `180 * height / width`).
+    pub fn phi_deg(&self) -> f64 {
+        180.0 * self.height as f64 / self.width as f64
+    }
+
+    /// The middle `height` rows, as the reference crops (start row
+    /// `round((H - h) / 2)`, ties to even like Python's `round`).
+    ///
+    /// # Errors
+    /// [`DataError::Mismatch`] when `height` exceeds the map's height.
+    pub fn crop_rows_centered(&self, height: usize) -> Result<Self, DataError> {
+        if height > self.height {
+            return Err(DataError::mismatch(
+                "ground-truth crop height",
+                format!("at most {} rows", self.height),
+                height,
+            ));
+        }
+        let start = ((self.height - height) as f64 / 2.0).round_ties_even() as usize;
+        let data = self.data[start * self.width..(start + height) * self.width].to_vec();
+        Ok(Self {
+            width: self.width,
+            height,
+            data,
+        })
+    }
+}
+
+/// Reads an inverse-depth file by its extension: `.tif`/`.tiff` (the f32
+/// page of a possibly multi-page file), `.png` (16-bit released encoding),
+/// anything else raw little-endian f32 of width [`GT_WIDTH`].
+///
+/// # Errors
+/// [`DataError`] naming the file: unreadable, no f32 page, wrong bit depth,
+/// or a raw size that is not a whole number of rows.
+pub fn read_inv_depth(path: &Path) -> Result<InvDepthMap, DataError> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "tif" | "tiff" => read_tiff_f32(path),
+        "png" => read_png16(path),
+        _ => read_raw_f32(path, GT_WIDTH),
+    }
+}
+
+/// Reads the f32 page of a TIFF file (the reference writes an 8-bit RGB
+/// thumbnail first, then the f32 data).
+///
+/// # Errors
+/// [`DataError::Format`] when no page holds single-channel f32 data.
+pub fn read_tiff_f32(path: &Path) -> Result<InvDepthMap, DataError> {
+    let bytes = std::fs::read(path).map_err(|e| DataError::io(path, e))?;
+    let bad = |e: tiff::TiffError| DataError::format(path, format!("cannot decode TIFF: {e}"));
+    let mut dec = Decoder::new(Cursor::new(bytes)).map_err(bad)?;
+    loop {
+        let (w, h) = dec.dimensions().map_err(bad)?;
+        if let Ok(tiff::ColorType::Gray(32)) = dec.colortype()
+            && let DecodingResult::F32(data) = dec.read_image().map_err(bad)?
+        {
+            return Ok(InvDepthMap {
+                width: w as usize,
+                height: h as usize,
+                data,
+            });
+        }
+        if !dec.more_images() {
+            return Err(DataError::format(
+                path,
+                "no single-channel 32-bit float page (expected the f32 inverse depth)",
+            ));
+        }
+        dec.next_image().map_err(bad)?;
+    }
+}
+
+fn read_png16(path: &Path) -> Result<InvDepthMap, DataError> {
+    let bytes = std::fs::read(path).map_err(|e| DataError::io(path, e))?;
+    let img = image::load_from_memory(&bytes).map_err(|source| DataError::Image {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let image::DynamicImage::ImageLuma16(g) = img else {
+        return Err(DataError::format(
+            path,
+            format!(
+                "expected a 16-bit gray PNG (released inverse-depth encoding), found {:?}",
+                img.color()
+            ),
+        ));
+    };
+    let (w, h) = (g.width() as usize, g.height() as usize);
+    let data = g
+        .into_raw()
+        .into_iter()
+        .map(|v| (f64::from(v) / 65500.0 * PNG16_MAX_INV_DEPTH) as f32)
+        .collect();
+    Ok(InvDepthMap {
+        width: w,
+        height: h,
+        data,
+    })
+}
+
+/// Reads raw little-endian f32 rows of `width` values.
+///
+/// # Errors
+/// [`DataError::Format`] when the size is not a whole number of rows.
+pub fn read_raw_f32(path: &Path, width: usize) -> Result<InvDepthMap, DataError> {
+    let bytes = std::fs::read(path).map_err(|e| DataError::io(path, e))?;
+    let row_bytes = width * 4;
+    if bytes.is_empty() || bytes.len() % row_bytes != 0 {
+        return Err(DataError::format(
+            path,
+            format!(
+                "raw f32 file of {} bytes: expected a whole number of rows of {width} floats ({row_bytes} bytes)",
+                bytes.len()
+            ),
+        ));
+    }
+    let data = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    Ok(InvDepthMap {
+        width,
+        height: bytes.len() / row_bytes,
+        data,
+    })
+}
+
+/// Writes an f32 map as a single-page, deflate-compressed TIFF, atomically.
+///
+/// # Errors
+/// [`DataError`] naming the file.
+pub fn write_f32_tiff(
+    path: &Path,
+    width: usize,
+    height: usize,
+    data: &[f32],
+) -> Result<(), DataError> {
+    if data.len() != width * height {
+        return Err(DataError::mismatch(
+            format!("{}: map length", path.display()),
+            width * height,
+            data.len(),
+        ));
+    }
+    let mut buf = Cursor::new(Vec::new());
+    let bad = |e: tiff::TiffError| DataError::format(path, format!("cannot encode TIFF: {e}"));
+    TiffEncoder::new(&mut buf)
+        .map_err(bad)?
+        .with_compression(Compression::Deflate(DeflateLevel::Balanced))
+        .write_image::<colortype::Gray32Float>(width as u32, height as u32, data)
+        .map_err(bad)?;
+    omnimvs_camera::fs::write_atomic(path, buf.get_ref()).map_err(|e| DataError::io(path, e))
+}
+
+/// Writes an inverse-depth map (1/m) as an f32 TIFF, atomically.
+///
+/// # Errors
+/// As [`write_f32_tiff`].
+pub fn write_inv_depth_tiff(path: &Path, map: &InvDepthMap) -> Result<(), DataError> {
+    write_f32_tiff(path, map.width, map.height, &map.data)
+}
+
+/// Ground truth as hypothesis indices, with the evaluation mask.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroundTruth {
+    pub width: usize,
+    pub height: usize,
+    /// Fractional index `n*` of every pixel.
+    pub index: Vec<f32>,
+    /// Whether the pixel counts in training and evaluation.
+    pub valid: Vec<bool>,
+}
+
+/// Inverse depths below this (farther than 1 km) count as "infinite".
+pub const FINITE_INV_DEPTH: f32 = 1e-3;
+
+/// Converts a (cropped) inverse-depth map to indices and applies the
+/// reference's invalid-pixel rule: an "infinite" pixel (inverse depth below
+/// [`FINITE_INV_DEPTH`]) inside a hole that a 5x5 binary closing of the
+/// finite-depth mask fills is invalid (it is noise, not sky); every valid
+/// pixel has `0 <= n* <= N`.
+pub fn ground_truth_index(map: &InvDepthMap, hyps: &InvDepthHypotheses) -> GroundTruth {
+    let (w, h) = (map.width, map.height);
+    let finite: Vec<bool> = map.data.iter().map(|&d| d >= FINITE_INV_DEPTH).collect();
+    let closed = binary_closing_5x5(&finite, w, h);
+    let n = hyps.count as f32;
+    let mut index = Vec::with_capacity(w * h);
+    let mut valid = Vec::with_capacity(w * h);
+    for i in 0..w * h {
+        let idx = hyps.index(f64::from(map.data[i])) as f32;
+        let hole = !finite[i] && closed[i];
+        index.push(idx);
+        valid.push(!hole && idx.is_finite() && (0.0..=n).contains(&idx));
+    }
+    GroundTruth {
+        width: w,
+        height: h,
+        index,
+        valid,
+    }
+}
+
+/// One pass of a 5-wide max (dilate) or min (erode) along rows or columns,
+/// treating pixels outside the image as `false` (scipy's `border_value=0`).
+fn pass(src: &[bool], w: usize, h: usize, horizontal: bool, dilate: bool) -> Vec<bool> {
+    let mut out = vec![false; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let mut acc = !dilate;
+            for k in -2i64..=2 {
+                let (xx, yy) = if horizontal {
+                    (x as i64 + k, y as i64)
+                } else {
+                    (x as i64, y as i64 + k)
+                };
+                let v = xx >= 0
+                    && yy >= 0
+                    && (xx as usize) < w
+                    && (yy as usize) < h
+                    && src[yy as usize * w + xx as usize];
+                acc = if dilate { acc || v } else { acc && v };
+            }
+            out[y * w + x] = acc;
+        }
+    }
+    out
+}
+
+/// `scipy.ndimage.binary_closing(mask, ones((5, 5)))`: dilation then
+/// erosion, both with outside pixels `false`.
+pub fn binary_closing_5x5(mask: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let d = pass(&pass(mask, w, h, true, true), w, h, false, true);
+    pass(&pass(&d, w, h, true, false), w, h, false, false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closing_fills_small_holes_but_not_near_borders() {
+        let (w, h) = (12, 12);
+        let mut m = vec![true; w * h];
+        m[6 * w + 6] = false; // an interior hole
+        m[0] = false; // a corner pixel
+        let c = binary_closing_5x5(&m, w, h);
+        assert!(c[6 * w + 6], "interior hole is closed");
+        // Erosion with a zero border clears everything within 2 px of the edge.
+        assert!(!c[0] && !c[w + 1] && c[2 * w + 2]);
+    }
+
+    #[test]
+    fn invalid_rule_marks_holes_not_sky() {
+        let hyps = InvDepthHypotheses::new(192, 0.5).unwrap();
+        let (w, h) = (20, 20);
+        // Top half sky (0), bottom half at 2 m, one noisy zero inside.
+        let mut data = vec![0f32; w * h];
+        for v in &mut data[10 * w..] {
+            *v = 0.5;
+        }
+        data[15 * w + 10] = 0.0;
+        let gt = ground_truth_index(
+            &InvDepthMap {
+                width: w,
+                height: h,
+                data,
+            },
+            &hyps,
+        );
+        assert!(gt.valid[2 * w + 10], "sky is valid");
+        assert!(!gt.valid[15 * w + 10], "noise hole is invalid");
+        assert!(gt.valid[15 * w + 11]);
+        assert!((gt.index[15 * w + 11] - 0.5 / (2.0 / 191.0)).abs() < 1e-3);
+    }
+
+    #[test]
+    fn crop_is_centered() {
+        let map = InvDepthMap {
+            width: 1,
+            height: 320,
+            data: (0..320).map(|v| v as f32).collect(),
+        };
+        let c = map.crop_rows_centered(160).unwrap();
+        assert_eq!(c.data[0], 80.0);
+        assert!(map.crop_rows_centered(400).is_err());
+    }
+}

@@ -1,0 +1,25 @@
+//! Dataset folders in the reference OmniMVS layout (`FORMATS.md`).
+//!
+//! * [`Dataset`]: `config.yaml` (rig, min depth, `img_fmt`, frame range),
+//!   frame files by index, validity masks.
+//! * [`image_io`]: gray images (RGB -> channel mean), the network's input
+//!   normalisation, PNG writing.
+//! * [`gt`]: ground-truth inverse depth in its three encodings, cropping and
+//!   the invalid-pixel rule; the f32 TIFF writer.
+//! * [`metrics`]: the paper's error metrics per frame and over frames.
+//! * [`colormap`], [`ply`]: pictures and point clouds of results.
+
+pub mod colormap;
+mod config;
+mod dataset;
+mod error;
+mod format;
+pub mod gt;
+pub mod image_io;
+pub mod metrics;
+pub mod ply;
+
+pub use config::{DatasetConfig, FrameRange, write_config_yaml};
+pub use dataset::Dataset;
+pub use error::DataError;
+pub use format::format_printf;

@@ -1,0 +1,29 @@
+//! Spherical sweeping (paper section 3.1, `FORMATS.md`).
+//!
+//! * [`EquirectGrid`]: the equirectangular output grid and its unit rays in
+//!   the rig frame.
+//! * [`InvDepthHypotheses`]: `N` spheres evenly spaced in inverse depth, and
+//!   index <-> inverse depth conversions.
+//! * [`LookupTable`]: for every camera, sphere and grid pixel, where to sample
+//!   the fisheye image, in the reference `lt_(h,w,N).hwd` layout; built in
+//!   parallel and cached per rig ([`LutCache`]).
+//! * [`warp`]: bilinear warping of `C x H x W` maps onto the spheres with
+//!   `grid_sample(align_corners=True)` semantics and zeros outside.
+//! * [`panorama`]: the gray panorama composed from all cameras at a given
+//!   inverse depth.
+
+mod cache;
+mod error;
+mod grid;
+mod hypotheses;
+mod lut;
+pub mod panorama;
+pub mod warp;
+
+pub use cache::{CacheStatus, LutCache};
+pub use error::SweepError;
+pub use grid::EquirectGrid;
+pub use hypotheses::InvDepthHypotheses;
+pub use lut::{INVALID_PIXEL, LookupTable, SphereSet, hwd_file_name};
+pub use panorama::{InvDepthSource, Panorama, compose_panorama, warp_camera_to_panorama};
+pub use warp::{BilinearTap, GrayImage, sample_bilinear, warp_camera_onto_spheres};
