@@ -1,0 +1,22 @@
+//! The OmniMVS network (Won, Ryu and Lim, ICCV 2019) in burn.
+//!
+//! Fisheye images pass one by one through the unary feature CNN, are warped onto `N / 2`
+//! spheres around the rig through a precomputed lookup table ([`taps`]), transferred by a
+//! stride-2 convolution, concatenated over cameras, fused and regularised by a 3D
+//! encoder-decoder; a softargmin over the `N` hypotheses gives the inverse-depth index.
+//!
+//! - [`config`]: sizes, layouts (ICCV paper / published weights) and presets.
+//! - [`model`]: the burn modules, named like the reference PyTorch state dict.
+//! - [`taps`]: bilinear taps of a lookup table and the host warp kernel.
+
+pub mod bench;
+pub mod config;
+pub mod error;
+pub mod model;
+pub mod taps;
+pub mod weights;
+
+pub use config::{Layout, NetConfig};
+pub use error::NetError;
+pub use model::{NetOutput, OmniMvsNet, SweepTaps};
+pub use taps::SweepGrid;

@@ -1,0 +1,221 @@
+//! Convolution + batch norm + ReLU blocks with an optional residual input, laid out like the
+//! reference `module/basic.py` (`conv`, `bn`) so that PyTorch state dicts load by name.
+
+use burn::module::{Module, Param};
+use burn::nn::conv::{
+    Conv2d, Conv2dConfig, Conv3d, Conv3dConfig, ConvTranspose3d, ConvTranspose3dConfig,
+};
+use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d, PaddingConfig3d};
+use burn::tensor::{Device, Tensor, activation};
+
+/// Applies `x (+ residual)` then ReLU when asked. PyTorch adds the residual after batch norm
+/// and before ReLU.
+fn finish<const D: usize>(x: Tensor<D>, residual: Option<Tensor<D>>, relu: bool) -> Tensor<D> {
+    let x = match residual {
+        Some(residual) => x + residual,
+        None => x,
+    };
+    if relu { activation::relu(x) } else { x }
+}
+
+/// Per-output-channel scale and shift `(gamma / sqrt(var + eps), beta - mean * scale)` of an
+/// inference-mode batch norm.
+fn batch_norm_affine(bn: &BatchNorm) -> (Tensor<1>, Tensor<1>) {
+    let scale = bn.gamma.val() / bn.running_var.value().add_scalar(bn.epsilon).sqrt();
+    let shift = bn.beta.val() - bn.running_mean.value() * scale.clone();
+    (scale, shift)
+}
+
+/// Folds `scale`/`shift` into a weight whose output channels lie along `out_dim` and its bias.
+fn fold_weight<const D: usize>(
+    weight: Tensor<D>,
+    bias: Option<Tensor<1>>,
+    scale: Tensor<1>,
+    shift: Tensor<1>,
+    out_dim: usize,
+) -> (Tensor<D>, Tensor<1>) {
+    let channels = scale.dims()[0];
+    let mut shape = [1usize; D];
+    shape[out_dim] = channels;
+    let weight = weight * scale.clone().reshape(shape);
+    let bias = match bias {
+        Some(bias) => bias * scale + shift,
+        None => shift,
+    };
+    (weight, bias)
+}
+
+/// 2D convolution, optional batch norm, optional ReLU.
+#[derive(Module, Debug)]
+pub struct ConvBn2d {
+    /// The convolution (`conv` in the reference state dict).
+    pub conv: Conv2d,
+    /// Batch norm after the convolution (`bn`), absent for plain convolutions and after
+    /// [`ConvBn2d::fold_batch_norm`].
+    pub bn: Option<BatchNorm>,
+    /// Whether a ReLU ends the block.
+    #[module(skip)]
+    pub relu: bool,
+}
+
+impl ConvBn2d {
+    /// A square `kernel x kernel` convolution with symmetric padding `pad`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        channels: [usize; 2],
+        kernel: usize,
+        stride: usize,
+        pad: usize,
+        dilation: usize,
+        bn: bool,
+        relu: bool,
+        device: &Device,
+    ) -> Self {
+        let conv = Conv2dConfig::new(channels, [kernel, kernel])
+            .with_stride([stride, stride])
+            .with_dilation([dilation, dilation])
+            .with_padding(PaddingConfig2d::Explicit(pad, pad, pad, pad))
+            .init(device);
+        let bn = bn.then(|| BatchNormConfig::new(channels[1]).init(device));
+        Self { conv, bn, relu }
+    }
+
+    /// `[B, C_in, H, W] -> [B, C_out, H', W']`, adding `residual` before the ReLU.
+    pub fn forward(&self, x: Tensor<4>, residual: Option<Tensor<4>>) -> Tensor<4> {
+        let x = self.conv.forward(x); // [B, C_out, H', W']
+        let x = match &self.bn {
+            Some(bn) => bn.forward(x),
+            None => x,
+        };
+        finish(x, residual, self.relu)
+    }
+
+    /// Folds an inference-mode batch norm into the convolution.
+    pub fn fold_batch_norm(mut self) -> Self {
+        if let Some(bn) = self.bn.take() {
+            let (scale, shift) = batch_norm_affine(&bn);
+            let bias = self.conv.bias.as_ref().map(|b| b.val());
+            let (weight, bias) = fold_weight(self.conv.weight.val(), bias, scale, shift, 0);
+            self.conv.weight = Param::from_tensor(weight);
+            self.conv.bias = Some(Param::from_tensor(bias));
+        }
+        self
+    }
+}
+
+/// 3D convolution (`k x k x k`, symmetric padding), optional batch norm, optional ReLU.
+#[derive(Module, Debug)]
+pub struct ConvBn3d {
+    /// The convolution (`conv`).
+    pub conv: Conv3d,
+    /// Batch norm (`bn`), absent after [`ConvBn3d::fold_batch_norm`].
+    pub bn: Option<BatchNorm>,
+    /// Whether a ReLU ends the block.
+    #[module(skip)]
+    pub relu: bool,
+}
+
+impl ConvBn3d {
+    /// A cubic `kernel^3` convolution with padding `pad` on every side.
+    pub fn new(
+        channels: [usize; 2],
+        kernel: usize,
+        stride: usize,
+        pad: usize,
+        bn: bool,
+        relu: bool,
+        device: &Device,
+    ) -> Self {
+        let conv = Conv3dConfig::new(channels, [kernel; 3])
+            .with_stride([stride; 3])
+            .with_padding(PaddingConfig3d::Explicit(pad, pad, pad))
+            .init(device);
+        let bn = bn.then(|| BatchNormConfig::new(channels[1]).init(device));
+        Self { conv, bn, relu }
+    }
+
+    /// `[B, C_in, D, H, W] -> [B, C_out, D', H', W']`.
+    pub fn forward(&self, x: Tensor<5>, residual: Option<Tensor<5>>) -> Tensor<5> {
+        let x = self.conv.forward(x); // [B, C_out, D', H', W']
+        self.finish(x, residual)
+    }
+
+    /// Batch norm, residual and ReLU applied to an already convolved tensor (bias included).
+    pub fn finish(&self, x: Tensor<5>, residual: Option<Tensor<5>>) -> Tensor<5> {
+        let x = match &self.bn {
+            Some(bn) => bn.forward(x),
+            None => x,
+        };
+        finish(x, residual, self.relu)
+    }
+
+    /// Folds an inference-mode batch norm into the convolution.
+    pub fn fold_batch_norm(mut self) -> Self {
+        if let Some(bn) = self.bn.take() {
+            let (scale, shift) = batch_norm_affine(&bn);
+            let bias = self.conv.bias.as_ref().map(|b| b.val());
+            let (weight, bias) = fold_weight(self.conv.weight.val(), bias, scale, shift, 0);
+            self.conv.weight = Param::from_tensor(weight);
+            self.conv.bias = Some(Param::from_tensor(bias));
+        }
+        self
+    }
+}
+
+/// 3D transposed convolution, optional batch norm, optional ReLU.
+#[derive(Module, Debug)]
+pub struct DeconvBn3d {
+    /// The transposed convolution (`conv`).
+    pub conv: ConvTranspose3d,
+    /// Batch norm (`bn`), absent after [`DeconvBn3d::fold_batch_norm`].
+    pub bn: Option<BatchNorm>,
+    /// Whether a ReLU ends the block.
+    #[module(skip)]
+    pub relu: bool,
+}
+
+impl DeconvBn3d {
+    /// A `kernel^3` transposed convolution with padding `pad` and output padding `out_pad`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        channels: [usize; 2],
+        kernel: usize,
+        stride: usize,
+        pad: usize,
+        out_pad: usize,
+        bn: bool,
+        relu: bool,
+        device: &Device,
+    ) -> Self {
+        let conv = ConvTranspose3dConfig::new(channels, [kernel; 3])
+            .with_stride([stride; 3])
+            .with_padding([pad; 3])
+            .with_padding_out([out_pad; 3])
+            .init(device);
+        let bn = bn.then(|| BatchNormConfig::new(channels[1]).init(device));
+        Self { conv, bn, relu }
+    }
+
+    /// `[B, C_in, D, H, W] -> [B, C_out, 2D, 2H, 2W]` for stride 2.
+    pub fn forward(&self, x: Tensor<5>, residual: Option<Tensor<5>>) -> Tensor<5> {
+        let x = self.conv.forward(x); // [B, C_out, D', H', W']
+        let x = match &self.bn {
+            Some(bn) => bn.forward(x),
+            None => x,
+        };
+        finish(x, residual, self.relu)
+    }
+
+    /// Folds an inference-mode batch norm into the transposed convolution, whose weight is
+    /// `[C_in, C_out, k, k, k]`.
+    pub fn fold_batch_norm(mut self) -> Self {
+        if let Some(bn) = self.bn.take() {
+            let (scale, shift) = batch_norm_affine(&bn);
+            let bias = self.conv.bias.as_ref().map(|b| b.val());
+            let (weight, bias) = fold_weight(self.conv.weight.val(), bias, scale, shift, 1);
+            self.conv.weight = Param::from_tensor(weight);
+            self.conv.bias = Some(Param::from_tensor(bias));
+        }
+        self
+    }
+}

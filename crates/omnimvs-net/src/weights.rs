@@ -1,0 +1,220 @@
+//! Weights: our own files (safetensors + the configuration JSON beside them) and the import
+//! of PyTorch checkpoints of the reference implementation (`{'net_state_dict': ..., 'CH': ..}`).
+
+use std::path::{Path, PathBuf};
+
+use burn::store::pytorch_reader::PytorchReader;
+use burn::store::{ApplyResult, ModuleSnapshot, PytorchStore, SafetensorsStore};
+use burn::tensor::Device;
+use serde::Deserialize;
+
+use crate::config::{Layout, NetConfig};
+use crate::error::NetError;
+use crate::model::OmniMvsNet;
+
+/// Top-level key of the reference checkpoints holding the state dict.
+pub const STATE_DICT_KEY: &str = "net_state_dict";
+
+/// State-dict key present only in the published layout (the 18th feature convolution).
+const PUBLISHED_ONLY_KEY: &str = "feature_layers.layers.17.conv.weight";
+
+/// Fusion weight `[2 CH, cams * CH, 3, 3, 3]`, which gives the number of cameras.
+const FUSION_WEIGHT_KEY: &str = "cost_computes.fusion.conv.weight";
+
+/// The configuration file written beside a weight file: `model.safetensors` ->
+/// `model.json`.
+pub fn config_path(weights: &Path) -> PathBuf {
+    weights.with_extension("json")
+}
+
+fn weights_error(path: &Path, message: impl Into<String>) -> NetError {
+    NetError::Weights {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+/// Fails unless every parameter of the model was found and applied. Extra entries are
+/// allowed only for PyTorch's `num_batches_tracked` counters.
+fn check_applied(path: &Path, result: &ApplyResult) -> Result<(), NetError> {
+    if !result.errors.is_empty() {
+        let errors: Vec<String> = result.errors.iter().map(|e| e.to_string()).collect();
+        return Err(weights_error(
+            path,
+            format!("cannot apply tensors: {}", errors.join("; ")),
+        ));
+    }
+    if !result.missing.is_empty() {
+        let missing: Vec<&str> = result.missing.iter().map(|(p, _)| p.as_str()).collect();
+        return Err(weights_error(
+            path,
+            format!("missing tensors: {}", missing.join(", ")),
+        ));
+    }
+    let unused: Vec<&str> = result
+        .unused
+        .iter()
+        .map(String::as_str)
+        .filter(|p| !p.ends_with("num_batches_tracked"))
+        .collect();
+    if !unused.is_empty() {
+        return Err(weights_error(
+            path,
+            format!("tensors the network does not have: {}", unused.join(", ")),
+        ));
+    }
+    Ok(())
+}
+
+/// Writes `net`'s parameters to `path` (safetensors) and its configuration to
+/// [`config_path`]`(path)`.
+///
+/// # Errors
+/// [`NetError::Io`] or [`NetError::Weights`] when a file cannot be written.
+pub fn save(net: &OmniMvsNet, path: &Path) -> Result<(), NetError> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| NetError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+    }
+    let json = serde_json::to_string_pretty(&net.config).map_err(|source| NetError::Json {
+        path: config_path(path),
+        source,
+    })?;
+    std::fs::write(config_path(path), json + "\n").map_err(|source| NetError::Io {
+        path: config_path(path),
+        source,
+    })?;
+    let mut store = SafetensorsStore::from_file(path).overwrite(true);
+    net.save_into(&mut store)
+        .map_err(|e| weights_error(path, e.to_string()))
+}
+
+/// Reads a configuration JSON file.
+///
+/// # Errors
+/// [`NetError::Io`] or [`NetError::Json`].
+pub fn read_config(path: &Path) -> Result<NetConfig, NetError> {
+    let text = std::fs::read_to_string(path).map_err(|source| NetError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    serde_json::from_str(&text).map_err(|source| NetError::Json {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Loads a network saved by [`save`]: the configuration beside `path`, then the weights.
+///
+/// # Errors
+/// [`NetError`] when a file is missing, unreadable or does not fit the configuration.
+pub fn load(path: &Path, device: &Device) -> Result<OmniMvsNet, NetError> {
+    let config = read_config(&config_path(path))?;
+    let mut net = OmniMvsNet::new(&config, device)?;
+    if !path.exists() {
+        return Err(weights_error(path, "no such weight file"));
+    }
+    let mut store = SafetensorsStore::from_file(path);
+    let result = net
+        .load_from(&mut store)
+        .map_err(|e| weights_error(path, e.to_string()))?;
+    check_applied(path, &result)?;
+    Ok(net)
+}
+
+/// What a reference checkpoint says about the network it holds.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CheckpointInfo {
+    /// `CH`.
+    pub channels: usize,
+    /// Number of cameras (input channels of the fusion divided by `CH`).
+    pub num_cameras: usize,
+    /// ICCV or published layout (presence of the 18th feature convolution).
+    pub layout: Layout,
+}
+
+#[derive(Deserialize)]
+struct CheckpointMeta {
+    #[serde(rename = "CH")]
+    ch: Option<usize>,
+}
+
+/// Reads `CH`, the number of cameras and the layout of a reference checkpoint.
+///
+/// # Errors
+/// [`NetError::Weights`] when the file is not a PyTorch checkpoint with a
+/// `net_state_dict`.
+pub fn inspect_pytorch(path: &Path) -> Result<CheckpointInfo, NetError> {
+    let reader = PytorchReader::with_top_level_key(path, STATE_DICT_KEY)
+        .map_err(|e| weights_error(path, format!("not a reference checkpoint: {e}")))?;
+    let fusion = reader.get(FUSION_WEIGHT_KEY).ok_or_else(|| {
+        weights_error(path, format!("no `{FUSION_WEIGHT_KEY}` in the state dict"))
+    })?;
+    let shape = fusion.shape().to_vec();
+    let meta: Option<CheckpointMeta> = PytorchReader::load_config(path, None).ok();
+    let channels = match meta.and_then(|m| m.ch) {
+        Some(ch) => ch,
+        None if shape.len() == 5 => shape[0] / 2,
+        None => 0,
+    };
+    if shape.len() != 5 || channels == 0 || shape[0] != 2 * channels || shape[1] % channels != 0 {
+        return Err(weights_error(
+            path,
+            format!(
+                "`{FUSION_WEIGHT_KEY}` has shape {shape:?}, expected [2 CH, cams * CH, 3, 3, 3] with CH = {channels}"
+            ),
+        ));
+    }
+    let layout = if reader.get(PUBLISHED_ONLY_KEY).is_some() {
+        Layout::Published
+    } else {
+        Layout::Iccv
+    };
+    Ok(CheckpointInfo {
+        channels,
+        num_cameras: shape[1] / channels,
+        layout,
+    })
+}
+
+/// Imports a reference PyTorch checkpoint. `CH`, the cameras and the layout come from the
+/// checkpoint; the other sizes (which the weights do not fix) from `base`.
+///
+/// # Errors
+/// [`NetError`] when the file cannot be read or does not match the layout.
+pub fn import_pytorch(
+    path: &Path,
+    base: &NetConfig,
+    device: &Device,
+) -> Result<OmniMvsNet, NetError> {
+    let info = inspect_pytorch(path)?;
+    let config = NetConfig {
+        channels: info.channels,
+        num_cameras: info.num_cameras,
+        layout: info.layout,
+        ..base.clone()
+    };
+    let mut net = OmniMvsNet::new(&config, device)?;
+    let mut store = PytorchStore::from_file(path)
+        .with_top_level_key(STATE_DICT_KEY)
+        .map_indices_contiguous(false);
+    let result = net
+        .load_from(&mut store)
+        .map_err(|e| weights_error(path, e.to_string()))?;
+    check_applied(path, &result)?;
+    Ok(net)
+}
+
+/// Loads weights of either kind: a `.pt`/`.pth` reference checkpoint (sizes from `base`)
+/// or our safetensors file (sizes from its JSON).
+///
+/// # Errors
+/// See [`import_pytorch`] and [`load`].
+pub fn load_any(path: &Path, base: &NetConfig, device: &Device) -> Result<OmniMvsNet, NetError> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("pt" | "pth" | "tar") => import_pytorch(path, base, device),
+        _ => load(path, device),
+    }
+}
