@@ -211,7 +211,8 @@ pub const FINITE_INV_DEPTH: f32 = 1e-3;
 /// reference's invalid-pixel rule: an "infinite" pixel (inverse depth below
 /// [`FINITE_INV_DEPTH`]) inside a hole that a 5x5 binary closing of the
 /// finite-depth mask fills is invalid (it is noise, not sky); every valid
-/// pixel has `0 <= n* <= N`.
+/// pixel has `0 <= n* <= N`. Inverse depth 0 (sky) maps to index 0: `d_0`
+/// is `f64::EPSILON`, not 0, and the difference is a numerical artefact.
 pub fn ground_truth_index(map: &InvDepthMap, hyps: &InvDepthHypotheses) -> GroundTruth {
     let (w, h) = (map.width, map.height);
     let finite: Vec<bool> = map.data.iter().map(|&d| d >= FINITE_INV_DEPTH).collect();
@@ -220,7 +221,9 @@ pub fn ground_truth_index(map: &InvDepthMap, hyps: &InvDepthHypotheses) -> Groun
     let mut index = Vec::with_capacity(w * h);
     let mut valid = Vec::with_capacity(w * h);
     for i in 0..w * h {
-        let idx = hyps.index(f64::from(map.data[i])) as f32;
+        // Sky is stored as inverse depth 0, which sits f64::EPSILON below d_0
+        // (index -1e-14): that is index 0, not "behind the farthest sphere".
+        let idx = hyps.index(f64::from(map.data[i])).max(0.0) as f32;
         let hole = !finite[i] && closed[i];
         index.push(idx);
         valid.push(!hole && idx.is_finite() && (0.0..=n).contains(&idx));

@@ -1,0 +1,234 @@
+//! `omnimvs infer`: run the OmniMVS network on a dataset's frames.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use omnimvs_data::Dataset;
+use omnimvs_data::colormap::{Colormap, colorize};
+use omnimvs_data::gt::write_f32_tiff;
+use omnimvs_data::image_io::write_png_u8;
+use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
+use omnimvs_data::ply::{ColoredPoint, write_ply};
+use omnimvs_net::infer::{FrameResult, Inference, resize_bilinear};
+use omnimvs_net::weights::load_any;
+use omnimvs_net::{NetConfig, OmniMvsNet};
+use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
+
+use crate::args::Frames;
+
+/// Inverse depths below this (farther than 1 km) are left out of point clouds.
+const FAR_INV_DEPTH: f32 = 1e-3;
+/// Error maps saturate at this error, in percent of N.
+const ERROR_MAP_MAX_PCT: f64 = 10.0;
+
+/// Estimate 360-degree inverse depth with the OmniMVS network. Writes per frame
+/// OUT/%05d.tiff (f32 inverse depth, 1/m), %05d_index.tiff (hypothesis index),
+/// %05d_entropy.tiff, %05d.png (colour-mapped inverse depth), %05d_vis.png
+/// (inputs, panorama, depth, entropy and error when ground truth exists) and
+/// optionally %05d.ply; metrics.json when ground truth exists.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Dataset folder (or its config.yaml).
+    pub dataset: PathBuf,
+    /// Weights: our .safetensors (with its .json beside it) or a reference
+    /// PyTorch checkpoint (.pt/.pth with net_state_dict and CH). Without it, a
+    /// randomly initialised network of --preset (no trained model is bundled yet).
+    #[arg(long)]
+    pub weights: Option<PathBuf>,
+    /// Architecture sizes for a PyTorch checkpoint or random weights: paper or tiny.
+    #[arg(long, default_value = "paper")]
+    pub preset: String,
+    /// Frames, A..B (inclusive) or a single frame.
+    #[arg(long)]
+    pub frames: Frames,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Compute backend; only `cpu` (the pure-Rust flex backend) for now.
+    #[arg(long, default_value = "cpu")]
+    pub backend: String,
+    /// Also write a PLY point cloud coloured by the panorama.
+    #[arg(long)]
+    pub ply: bool,
+    /// Camera concatenation order, e.g. 0,1,2,3 (default: the rig's order).
+    #[arg(long, value_delimiter = ',')]
+    pub order: Option<Vec<usize>>,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let device = match args.backend.as_str() {
+        "cpu" | "flex" => burn::tensor::Device::flex(),
+        other => bail!("--backend {other}: only `cpu` is available in this build"),
+    };
+    let ds = Dataset::open(&args.dataset)?;
+    let base = NetConfig::preset(&args.preset)?;
+    let net = match &args.weights {
+        Some(path) => load_any(path, &base, &device)
+            .with_context(|| format!("loading weights {}", path.display()))?,
+        None => {
+            eprintln!(
+                "warning: no --weights and no bundled model yet: using a randomly initialised \
+                 `{}` network, its outputs are meaningless",
+                args.preset
+            );
+            OmniMvsNet::new(&base, &device)?
+        }
+    };
+    let config = net.config.clone();
+    let net = net.fold_batch_norm();
+    let (mut inference, status) = Inference::new(net, &ds, &LutCache::default_location(), device)?;
+    match status {
+        CacheStatus::Hit(p) => eprintln!("lookup table from cache {}", p.display()),
+        CacheStatus::Built(p) => eprintln!("lookup table built and cached in {}", p.display()),
+        CacheStatus::BuiltNotSaved(why) => eprintln!("lookup table built (not cached: {why})"),
+    }
+    if let Some(order) = &args.order {
+        inference.net.check_order(order)?;
+        inference.order = order.clone();
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let settings = serde_json::json!({
+        "dataset": args.dataset,
+        "weights": args.weights,
+        "network": config,
+        "order": inference.order,
+        "backend": args.backend,
+    });
+    std::fs::write(args.out.join("infer.json"), serde_json::to_string_pretty(&settings)? + "\n")?;
+
+    let frames: Vec<u32> = args.frames.0.clone().collect();
+    let bar = ProgressBar::new(frames.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} frames, {elapsed} elapsed, eta {eta} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut metrics: Vec<(u32, Metrics)> = Vec::new();
+    for &frame in &frames {
+        let images = ds.read_frame(frame).with_context(|| format!("frame {frame}"))?;
+        let result = inference.run(&images).with_context(|| format!("frame {frame}"))?;
+        let error = write_frame(args, &ds, &inference, frame, &images, &result)?;
+        if let Some(m) = error {
+            bar.set_message(format!("frame {frame}: MAE {:.3}", m.mae));
+            metrics.push((frame, m));
+        } else {
+            bar.set_message(format!("frame {frame}: {:.2} s", result.timings.total));
+        }
+        bar.inc(1);
+    }
+    bar.finish();
+    if !metrics.is_empty() {
+        let rows: Vec<Metrics> = metrics.iter().map(|(_, m)| *m).collect();
+        let mean = mean_metrics(&rows);
+        let json = serde_json::json!({
+            "frames": metrics.iter().map(|(f, m)| serde_json::json!({"frame": f, "metrics": m})).collect::<Vec<_>>(),
+            "mean": mean,
+        });
+        std::fs::write(args.out.join("metrics.json"), serde_json::to_string_pretty(&json)? + "\n")?;
+        if let Some(mean) = mean {
+            println!("{}", mean.markdown_row("OmniMVS (burn)"));
+        }
+    }
+    println!("wrote {} frames to {}", frames.len(), args.out.display());
+    Ok(())
+}
+
+/// Writes every output of one frame; returns its metrics when ground truth exists.
+fn write_frame(
+    args: &Args,
+    ds: &Dataset,
+    inference: &Inference,
+    frame: u32,
+    images: &[GrayImage],
+    result: &FrameResult,
+) -> Result<Option<Metrics>> {
+    let (w, h) = (result.width, result.height);
+    let out = |suffix: &str| args.out.join(format!("{frame:05}{suffix}"));
+    write_f32_tiff(&out(".tiff"), w, h, &result.inv_depth)?;
+    write_f32_tiff(&out("_index.tiff"), w, h, &result.index)?;
+    write_f32_tiff(&out("_entropy.tiff"), w, h, &result.entropy)?;
+    let max_inv = inference.hypotheses.max_inv_depth();
+    let depth_rgb = colorize(&result.inv_depth, 0.0, max_inv, Colormap::Turbo, None);
+    write_png_u8(&out(".png"), w, h, 3, &depth_rgb)?;
+
+    let ndepth = inference.net.config.num_invdepth;
+    let gt = ds.ground_truth(frame, h, w, &inference.hypotheses)?;
+    let metrics = gt.as_ref().map(|gt| frame_metrics(&result.index, gt, ndepth)).transpose()?;
+
+    let pano = compose_panorama(
+        &ds.rig,
+        &inference.grid,
+        images,
+        Some(&inference.masks),
+        InvDepthSource::Map(&result.inv_depth),
+    )?;
+    let entropy_rgb =
+        colorize(&result.entropy, 0.0, (ndepth as f64).ln(), Colormap::Inferno, None);
+    let mut rows: Vec<Vec<u8>> = vec![
+        fisheye_strip(images, w),
+        gray_to_rgb(&pano.image),
+        depth_rgb,
+        entropy_rgb,
+    ];
+    if let Some(gt) = &gt {
+        let err: Vec<f32> = result
+            .index
+            .iter()
+            .zip(&gt.index)
+            .map(|(p, g)| (p - g).abs() / ndepth as f32 * 100.0)
+            .collect();
+        rows.push(colorize(&err, 0.0, ERROR_MAP_MAX_PCT, Colormap::Inferno, Some(&gt.valid)));
+    }
+    let composite: Vec<u8> = rows.concat();
+    write_png_u8(&out("_vis.png"), w, composite.len() / (3 * w), 3, &composite)?;
+
+    if args.ply {
+        let points: Vec<ColoredPoint> = (0..h * w)
+            .filter(|&i| result.inv_depth[i] > FAR_INV_DEPTH)
+            .map(|i| {
+                let ray = inference.grid.ray((i / w) as f64, (i % w) as f64);
+                let p = ray / f64::from(result.inv_depth[i]);
+                let v = pano.image.data[i].clamp(0.0, 255.0) as u8;
+                ColoredPoint { xyz_m: [p.x as f32, p.y as f32, p.z as f32], rgb: [v, v, v] }
+            })
+            .collect();
+        write_ply(&out(".ply"), &points)?;
+    }
+    Ok(metrics)
+}
+
+/// The fisheye images side by side, scaled to a strip `width` pixels wide (RGB).
+fn fisheye_strip(images: &[GrayImage], width: usize) -> Vec<u8> {
+    let tile_w = width / images.len().max(1);
+    let tile_h = images
+        .iter()
+        .map(|im| tile_w * im.height / im.width.max(1))
+        .max()
+        .unwrap_or(0);
+    let mut rgb = vec![0u8; width * tile_h * 3];
+    for (k, im) in images.iter().enumerate() {
+        let th = tile_w * im.height / im.width.max(1);
+        let small = resize_bilinear(im, tile_w, th);
+        for r in 0..th {
+            for c in 0..tile_w {
+                let v = small.data[r * tile_w + c].clamp(0.0, 255.0) as u8;
+                let o = (r * width + k * tile_w + c) * 3;
+                rgb[o..o + 3].copy_from_slice(&[v, v, v]);
+            }
+        }
+    }
+    rgb
+}
+
+fn gray_to_rgb(image: &GrayImage) -> Vec<u8> {
+    image
+        .data
+        .iter()
+        .flat_map(|&v| {
+            let v = v.clamp(0.0, 255.0) as u8;
+            [v, v, v]
+        })
+        .collect()
+}
+

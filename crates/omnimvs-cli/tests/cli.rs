@@ -1,0 +1,154 @@
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+//! The `omnimvs` binary end to end: outputs on the real samples, and clear
+//! errors with a non-zero exit for bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+#[path = "../../omnimvs-sweep/tests/support/golden.rs"]
+mod golden;
+
+fn samples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/omnimvs-samples")
+}
+
+fn omnimvs(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_omnimvs"))
+        .args(args)
+        .env(
+            "OMNIMVS_CACHE_DIR",
+            std::env::temp_dir().join("omnimvs-cli-test-cache"),
+        )
+        .output()
+        .expect("run omnimvs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn lut_file_matches_golden_values_on_both_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, min_depth) in [("sunny_single", 1.65), ("itbt_sample", 0.5)] {
+        let ds = samples().join(name);
+        let out = dir.path().join("lt_(160,640,192).hwd");
+        let o = omnimvs(&["lut", ds.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let rig = omnimvs_camera::read_config_rig(&ds.join("config.yaml")).unwrap();
+        let grid = omnimvs_sweep::EquirectGrid::new(160, 640, 45.0).unwrap();
+        let hyps = omnimvs_sweep::InvDepthHypotheses::new(192, min_depth).unwrap();
+        let lut = omnimvs_sweep::LookupTable::read_hwd(
+            &out,
+            &rig,
+            &grid,
+            &hyps,
+            omnimvs_sweep::SphereSet::EveryOther,
+        )
+        .unwrap();
+        let (worst, n) = golden::compare(&lut, &golden::Golden::load(name));
+        assert!(
+            n > 7_000 && worst < 0.01,
+            "{name}: {n} entries, worst {worst} px"
+        );
+    }
+}
+
+#[test]
+fn info_describes_the_rig_and_frames() {
+    let o = omnimvs(&["info", samples().join("itbt_sample").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = stdout(&o);
+    assert!(s.contains("cameras      4"), "{s}");
+    assert!(s.contains("3 listed, 3 found"), "{s}");
+    assert!(s.contains("cam1-cam3: 0.420 m"), "{s}");
+    assert!(s.contains("ground truth none"), "{s}");
+}
+
+#[test]
+fn pano_writes_a_panorama() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("pano.png");
+    let o = omnimvs(&[
+        "pano",
+        samples().join("itbt_sample").to_str().unwrap(),
+        "--frame",
+        "1",
+        "--depth",
+        "3",
+        "--size",
+        "100x200",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(&out).unwrap();
+    assert_eq!((img.width(), img.height()), (200, 100));
+    assert!(stdout(&o).contains("100.0% of pixels seen"));
+}
+
+#[test]
+fn bad_input_gives_clear_errors_and_non_zero_exit() {
+    let dir = tempfile::tempdir().unwrap();
+    let itbt = samples().join("itbt_sample");
+    let itbt = itbt.to_str().unwrap();
+    let out = dir.path().join("x.png");
+    let out = out.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["info", "/nonexistent/dataset"], "/nonexistent/dataset"),
+        (
+            vec!["pano", itbt, "--frame", "9", "--depth", "3", "--out", out],
+            "frame 9",
+        ),
+        (
+            vec!["pano", itbt, "--frame", "1", "--depth=-2", "--out", out],
+            "--depth",
+        ),
+        (
+            vec![
+                "pano",
+                itbt,
+                "--frame",
+                "1",
+                "--invdepth",
+                "/nonexistent/d.tiff",
+                "--out",
+                out,
+            ],
+            "/nonexistent/d.tiff",
+        ),
+        (
+            vec!["lut", itbt, "--ndepth", "191", "--out", out],
+            "--ndepth 191",
+        ),
+        (
+            vec!["lut", itbt, "--size", "160", "--out", out],
+            "HEIGHTxWIDTH",
+        ),
+        (
+            vec!["lut", itbt, "--phi-deg", "120", "--out", out],
+            "phi_deg",
+        ),
+        (
+            vec!["lut", itbt, "--out", "/nonexistent/dir/lt.hwd"],
+            "/nonexistent/dir/lt.hwd",
+        ),
+    ];
+    for (args, needle) in cases {
+        let o = omnimvs(&args);
+        assert!(!o.status.success(), "{args:?} should fail");
+        let e = stderr(&o);
+        assert!(e.contains(needle), "{args:?}: stderr lacks {needle:?}: {e}");
+        assert!(!e.contains("panicked"), "{args:?} panicked: {e}");
+    }
+    // A truncated config.yaml in a dataset folder.
+    let text = std::fs::read_to_string(samples().join("sunny_single/config.yaml")).unwrap();
+    std::fs::write(dir.path().join("config.yaml"), &text[..text.len() / 3]).unwrap();
+    let o = omnimvs(&["info", dir.path().to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("config.yaml"), "{}", stderr(&o));
+}
