@@ -8,6 +8,10 @@ use omnimvs_camera::CameraError;
 pub enum SynthError {
     #[error(transparent)]
     Camera(#[from] CameraError),
+    #[error(transparent)]
+    Data(#[from] omnimvs_data::DataError),
+    #[error(transparent)]
+    Sweep(#[from] omnimvs_sweep::SweepError),
     #[error("{path}: {action}: {source}")]
     Io {
         path: PathBuf,

@@ -12,17 +12,25 @@
 //! rig placed in it by [`SceneSpec::world_from_rig`]. Distances in metres,
 //! inverse depths in 1/m.
 
+pub mod contact;
+pub mod dataset;
 mod error;
+pub mod generate;
+pub mod house;
 pub mod mesh;
 mod ply;
 pub mod primitive;
 pub mod render;
+pub mod rig;
 pub mod rng;
 pub mod scene;
 pub mod texture;
+pub mod things;
 mod tracer;
 
+pub use dataset::{DatasetWriter, Frame, FrameEvent, Shard, SynthSettings, parse_frames};
 pub use error::SynthError;
-pub use render::{equirect_ray, render_fisheye, render_fisheye_into, render_inverse_depth};
+pub use generate::{GenParams, generate};
+pub use render::{render_fisheye, render_fisheye_into, render_inverse_depth};
 pub use scene::{LightSpec, ObjectSpec, Placement, SceneKind, SceneSpec, ShapeSpec, SkySpec};
 pub use tracer::{Hit, MeshLibrary, Tracer};

@@ -5,6 +5,7 @@
 use glam::Vec3A;
 use nalgebra::Vector3;
 use omnimvs_camera::{Camera, Pixel};
+use omnimvs_sweep::EquirectGrid;
 use rayon::prelude::*;
 
 use crate::Tracer;
@@ -63,41 +64,16 @@ pub fn render_fisheye_into(tracer: &Tracer, camera: &Camera, spp: u32, out: &mut
     });
 }
 
-/// The unit ray (rig frame) of pixel `(row, col)` of an `height x width`
-/// equirectangular grid covering latitudes `+-phi_deg` (FORMATS.md).
-pub fn equirect_ray(
-    row: usize,
-    col: usize,
-    height: usize,
-    width: usize,
-    phi_deg: f64,
-) -> Vector3<f64> {
-    let (w2, h2) = (width as f64 / 2.0, (height as f64 - 1.0) / 2.0);
-    let theta = (col as f64 - w2) / w2 * std::f64::consts::PI + std::f64::consts::FRAC_PI_2;
-    let phi = if h2 > 0.0 {
-        (row as f64 - h2) / h2 * phi_deg.to_radians()
-    } else {
-        0.0
-    };
-    Vector3::new(-phi.cos() * theta.cos(), phi.sin(), phi.cos() * theta.sin())
-}
-
 /// Ground-truth inverse depth (1/m, from the rig origin; 0 for the sky) on
-/// an `height x width` equirectangular grid covering `+-phi_deg`,
-/// row-major.
-pub fn render_inverse_depth(
-    tracer: &Tracer,
-    height: usize,
-    width: usize,
-    phi_deg: f64,
-) -> Vec<f32> {
-    let mut out = vec![0f32; height * width];
-    out.par_chunks_mut(width.max(1))
+/// an equirectangular grid (`FORMATS.md` convention), row-major.
+pub fn render_inverse_depth(tracer: &Tracer, grid: &EquirectGrid) -> Vec<f32> {
+    let mut out = vec![0f32; grid.len()];
+    out.par_chunks_mut(grid.width.max(1))
         .enumerate()
         .for_each(|(row, line)| {
             for (col, v) in line.iter_mut().enumerate() {
-                let d = to_vec3a(&equirect_ray(row, col, height, width, phi_deg));
-                *v = tracer.inverse_depth(d.normalize());
+                let d = to_vec3a(&grid.ray(row as f64, col as f64).normalize());
+                *v = tracer.inverse_depth(d);
             }
         });
     out
@@ -120,15 +96,5 @@ mod tests {
                 .all(|&(a, b)| (-0.5..0.5).contains(&a) && (-0.5..0.5).contains(&b))
         );
         assert_eq!(sample_offsets(0).len(), 1);
-    }
-
-    #[test]
-    fn equirect_middle_column_looks_forward_and_row0_up() {
-        let d = equirect_ray(159, 320, 320, 640, 90.0);
-        assert!((d - Vector3::new(0.0, 0.0, 1.0)).norm() < 0.01);
-        let up = equirect_ray(0, 100, 320, 640, 90.0);
-        assert!((up.y + 1.0).abs() < 1e-12);
-        let left = equirect_ray(159, 0, 320, 640, 90.0);
-        assert!((left - Vector3::new(0.0, 0.0, -1.0)).norm() < 0.01);
     }
 }

@@ -1,0 +1,482 @@
+//! Writing a dataset in the reference layout (`FORMATS.md`):
+//!
+//! ```text
+//! <out>/config.yaml                      the rig, min depth, img_fmt, frames
+//! <out>/synth.json                       generator settings (checked on resume)
+//! <out>/cam1/00001.png ... camN/         8-bit gray fisheye images
+//! <out>/omnidepth_gt_640/00001.tiff      f32 inverse depth, 320x640, +-90 deg
+//! <out>/scene/00001.json                 the scene, enough to render it again
+//! ```
+//!
+//! Every file is written atomically (temporary file + rename), the ground
+//! truth last; a frame counts as done when all its files exist, so an
+//! interrupted run leaves whole files only and a re-run resumes.
+
+use std::path::{Path, PathBuf};
+
+use omnimvs_camera::Rig;
+use omnimvs_data::{DatasetConfig, FrameRange, write_config_yaml};
+use omnimvs_sweep::EquirectGrid;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::mesh::{TriMesh, load_mesh};
+use crate::rig::{RigSource, rig_radius_m};
+use crate::scene::{SceneKind, SceneSpec, generator_name};
+use crate::{GenParams, SynthError, Tracer, generate, render_fisheye, render_inverse_depth};
+
+/// Ground-truth grid of the published datasets: 320 x 640, +-90 degrees.
+pub const GT_HEIGHT: usize = 320;
+pub const GT_WIDTH: usize = 640;
+pub const GT_PHI_DEG: f64 = 90.0;
+/// Image file pattern (camera index 1-based, frame index).
+pub const IMG_FMT: &str = "cam%d/%05d.png";
+/// Ground-truth folder and pattern.
+pub const GT_DIR: &str = "omnidepth_gt_640";
+pub const GT_FMT: &str = "omnidepth_gt_640/%05d.tiff";
+pub const SCENE_DIR: &str = "scene";
+
+/// The settings that decide what a dataset contains; written to
+/// `synth.json`, and a resumed run must use the same ones.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SynthSettings {
+    pub generator: String,
+    pub kind: SceneKind,
+    pub seed: u64,
+    /// Samples per pixel of the fisheye images.
+    pub spp: u32,
+    pub num_objects: usize,
+    /// User mesh files (OBJ/PLY) for `things` scenes.
+    pub meshes: Vec<String>,
+    /// Image size of every camera, `[height, width]`.
+    pub image_size: Vec<[u32; 2]>,
+    pub min_depth_m: f64,
+}
+
+/// Which part of the frames a machine renders: frames `k` (0-based position
+/// in the range) with `k % count == index - 1`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// 1-based.
+    pub index: u32,
+    pub count: u32,
+}
+
+impl Shard {
+    pub const ALL: Self = Self { index: 1, count: 1 };
+
+    /// Parses `i/n`, `1 <= i <= n`.
+    ///
+    /// # Errors
+    /// [`SynthError::Invalid`] naming `--shard`.
+    pub fn parse(s: &str) -> Result<Self, SynthError> {
+        let bad = || {
+            SynthError::invalid(
+                "--shard",
+                format!("expected i/n with 1 <= i <= n, such as 2/4, found {s:?}"),
+            )
+        };
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count) = (
+            i.trim().parse::<u32>().map_err(|_| bad())?,
+            n.trim().parse::<u32>().map_err(|_| bad())?,
+        );
+        if index == 0 || count == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Self { index, count })
+    }
+
+    /// The frames of `range` that belong to this shard.
+    pub fn frames(&self, range: &FrameRange) -> Vec<u32> {
+        range
+            .indices()
+            .into_iter()
+            .enumerate()
+            .filter(|(k, _)| *k as u32 % self.count == self.index - 1)
+            .map(|(_, f)| f)
+            .collect()
+    }
+}
+
+/// Parses `--frames`: `a..b` (inclusive, as the published splits are
+/// written), `a..=b`, `a-b` or a single `a`.
+///
+/// # Errors
+/// [`SynthError::Invalid`] naming `--frames`, for malformed text or a
+/// reversed range.
+pub fn parse_frames(s: &str) -> Result<FrameRange, SynthError> {
+    let bad = |m: String| SynthError::invalid("--frames", m);
+    let t = s.trim();
+    let (a, b) = if let Some((a, b)) = t.split_once("..=") {
+        (a, b)
+    } else if let Some((a, b)) = t.split_once("..") {
+        (a, b)
+    } else if let Some((a, b)) = t.split_once('-') {
+        (a, b)
+    } else {
+        (t, t)
+    };
+    let num = |x: &str| {
+        x.trim()
+            .parse::<u32>()
+            .map_err(|_| bad(format!("expected FIRST..LAST such as 1..1000, found {s:?}")))
+    };
+    let (start, end) = (num(a)?, num(b)?);
+    if end < start {
+        return Err(bad(format!(
+            "the range {s:?} is reversed: the last frame {end} is before the first {start}"
+        )));
+    }
+    Ok(FrameRange {
+        start,
+        step: 1,
+        end,
+    })
+}
+
+/// The files of one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FramePaths {
+    pub images: Vec<PathBuf>,
+    pub gt: PathBuf,
+    pub scene: PathBuf,
+}
+
+impl FramePaths {
+    fn all(&self) -> impl Iterator<Item = &PathBuf> {
+        self.images.iter().chain([&self.scene, &self.gt])
+    }
+}
+
+/// One rendered frame, in memory.
+pub struct Frame {
+    pub scene: SceneSpec,
+    /// Per camera, 8-bit gray, row-major.
+    pub images: Vec<Vec<u8>>,
+    /// `GT_HEIGHT x GT_WIDTH` inverse depth, 1/m.
+    pub inv_depth: Vec<f32>,
+}
+
+/// What happened to a frame during [`DatasetWriter::run`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameEvent {
+    Rendered(u32),
+    /// Already complete on disk (resume).
+    Skipped(u32),
+}
+
+/// Renders and writes frames of one dataset folder.
+pub struct DatasetWriter {
+    out: PathBuf,
+    rig: Rig,
+    settings: SynthSettings,
+    params: GenParams,
+    meshes: Vec<TriMesh>,
+    grid: EquirectGrid,
+}
+
+fn io<'a>(path: &'a Path, action: &'static str) -> impl FnOnce(std::io::Error) -> SynthError + 'a {
+    move |e| SynthError::io(path, action, e)
+}
+
+impl DatasetWriter {
+    /// Prepares `out`: creates the folders, writes `config.yaml` (the rig,
+    /// min depth and the whole frame range) and `synth.json`, or checks that
+    /// an existing `synth.json` has the same settings (resume).
+    ///
+    /// # Errors
+    /// [`SynthError`] naming the folder or file: not creatable or writable,
+    /// a user mesh that does not load, settings that differ from those of
+    /// the dataset already there.
+    pub fn create(
+        out: &Path,
+        rig: &RigSource,
+        kind: SceneKind,
+        seed: u64,
+        spp: u32,
+        meshes: &[String],
+        frames: &FrameRange,
+    ) -> Result<Self, SynthError> {
+        if kind == SceneKind::Custom {
+            return Err(SynthError::invalid("--kind", "expected things or house"));
+        }
+        if spp == 0 || spp > 4096 {
+            return Err(SynthError::invalid(
+                "--spp",
+                format!("expected 1 to 4096 samples per pixel, found {spp}"),
+            ));
+        }
+        let loaded = meshes
+            .iter()
+            .map(|m| load_mesh(Path::new(m)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut params = GenParams::new(rig.min_depth_m, rig_radius_m(&rig.rig));
+        params.meshes = meshes.to_vec();
+        let settings = SynthSettings {
+            generator: generator_name(),
+            kind,
+            seed,
+            spp,
+            num_objects: params.num_objects,
+            meshes: meshes.to_vec(),
+            image_size: rig
+                .rig
+                .cameras
+                .iter()
+                .map(|c| [c.model.height(), c.model.width()])
+                .collect(),
+            min_depth_m: rig.min_depth_m,
+        };
+        std::fs::create_dir_all(out).map_err(io(out, "cannot create the output folder"))?;
+        for dir in rig
+            .rig
+            .cameras
+            .iter()
+            .map(|c| c.img_dir.as_str())
+            .chain([GT_DIR, SCENE_DIR])
+        {
+            let p = out.join(dir);
+            std::fs::create_dir_all(&p).map_err(io(&p, "cannot create folder"))?;
+        }
+        let settings_path = out.join("synth.json");
+        let settings_json =
+            serde_json::to_string_pretty(&settings).map_err(|e| SynthError::Json {
+                path: settings_path.clone(),
+                message: e.to_string(),
+            })?;
+        if settings_path.exists() {
+            let text = std::fs::read_to_string(&settings_path)
+                .map_err(io(&settings_path, "cannot read"))?;
+            let old: SynthSettings = serde_json::from_str(&text).map_err(|e| SynthError::Json {
+                path: settings_path.clone(),
+                message: e.to_string(),
+            })?;
+            if old != settings {
+                return Err(SynthError::SettingsMismatch {
+                    path: settings_path,
+                    message: describe_difference(&old, &settings),
+                });
+            }
+        } else {
+            omnimvs_camera::fs::write_atomic(&settings_path, settings_json.as_bytes())
+                .map_err(io(&settings_path, "cannot write"))?;
+        }
+        let config = DatasetConfig {
+            min_depth_m: rig.min_depth_m,
+            img_fmt: IMG_FMT.to_string(),
+            frames: *frames,
+            gt_fmt: Some(GT_FMT.to_string()),
+        };
+        let config_path = out.join("config.yaml");
+        omnimvs_camera::fs::write_atomic(
+            &config_path,
+            write_config_yaml(&rig.rig, &config).as_bytes(),
+        )
+        .map_err(io(&config_path, "cannot write"))?;
+        Ok(Self {
+            out: out.to_path_buf(),
+            rig: rig.rig.clone(),
+            settings,
+            params,
+            meshes: loaded,
+            grid: EquirectGrid::new(GT_HEIGHT, GT_WIDTH, GT_PHI_DEG)?,
+        })
+    }
+
+    pub fn settings(&self) -> &SynthSettings {
+        &self.settings
+    }
+
+    /// The files of frame `frame`.
+    pub fn frame_paths(&self, frame: u32) -> FramePaths {
+        FramePaths {
+            images: self
+                .rig
+                .cameras
+                .iter()
+                .map(|c| self.out.join(&c.img_dir).join(format!("{frame:05}.png")))
+                .collect(),
+            gt: self.out.join(GT_DIR).join(format!("{frame:05}.tiff")),
+            scene: self.out.join(SCENE_DIR).join(format!("{frame:05}.json")),
+        }
+    }
+
+    /// Whether every file of the frame is on disk.
+    pub fn is_complete(&self, frame: u32) -> bool {
+        self.frame_paths(frame).all().all(|p| p.is_file())
+    }
+
+    /// Generates and renders one frame in memory.
+    ///
+    /// # Errors
+    /// [`SynthError`] if the scene cannot be built.
+    pub fn render_frame(&self, frame: u32) -> Result<Frame, SynthError> {
+        let scene = generate(self.settings.kind, self.settings.seed, frame, &self.params)?;
+        render_scene(
+            &scene,
+            &self.meshes,
+            &self.rig,
+            self.settings.spp,
+            &self.grid,
+        )
+        .map(|(images, inv_depth)| Frame {
+            scene,
+            images,
+            inv_depth,
+        })
+    }
+
+    /// Writes a rendered frame: scene, images, then the ground truth.
+    ///
+    /// # Errors
+    /// [`SynthError`] naming the file that could not be written; files of
+    /// other frames are untouched and this frame is redone by a re-run.
+    pub fn write_frame(&self, frame: u32, data: &Frame) -> Result<(), SynthError> {
+        let paths = self.frame_paths(frame);
+        let json = serde_json::to_string_pretty(&data.scene).map_err(|e| SynthError::Json {
+            path: paths.scene.clone(),
+            message: e.to_string(),
+        })?;
+        omnimvs_camera::fs::write_atomic(&paths.scene, json.as_bytes())
+            .map_err(io(&paths.scene, "cannot write"))?;
+        self.rig
+            .cameras
+            .par_iter()
+            .zip(&data.images)
+            .zip(&paths.images)
+            .try_for_each(|((cam, img), path)| {
+                let (w, h) = (cam.model.width() as usize, cam.model.height() as usize);
+                omnimvs_data::image_io::write_png_u8(path, w, h, 1, img).map_err(SynthError::from)
+            })?;
+        omnimvs_data::gt::write_f32_tiff(&paths.gt, GT_WIDTH, GT_HEIGHT, &data.inv_depth)?;
+        Ok(())
+    }
+
+    /// Renders and writes `frames`, skipping complete ones; `on_frame` is
+    /// called after each.
+    ///
+    /// # Errors
+    /// The first failure; frames finished before it stay on disk.
+    pub fn run(
+        &self,
+        frames: &[u32],
+        mut on_frame: impl FnMut(FrameEvent),
+    ) -> Result<(), SynthError> {
+        for &f in frames {
+            if self.is_complete(f) {
+                on_frame(FrameEvent::Skipped(f));
+                continue;
+            }
+            let data = self.render_frame(f)?;
+            self.write_frame(f, &data)?;
+            on_frame(FrameEvent::Rendered(f));
+        }
+        Ok(())
+    }
+}
+
+fn describe_difference(old: &SynthSettings, new: &SynthSettings) -> String {
+    let mut d = Vec::new();
+    if old.kind != new.kind {
+        d.push(format!(
+            "kind {} there, {} now",
+            old.kind.name(),
+            new.kind.name()
+        ));
+    }
+    if old.seed != new.seed {
+        d.push(format!("seed {} there, {} now", old.seed, new.seed));
+    }
+    if old.spp != new.spp {
+        d.push(format!("spp {} there, {} now", old.spp, new.spp));
+    }
+    if old.image_size != new.image_size {
+        d.push(format!(
+            "image size {:?} there, {:?} now",
+            old.image_size, new.image_size
+        ));
+    }
+    if old.min_depth_m != new.min_depth_m {
+        d.push(format!(
+            "min depth {} there, {} now",
+            old.min_depth_m, new.min_depth_m
+        ));
+    }
+    if old.meshes != new.meshes {
+        d.push("different user meshes".to_string());
+    }
+    if old.generator != new.generator {
+        d.push(format!(
+            "generator {} there, {} now",
+            old.generator, new.generator
+        ));
+    }
+    if d.is_empty() {
+        d.push("other settings differ".to_string());
+    }
+    d.join(", ")
+}
+
+/// Renders every camera of `rig` and the ground truth on `grid` for a scene.
+///
+/// # Errors
+/// [`SynthError`] if the scene cannot be built (bad placement, mesh index).
+pub fn render_scene(
+    scene: &SceneSpec,
+    meshes: &[TriMesh],
+    rig: &Rig,
+    spp: u32,
+    grid: &EquirectGrid,
+) -> Result<(Vec<Vec<u8>>, Vec<f32>), SynthError> {
+    let tracer = Tracer::new(scene, meshes)?;
+    let images = rig
+        .cameras
+        .iter()
+        .map(|c| render_fisheye(&tracer, c, spp))
+        .collect();
+    let inv_depth = render_inverse_depth(&tracer, grid);
+    Ok((images, inv_depth))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_and_shards_parse() {
+        assert_eq!(
+            parse_frames("1..1000").unwrap(),
+            FrameRange {
+                start: 1,
+                step: 1,
+                end: 1000
+            }
+        );
+        assert_eq!(
+            parse_frames("5").unwrap(),
+            FrameRange {
+                start: 5,
+                step: 1,
+                end: 5
+            }
+        );
+        assert_eq!(parse_frames("3..=4").unwrap().end, 4);
+        let err = parse_frames("10..2").unwrap_err().to_string();
+        assert!(
+            err.contains("--frames") && err.contains("reversed"),
+            "{err}"
+        );
+        assert!(parse_frames("a..b").is_err());
+        let range = parse_frames("1..10").unwrap();
+        let s = Shard::parse("2/3").unwrap();
+        assert_eq!(s.frames(&range), vec![2, 5, 8]);
+        let all: Vec<u32> = (1..=3)
+            .flat_map(|i| Shard { index: i, count: 3 }.frames(&range))
+            .collect();
+        assert_eq!(all.len(), 10);
+        assert!(Shard::parse("0/3").is_err());
+        assert!(Shard::parse("4/3").is_err());
+        assert!(Shard::parse("x").is_err());
+    }
+}

@@ -1,0 +1,142 @@
+//! What the scene generators share: parameters, bounding-box clearance,
+//! random skies and lights.
+
+use nalgebra::{Matrix3, Point3, Vector3};
+
+use crate::rng::Rng;
+use crate::scene::{LightSpec, Placement, SceneKind, SceneSpec, SkySpec};
+use crate::{SynthError, house, things};
+
+/// Parameters of the scene generators.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GenParams {
+    /// The rig's minimum depth (`omnimvs_sweep_min_depth`), metres: no
+    /// geometry is placed closer to the rig origin.
+    pub min_depth_m: f64,
+    /// Largest distance of a camera centre from the rig origin, metres.
+    pub rig_radius_m: f64,
+    /// Objects per `things` scene (64 in OmniThings).
+    pub num_objects: usize,
+    /// User mesh files (OBJ/PLY) that `things` scenes may use.
+    pub meshes: Vec<String>,
+}
+
+impl GenParams {
+    /// The published rig's values and 64 objects.
+    pub fn new(min_depth_m: f64, rig_radius_m: f64) -> Self {
+        Self {
+            min_depth_m,
+            rig_radius_m,
+            num_objects: 64,
+            meshes: Vec::new(),
+        }
+    }
+
+    /// The least distance (metres) from the rig origin to any geometry: the
+    /// minimum depth, and never less than 0.25 m beyond the cameras.
+    pub fn clearance_m(&self) -> f64 {
+        self.min_depth_m.max(self.rig_radius_m + 0.25)
+    }
+}
+
+/// Generates the scene of one frame.
+///
+/// # Errors
+/// [`SynthError::Invalid`] for [`SceneKind::Custom`] or non-positive depths.
+pub fn generate(
+    kind: SceneKind,
+    seed: u64,
+    frame: u32,
+    params: &GenParams,
+) -> Result<SceneSpec, SynthError> {
+    if !(params.min_depth_m.is_finite() && params.min_depth_m > 0.0) {
+        return Err(SynthError::invalid(
+            "min depth",
+            format!(
+                "expected a positive number of metres, found {}",
+                params.min_depth_m
+            ),
+        ));
+    }
+    match kind {
+        SceneKind::Things => Ok(things::generate(seed, frame, params)),
+        SceneKind::House => Ok(house::generate(seed, frame, params)),
+        SceneKind::Custom => Err(SynthError::invalid(
+            "scene kind",
+            "custom scenes are not generated",
+        )),
+    }
+}
+
+/// Distance from `point` to the axis-aligned bounding box of an object's
+/// unit cube `[-1, 1]^3` under `placement` (0 when inside). Every shape lies
+/// inside its unit cube, so this is a lower bound of the distance to the
+/// object.
+pub fn aabb_distance(placement: &Placement, point: &Vector3<f64>) -> f64 {
+    let lin: Matrix3<f64> =
+        placement.rotation_matrix() * Matrix3::from_diagonal(&Vector3::from(placement.scale));
+    let half = Vector3::from_fn(|r, _| lin.row(r).abs().sum());
+    let c = Vector3::from(placement.translation_m);
+    let lo = c - half;
+    let hi = c + half;
+    let q = Point3::from(point.sup(&lo).inf(&hi));
+    (q.coords - point).norm()
+}
+
+/// A random sky: gradient, clouds, sun.
+pub fn random_sky(rng: &mut Rng) -> SkySpec {
+    let horizon = rng.range(0.55, 0.9) as f32;
+    let elevation = rng.range(0.15, 1.2);
+    let azimuth = rng.range(0.0, std::f64::consts::TAU);
+    SkySpec {
+        zenith: (horizon - rng.range(0.1, 0.4) as f32).max(0.1),
+        horizon,
+        ground: rng.range(0.15, 0.4) as f32,
+        cloud_cover: rng.range(0.1, 0.8) as f32,
+        cloud_brightness: rng.range(0.7, 1.0) as f32,
+        cloud_freq: rng.log_range(1.5, 6.0) as f32,
+        cloud_seed: rng.seed_i32(),
+        sun_dir: [
+            (elevation.cos() * azimuth.cos()) as f32,
+            -elevation.sin() as f32,
+            (elevation.cos() * azimuth.sin()) as f32,
+        ],
+        sun_strength: rng.range(0.0, 0.6) as f32,
+    }
+}
+
+/// A light: the sun of the sky when there is one, else a point light inside
+/// the room (`(placement, half extents)`), else above the rig.
+pub fn random_light(
+    rng: &mut Rng,
+    sky: Option<&SkySpec>,
+    room: Option<(&Placement, Vector3<f64>)>,
+) -> LightSpec {
+    let ambient = rng.range(0.25, 0.5) as f32;
+    let diffuse = rng.range(0.5, 0.8) as f32;
+    if let Some(s) = sky {
+        return LightSpec {
+            position_m: s.sun_dir.map(f64::from),
+            directional: true,
+            ambient,
+            diffuse,
+        };
+    }
+    let position = match room {
+        Some((placement, half)) => {
+            let local = Vector3::new(
+                rng.range(-0.8, 0.8) * half.x,
+                rng.range(-0.95, -0.6) * half.y,
+                rng.range(-0.8, 0.8) * half.z,
+            );
+            placement.isometry() * Point3::from(local)
+        }
+        None => Point3::new(0.0, -5.0, 0.0),
+    };
+    LightSpec {
+        position_m: position.coords.into(),
+        directional: false,
+        ambient,
+        diffuse,
+    }
+}

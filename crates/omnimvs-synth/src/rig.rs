@@ -1,0 +1,267 @@
+//! Rigs for the generator: the published rig preset, reading a rig with its
+//! minimum depth from a `config.yaml`, and resizing a rig's images.
+
+use std::path::Path;
+
+use omnimvs_camera::{Camera, CameraModel, OcamModel, Rig, parse_config_rig};
+use serde_json::Value;
+
+use crate::SynthError;
+
+/// Name of the published rig preset (`--rig sunny`).
+pub const PRESET_NAME: &str = "sunny";
+
+/// Minimum depth of the published rig, metres.
+pub const PRESET_MIN_DEPTH_M: f64 = 1.65;
+
+/// The camera values of the published rig (the same numbers as the public
+/// `sunny/config.yaml`: four 220-degree fisheyes, 768x800, 0.6 m from the rig
+/// centre). Calibration, not data. No `invalid_mask`: synthetic images have
+/// no robot body in view.
+pub const PRESET_CAMERAS_YAML: &str = r#"
+cameras:
+  - cam_id: 1
+    img_dir: "cam1"
+    model: "ocam"
+    poly: [5, -1.966560e+02, 0.000000e+00, 3.053428e-03, -9.784996e-06, 2.278718e-08]
+    inv_poly: [13, 300.888356, 180.967781, -21.353055, 14.896848, 31.786100, -12.778866,
+      -10.889768, 20.862822, 6.557302, -10.383775, -2.519069, 2.891402, 1.028544]
+    center: [383.000000, 399.000000]
+    affine: [1.000000, 0.000000, 0.000000]
+    image_size: [768, 800]
+    pose: [0.000000, 0.000000, 0.000000, 0.000000, 0.000000, 0.600000]
+    max_fov: 220.0
+  - cam_id: 2
+    img_dir: "cam2"
+    model: "ocam"
+    poly: [5, -1.952845e+02, 0.0e+00, 3.144000e-03, -1.200000e-05, 2.486384e-08]
+    inv_poly: [18, 323.629199, 197.843945, -49.665142, 26.330296, 53.715508, -72.809331,
+      13.824609, 118.439118, -78.606602, -111.666632, 96.160106, 75.674015, -59.105222,
+      -35.206173, 19.094882, 10.136929, -2.487794, -1.285659]
+    center: [383.000000, 399.000000]
+    affine: [1.000000, 0.000000, 0.000000]
+    image_size: [768, 800]
+    pose: [0.000000, 1.570796326794897, 0.000000, 0.600000, 0.000000, 0.000000]
+    max_fov: 220.0
+  - cam_id: 3
+    img_dir: "cam3"
+    model: "ocam"
+    poly: [5, -1.961306e+02, 0.0e+00, 2.443660e-03, -6.311796e-06, 1.710723e-08]
+    inv_poly: [13, 304.912574, 182.614202, -14.835523, 19.282275, 23.836316, -9.545246,
+      -1.666827, 15.823282, 1.062545, -7.531972, -0.379030, 2.393536, 0.690840]
+    center: [383.000000, 399.000000]
+    affine: [1.000000, 0.000000, 0.000000]
+    image_size: [768, 800]
+    pose: [0.000000, 3.141592653589793, 0.000000, 0.000000, 0.000000, -0.600000]
+    max_fov: 220.0
+  - cam_id: 4
+    img_dir: "cam4"
+    model: "ocam"
+    poly: [5, -1.901115e+02, 0.0e+00, 2.210202e-03, -4.576664e-06, 1.417824e-08]
+    inv_poly: [14, 299.951227, 185.013857, -7.263880, 18.377107, 21.416860, -4.718155,
+      -1.264684, 11.644929, 2.355373, -5.187119, -1.178801, 1.663296, 0.886764, 0.125755]
+    center: [383.000000, 399.000000]
+    affine: [1.000000, 0.000000, 0.000000]
+    image_size: [768, 800]
+    pose: [0.000000, -1.570796326794897, 0.000000, -0.600000, 0.000000, 0.000000]
+    max_fov: 220.0
+"#;
+
+/// A rig and its minimum depth.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigSource {
+    pub rig: Rig,
+    /// `config.omnimvs_sweep_min_depth`, metres.
+    pub min_depth_m: f64,
+}
+
+/// The published rig preset.
+///
+/// # Errors
+/// Never in practice (the embedded text is tested); a [`SynthError`] if the
+/// embedded text were invalid.
+pub fn preset_rig() -> Result<RigSource, SynthError> {
+    let rig = parse_config_rig(Path::new("<preset sunny>"), PRESET_CAMERAS_YAML)?;
+    Ok(RigSource {
+        rig,
+        min_depth_m: PRESET_MIN_DEPTH_M,
+    })
+}
+
+/// The rig of `--rig`: the preset name, or a `config.yaml` path (whose
+/// `config.omnimvs_sweep_min_depth` gives the minimum depth).
+///
+/// # Errors
+/// [`SynthError`] naming the file and field: unreadable file, invalid YAML
+/// or camera fields, a missing or non-positive minimum depth.
+pub fn load_rig(arg: &str) -> Result<RigSource, SynthError> {
+    if arg == PRESET_NAME || arg == "preset" {
+        return preset_rig();
+    }
+    let path = Path::new(arg);
+    let rig = omnimvs_camera::read_config_rig(path)?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| SynthError::io(path, "cannot read rig", e))?;
+    let value = omnimvs_camera::yaml::parse_yaml(path, &text)?;
+    let min_depth = value
+        .get("config")
+        .and_then(|c| c.get("omnimvs_sweep_min_depth"))
+        .and_then(Value::as_f64)
+        .ok_or_else(|| {
+            SynthError::invalid(
+                format!("{}: field `config.omnimvs_sweep_min_depth`", path.display()),
+                "expected the minimum depth in metres",
+            )
+        })?;
+    if !(min_depth.is_finite() && min_depth > 0.0) {
+        return Err(SynthError::invalid(
+            format!("{}: field `config.omnimvs_sweep_min_depth`", path.display()),
+            format!("expected a positive number of metres, found {min_depth}"),
+        ));
+    }
+    Ok(RigSource {
+        rig,
+        min_depth_m: min_depth,
+    })
+}
+
+/// Largest distance of a camera centre from the rig origin, metres.
+pub fn rig_radius_m(rig: &Rig) -> f64 {
+    rig.cameras
+        .iter()
+        .map(|c| c.center_in_rig().coords.norm())
+        .fold(0.0, f64::max)
+}
+
+/// The rig with every camera's images resized to `height x width` pixels:
+/// the same rays, at the new resolution. Pixel centres map as
+/// `(p + 0.5) * s - 0.5`; OCamCalib's radius scales with the column factor
+/// and the row/column aspect goes into the affine terms `c`, `d`.
+///
+/// # Errors
+/// [`SynthError::Invalid`] for a zero size.
+pub fn resize_rig(rig: &Rig, height: u32, width: u32) -> Result<Rig, SynthError> {
+    if height == 0 || width == 0 {
+        return Err(SynthError::invalid(
+            "--size",
+            format!("expected a positive HxW, found {height}x{width}"),
+        ));
+    }
+    let cameras = rig
+        .cameras
+        .iter()
+        .map(|cam| {
+            let CameraModel::Ocam(m) = &cam.model;
+            let sr = f64::from(height) / f64::from(m.height);
+            let sc = f64::from(width) / f64::from(m.width);
+            let model = OcamModel {
+                poly: m
+                    .poly
+                    .iter()
+                    .enumerate()
+                    .map(|(i, a)| a * sc.powi(1 - i as i32))
+                    .collect(),
+                inv_poly: m.inv_poly.iter().map(|p| p * sc).collect(),
+                center_row: (m.center_row + 0.5) * sr - 0.5,
+                center_col: (m.center_col + 0.5) * sc - 0.5,
+                c: m.c * sr / sc,
+                d: m.d * sr / sc,
+                e: m.e,
+                width,
+                height,
+                max_fov_deg: m.max_fov_deg,
+            };
+            Camera::new(
+                cam.id,
+                cam.img_dir.clone(),
+                CameraModel::Ocam(model),
+                cam.pose,
+                None,
+            )
+        })
+        .collect();
+    Ok(Rig::new(cameras))
+}
+
+/// Parses `HxW` (e.g. `384x400`).
+///
+/// # Errors
+/// [`SynthError::Invalid`] naming the option.
+pub fn parse_size(s: &str) -> Result<(u32, u32), SynthError> {
+    let bad = || {
+        SynthError::invalid(
+            "--size",
+            format!("expected HxW such as 768x800, found {s:?}"),
+        )
+    };
+    let (h, w) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (h, w) = (
+        h.trim().parse::<u32>().map_err(|_| bad())?,
+        w.trim().parse::<u32>().map_err(|_| bad())?,
+    );
+    if h == 0 || w == 0 || h > 16384 || w > 16384 {
+        return Err(bad());
+    }
+    Ok((h, w))
+}
+
+#[cfg(test)]
+mod tests {
+    use omnimvs_camera::Pixel;
+    use omnimvs_camera::nalgebra::Vector3;
+
+    use super::*;
+
+    #[test]
+    fn preset_equals_the_published_sample_rig() {
+        let preset = preset_rig().unwrap();
+        assert_eq!(preset.rig.len(), 4);
+        assert!((rig_radius_m(&preset.rig) - 0.6).abs() < 1e-12);
+        let sample = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../../shared/data/omnimvs-samples/sunny_single/config.yaml");
+        if let Ok(from_file) = load_rig(sample.to_str().unwrap()) {
+            assert_eq!(from_file.min_depth_m, PRESET_MIN_DEPTH_M);
+            for (a, b) in preset.rig.cameras.iter().zip(&from_file.rig.cameras) {
+                assert_eq!(a.model, b.model);
+                assert_eq!(a.pose, b.pose);
+            }
+        }
+    }
+
+    #[test]
+    fn resized_rig_sees_the_same_rays() {
+        let rig = preset_rig().unwrap().rig;
+        let small = resize_rig(&rig, 192, 240).unwrap();
+        for (big, sm) in rig.cameras.iter().zip(&small.cameras) {
+            for p in [
+                Vector3::new(0.3, -0.2, 1.0),
+                Vector3::new(-2.0, 0.5, 0.1),
+                Vector3::new(0.0, 0.0, 1.0),
+            ] {
+                let a = big.model.project(&p).unwrap();
+                let b = sm.model.project(&p).unwrap();
+                assert!(((a.row + 0.5) * 0.25 - 0.5 - b.row).abs() < 1e-9);
+                assert!(((a.col + 0.5) * 0.3 - 0.5 - b.col).abs() < 1e-9);
+                let ray = sm.model.unproject(Pixel::new(b.col, b.row)).unwrap();
+                let ray_big = big.model.unproject(a).unwrap();
+                assert!((ray - ray_big).norm() < 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn bad_sizes_and_rigs_are_rejected() {
+        assert_eq!(parse_size("384x400").unwrap(), (384, 400));
+        assert!(parse_size("384").is_err());
+        assert!(parse_size("0x10").is_err());
+        let err = load_rig("/nonexistent/config.yaml")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("/nonexistent/config.yaml"), "{err}");
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("config.yaml");
+        std::fs::write(&p, PRESET_CAMERAS_YAML).unwrap();
+        let err = load_rig(p.to_str().unwrap()).unwrap_err().to_string();
+        assert!(err.contains("omnimvs_sweep_min_depth"), "{err}");
+    }
+}

@@ -1,0 +1,143 @@
+//! The rendered cameras agree with each other through the ground truth:
+//! warping every camera to the panorama with the ground-truth inverse depth
+//! gives the same intensities where cameras overlap, and a wrong depth does
+//! not.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::needless_range_loop)] // helpers of tests
+
+use glam::Vec3A;
+use omnimvs_camera::nalgebra::Vector3;
+use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthSource, warp_camera_to_panorama};
+use omnimvs_synth::rig::{preset_rig, resize_rig, rig_radius_m};
+use omnimvs_synth::{
+    GenParams, SceneKind, ShapeSpec, Tracer, generate, render_fisheye, render_inverse_depth,
+};
+
+/// Whether camera `cam` sees the ground-truth point of panorama pixel `k`
+/// (nothing in between; the sky when the inverse depth is 0).
+fn visible(
+    tracer: &Tracer,
+    cam: &omnimvs_camera::Camera,
+    grid: &EquirectGrid,
+    inv: &[f32],
+    k: usize,
+) -> bool {
+    let ray = grid.ray((k / grid.width) as f64, (k % grid.width) as f64);
+    let c = cam.center_in_rig().coords;
+    let to_vec = |v: Vector3<f64>| Vec3A::new(v.x as f32, v.y as f32, v.z as f32);
+    if inv[k] <= 0.0 {
+        return tracer.intersect(to_vec(c), to_vec(ray)).is_none();
+    }
+    let p = ray / f64::from(inv[k]);
+    let dist = (p - c).norm();
+    match tracer.intersect(to_vec(c), to_vec((p - c) / dist)) {
+        Some(hit) => f64::from(hit.t) > dist * (1.0 - 1e-3) - 1e-3,
+        None => true,
+    }
+}
+
+/// Mean absolute difference (gray levels) between every pair of cameras
+/// over the panorama pixels both see (inside the image and not occluded),
+/// with the pixels warped at inverse depth `warp_inv`, and the number of
+/// such pixel pairs.
+fn pairwise_mad(
+    tracer: &Tracer,
+    rig: &omnimvs_camera::Rig,
+    images: &[GrayImage],
+    grid: &EquirectGrid,
+    gt: &[f32],
+    warp_inv: &[f32],
+) -> (f64, usize) {
+    let warped: Vec<_> = rig
+        .cameras
+        .iter()
+        .zip(images)
+        .map(|(c, img)| {
+            warp_camera_to_panorama(c, grid, img, None, InvDepthSource::Map(warp_inv)).unwrap()
+        })
+        .collect();
+    let vis: Vec<Vec<bool>> = rig
+        .cameras
+        .iter()
+        .map(|c| {
+            (0..grid.len())
+                .map(|k| visible(tracer, c, grid, gt, k))
+                .collect()
+        })
+        .collect();
+    let (mut sum, mut n) = (0.0, 0usize);
+    for i in 0..warped.len() {
+        for j in i + 1..warped.len() {
+            for k in 0..grid.len() {
+                if warped[i].1[k] && warped[j].1[k] && vis[i][k] && vis[j][k] {
+                    sum += f64::from((warped[i].0[k] - warped[j].0[k]).abs());
+                    n += 1;
+                }
+            }
+        }
+    }
+    (sum / n.max(1) as f64, n)
+}
+
+fn check(kind: SceneKind, want_room: bool) {
+    let source = preset_rig().unwrap();
+    let rig = resize_rig(&source.rig, 192, 200).unwrap();
+    let params = GenParams::new(source.min_depth_m, rig_radius_m(&rig));
+    // The first frame of the wanted background (room or sky).
+    let scene = (1..50)
+        .map(|f| generate(kind, 11, f, &params).unwrap())
+        .find(|s| {
+            kind == SceneKind::House || (matches!(s.objects[0].shape, ShapeSpec::Box) == want_room)
+        })
+        .unwrap();
+    let tracer = Tracer::new(&scene, &[]).unwrap();
+    let images: Vec<GrayImage> = rig
+        .cameras
+        .iter()
+        .map(|c| GrayImage {
+            width: c.model.width() as usize,
+            height: c.model.height() as usize,
+            data: render_fisheye(&tracer, c, 4)
+                .into_iter()
+                .map(f32::from)
+                .collect(),
+        })
+        .collect();
+    let grid = EquirectGrid::new(160, 320, 90.0).unwrap();
+    let gt = render_inverse_depth(&tracer, &grid);
+    let (good, n) = pairwise_mad(&tracer, &rig, &images, &grid, &gt, &gt);
+    let half: Vec<f32> = gt.iter().map(|v| v * 0.5).collect();
+    let (bad_half, _) = pairwise_mad(&tracer, &rig, &images, &grid, &gt, &half);
+    let double: Vec<f32> = gt.iter().map(|v| v * 2.0).collect();
+    let (bad_double, _) = pairwise_mad(&tracer, &rig, &images, &grid, &gt, &double);
+    println!(
+        "{} (room: {want_room}, frame {}): MAD with GT {good:.2} gray levels over {n} overlapping pixel pairs; \
+         half inverse depth {bad_half:.2}; double {bad_double:.2}",
+        kind.name(),
+        scene.frame
+    );
+    assert!(n > 10_000, "cameras barely overlap: {n}");
+    assert!(
+        good < 6.0,
+        "cameras disagree through the ground truth: MAD {good:.2}"
+    );
+    assert!(
+        bad_half > 2.0 * good && bad_double > 2.0 * good,
+        "a wrong depth agrees as well: {bad_half:.2}, {bad_double:.2} vs {good:.2}"
+    );
+}
+
+#[test]
+fn things_in_a_room_are_consistent_across_cameras() {
+    check(SceneKind::Things, true);
+}
+
+#[test]
+fn things_under_a_sky_are_consistent_across_cameras() {
+    check(SceneKind::Things, false);
+}
+
+#[test]
+fn house_is_consistent_across_cameras() {
+    check(SceneKind::House, true);
+}
