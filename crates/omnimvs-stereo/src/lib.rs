@@ -1,0 +1,38 @@
+//! The classical omnidirectional stereo method of the OmniMVS paper's
+//! Table 3, "ZNCC+SGM": spherical sweeping with a ZNCC matching cost,
+//! regularised by semi-global matching, on a CPU.
+//!
+//! * [`SphericalStereo`]: the whole method for one rig, output grid and set of
+//!   hypotheses; [`SphericalStereo::compute`] turns the gray images of one
+//!   frame into an inverse-depth map, a fractional index map and a
+//!   confidence map, with the time of each stage.
+//! * [`SphereProjector`]: where each output pixel meets each sweep sphere in
+//!   each camera, computed on the fly (the lookup table of all spheres would
+//!   not fit the memory budget).
+//! * [`Matcher::cost_volume`]: the ZNCC cost volume ([`CostVolume`], 16-bit).
+//! * [`aggregate`]: SGM along 4 or 8 paths that wrap around in longitude.
+//! * [`winner_take_all`]: index with parabola refinement, and confidence.
+//! * [`synthetic`]: analytic textured scenes rendered exactly through a rig,
+//!   with their ground truth, for tests, tuning and benchmarks.
+//!
+//! Frames and units follow `FORMATS.md`: rig frame, inverse depth in 1/m,
+//! hypothesis index `n = (N-1)(d - d_0)/(d_(N-1) - d_0)`.
+
+mod cost;
+mod error;
+pub mod params;
+mod pipeline;
+mod projector;
+mod sgm;
+pub mod synthetic;
+mod view;
+mod wta;
+
+pub use cost::{CostTimings, CostVolume, Matcher, NO_PAIR_COST, ZNCC_VARIANCE_EPS};
+pub use error::StereoError;
+pub use params::{COST_SCALE, DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SweepStep};
+pub use pipeline::{SphericalStereo, StageTimings, StereoResult};
+pub use projector::SphereProjector;
+pub use sgm::{AggregatedVolume, aggregate};
+pub use view::CameraView;
+pub use wta::{IndexMap, winner_take_all};

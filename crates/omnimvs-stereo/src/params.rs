@@ -1,0 +1,152 @@
+use serde::{Deserialize, Serialize};
+
+use crate::StereoError;
+
+/// Fixed-point scale of the matching cost: a cost of `1.0` (the largest
+/// ZNCC cost, perfectly anti-correlated patches) is stored as this many
+/// units of a `u16`.
+pub const COST_SCALE: f32 = 512.0;
+
+/// Default `P1` (small inverse-depth changes), in matching-cost units
+/// (`(1 - zncc) / 2`, in `[0, 1]`). Tuned on generated validation rooms only
+/// (`examples/tune_sgm.rs`, README of this crate).
+pub const DEFAULT_P1: f32 = 0.05;
+
+/// Default `P2` (jumps of more than one hypothesis), in matching-cost units.
+/// Tuned with [`DEFAULT_P1`].
+pub const DEFAULT_P2: f32 = 0.6;
+
+/// Which SGM paths are aggregated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Directions {
+    /// Left, right, up, down.
+    Four,
+    /// The four above and the four diagonals.
+    Eight,
+}
+
+impl Directions {
+    /// Number of paths.
+    pub fn count(self) -> usize {
+        match self {
+            Self::Four => 4,
+            Self::Eight => 8,
+        }
+    }
+}
+
+/// Which hypotheses get a matching cost computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SweepStep {
+    /// All `N` spheres.
+    All,
+    /// Spheres `n = 0, 2, ..., N-2` (half the warping and matching work); the
+    /// cost of an odd hypothesis is the mean of its two neighbours' (the
+    /// last one copies `N-2`), and SGM still runs over all `N`.
+    EveryOther,
+}
+
+/// Parameters of the ZNCC + SGM method.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SgmParams {
+    /// Penalty for a change of one hypothesis between neighbours, in
+    /// matching-cost units (`(1 - zncc) / 2` averaged over camera pairs).
+    pub p1: f32,
+    /// Penalty for larger changes, same units; `P2 >= P1`.
+    pub p2: f32,
+    /// Number of SGM paths.
+    pub directions: Directions,
+    /// Hypotheses that get a matching cost.
+    pub sweep: SweepStep,
+    /// Side of the square ZNCC patch, odd (9 in the paper).
+    pub patch: usize,
+}
+
+impl Default for SgmParams {
+    fn default() -> Self {
+        Self {
+            p1: DEFAULT_P1,
+            p2: DEFAULT_P2,
+            directions: Directions::Eight,
+            sweep: SweepStep::All,
+            patch: 9,
+        }
+    }
+}
+
+impl SgmParams {
+    /// The largest `P2` that keeps the sum of all paths inside a `u16`.
+    pub fn max_p2(directions: Directions) -> f32 {
+        (f32::from(u16::MAX) / directions.count() as f32 - COST_SCALE) / COST_SCALE
+    }
+
+    /// Checks the penalties and the patch size.
+    ///
+    /// # Errors
+    /// [`StereoError::Penalties`] for non-finite or negative values, `P2 < P1`
+    /// or `P2` too large for 16-bit aggregation; [`StereoError::Volume`] for
+    /// an even or zero patch size.
+    pub fn validate(&self) -> Result<(), StereoError> {
+        let bad = |reason: String| StereoError::Penalties {
+            p1: self.p1,
+            p2: self.p2,
+            reason,
+        };
+        if !(self.p1.is_finite() && self.p2.is_finite()) || self.p1 < 0.0 || self.p2 < 0.0 {
+            return Err(bad("expected finite non-negative penalties".into()));
+        }
+        if self.p2 < self.p1 {
+            return Err(bad("expected P2 >= P1 (larger jumps cost more)".into()));
+        }
+        let max = Self::max_p2(self.directions);
+        if self.p2 > max {
+            return Err(bad(format!(
+                "expected P2 <= {max:.2} with {} paths (matching costs are in [0, 1]; \
+                 larger penalties overflow the 16-bit aggregation)",
+                self.directions.count()
+            )));
+        }
+        if self.patch == 0 || self.patch.is_multiple_of(2) {
+            return Err(StereoError::Volume(format!(
+                "patch size {}: expected an odd number of pixels (9 in the paper)",
+                self.patch
+            )));
+        }
+        Ok(())
+    }
+
+    /// `P1` in fixed-point cost units.
+    pub(crate) fn p1_units(&self) -> i16 {
+        (self.p1 * COST_SCALE).round() as i16
+    }
+
+    /// `P2` in fixed-point cost units.
+    pub(crate) fn p2_units(&self) -> i16 {
+        (self.p2 * COST_SCALE).round() as i16
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn validation() {
+        assert!(SgmParams::default().validate().is_ok());
+        let p = |p1, p2| SgmParams {
+            p1,
+            p2,
+            ..SgmParams::default()
+        };
+        assert!(p(0.5, 0.1).validate().is_err());
+        assert!(p(-0.1, 0.1).validate().is_err());
+        assert!(p(0.1, f32::NAN).validate().is_err());
+        assert!(p(0.1, 100.0).validate().is_err());
+        assert!(p(0.1, 14.0).validate().is_ok());
+        let even = SgmParams {
+            patch: 8,
+            ..SgmParams::default()
+        };
+        assert!(even.validate().is_err());
+    }
+}

@@ -1,0 +1,186 @@
+//! Fast projection of sweep-sphere points into a fisheye camera.
+//!
+//! The foundation's [`omnimvs_sweep::LookupTable`] stores a sampling position
+//! for every camera, sphere and grid pixel; with all 192 spheres at 160x640
+//! that is 629 MB of f32 for four cameras, more than this method's whole
+//! memory budget. The positions are instead recomputed on the fly, which is
+//! cheap: for grid ray `r` and inverse depth `d`, the point on the sphere in
+//! the camera frame is proportional to `R r + d t` (`cam_from_rig = (R, t)`),
+//! and the OCamCalib projection of a direction depends on its angle from the
+//! optical axis through one smooth function, tabulated once per camera in
+//! the half-angle variable `s = tan(alpha / 2)` (no `atan2`, no polynomial).
+//! The result matches [`omnimvs_camera::OcamModel::project`] (and hence the
+//! lookup table) to about 1e-3 pixel; see the tests.
+
+use omnimvs_camera::{Camera, CameraModel};
+use omnimvs_sweep::EquirectGrid;
+
+use crate::StereoError;
+
+/// Entries of the tabulated radial function.
+const TABLE_LEN: usize = 4096;
+
+/// Projects points of the sweep spheres of one grid into one camera.
+#[derive(Debug, Clone)]
+pub struct SphereProjector {
+    /// `R r` for every grid pixel (row-major), split by axis: x, y, z.
+    rays: [Vec<f32>; 3],
+    /// `t` of `cam_from_rig`, metres.
+    t: [f32; 3],
+    /// `g(s) = rho(alpha) (1 + s^2) / (2 s)` at `s = k * ds`.
+    table: Vec<f32>,
+    inv_ds: f32,
+    /// `tan(max_fov / 4)`: the largest valid `s`.
+    s_max: f32,
+    /// Affine `c, d, e` and centre `(row, col)` of the OCamCalib model.
+    c: f32,
+    d: f32,
+    e: f32,
+    center_row: f32,
+    center_col: f32,
+}
+
+impl SphereProjector {
+    /// Prepares the projection of `grid`'s rays into `camera`.
+    ///
+    /// # Errors
+    /// [`StereoError::Camera`] for a field of view of 360 degrees or more
+    /// (no half-angle table) or a degenerate affine matrix.
+    pub fn new(camera: &Camera, camera_number: usize, grid: &EquirectGrid) -> Result<Self, StereoError> {
+        let CameraModel::Ocam(model) = &camera.model;
+        let half_fov = model.half_fov_rad();
+        if !(half_fov > 0.0 && half_fov < std::f64::consts::PI) {
+            return Err(StereoError::Camera {
+                camera: camera_number,
+                reason: format!(
+                    "max_fov {} deg: expected a field of view in (0, 360) degrees",
+                    model.max_fov_deg
+                ),
+            });
+        }
+        let s_max = (half_fov / 2.0).tan();
+        // The table spans a little more than the FOV so that interpolation
+        // at s_max stays inside it.
+        let ds = s_max * 1.001 / (TABLE_LEN - 2) as f64;
+        let table = (0..TABLE_LEN)
+            .map(|k| {
+                // g(0) is the limit s -> 0; sample just off zero instead.
+                let s = (k as f64 * ds).max(ds * 1e-3);
+                let alpha = 2.0 * s.atan();
+                let theta = alpha - std::f64::consts::FRAC_PI_2;
+                let rho = model.inv_poly.iter().rev().fold(0.0, |acc, &a| acc * theta + a);
+                (rho * (1.0 + s * s) / (2.0 * s)) as f32
+            })
+            .collect();
+        let cam_from_rig = camera.rig_from_cam.inverse();
+        let rot = cam_from_rig.rotation.to_rotation_matrix();
+        let mut rays = [
+            Vec::with_capacity(grid.len()),
+            Vec::with_capacity(grid.len()),
+            Vec::with_capacity(grid.len()),
+        ];
+        for row in 0..grid.height {
+            for col in 0..grid.width {
+                let r = rot * grid.ray(row as f64, col as f64);
+                for axis in 0..3 {
+                    rays[axis].push(r[axis] as f32);
+                }
+            }
+        }
+        let t = cam_from_rig.translation.vector;
+        Ok(Self {
+            rays,
+            t: [t.x as f32, t.y as f32, t.z as f32],
+            table,
+            inv_ds: (1.0 / ds) as f32,
+            s_max: s_max as f32,
+            c: model.c as f32,
+            d: model.d as f32,
+            e: model.e as f32,
+            center_row: model.center_row as f32,
+            center_col: model.center_col as f32,
+        })
+    }
+
+    /// The fisheye pixel `(col, row)` where grid pixel `i` (row-major) sees
+    /// the sphere of inverse depth `inv_depth` (1/m); `None` outside the
+    /// field of view.
+    #[inline]
+    pub fn project(&self, i: usize, inv_depth: f32) -> Option<(f32, f32)> {
+        let x = self.rays[0][i] + inv_depth * self.t[0];
+        let y = self.rays[1][i] + inv_depth * self.t[1];
+        let z = self.rays[2][i] + inv_depth * self.t[2];
+        let n2 = x * x + y * y;
+        let norm = (n2 + z * z).sqrt();
+        let den = norm + z;
+        if den <= 1e-12 * norm.max(1e-30) {
+            return None; // straight behind the camera
+        }
+        let s = n2.sqrt() / den;
+        if s.is_nan() || s > self.s_max {
+            return None;
+        }
+        let pos = s * self.inv_ds;
+        let k = pos as usize; // s >= 0, and s <= s_max keeps k < TABLE_LEN - 1
+        let frac = pos - k as f32;
+        let g0 = self.table[k];
+        let g1 = self.table[k + 1];
+        let scale = (g0 + frac * (g1 - g0)) / norm;
+        // OCamCalib: x_ocam = Y rho / n (rows), y_ocam = X rho / n (columns).
+        let xo = y * scale;
+        let yo = x * scale;
+        let row = self.c * xo + self.d * yo + self.center_row;
+        let col = self.e * xo + yo + self.center_col;
+        Some((col, row))
+    }
+
+    /// Number of grid pixels.
+    pub fn len(&self) -> usize {
+        self.rays[0].len()
+    }
+
+    /// Whether the grid has no pixel.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synthetic::fixture_rig;
+    use omnimvs_sweep::{InvDepthHypotheses, LookupTable, SphereSet};
+
+    #[test]
+    fn matches_the_lookup_table() {
+        let rig = fixture_rig(0.25);
+        let grid = EquirectGrid::new(20, 80, 45.0).unwrap();
+        let hyps = InvDepthHypotheses::new(16, 0.8).unwrap();
+        let lut = LookupTable::build(&rig, &grid, &hyps, SphereSet::All).unwrap();
+        let (mut checked, mut worst) = (0, 0f64);
+        for (cam, camera) in rig.cameras.iter().enumerate() {
+            let p = SphereProjector::new(camera, cam + 1, &grid).unwrap();
+            for n in 0..16 {
+                let d = hyps.inv_depth(n as f64) as f32;
+                for i in 0..grid.len() {
+                    let (row, col) = (i / grid.width, i % grid.width);
+                    let (lc, lr) = lut.pixel(cam, n, row, col);
+                    let ours = p.project(i, d);
+                    if lc < -1.0 || lr < -1.0 {
+                        // Invalid in the table: outside the FOV, or a position
+                        // left of / above the image (which we also reject later).
+                        if let Some((c, r)) = ours {
+                            assert!(c < 0.5 || r < 0.5, "cam {cam} n {n} i {i}: {c},{r}");
+                        }
+                        continue;
+                    }
+                    let (c, r) = ours.expect("valid in the table");
+                    worst = worst.max((f64::from(c) - lc).abs()).max((f64::from(r) - lr).abs());
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 1000);
+        assert!(worst < 2e-3, "worst difference {worst} px");
+    }
+}
