@@ -27,6 +27,9 @@ enum Command {
     Info(cmd::info::Args),
     Lut(cmd::lut::Args),
     Pano(cmd::pano::Args),
+    Synth(cmd::synth::Args),
+    Train(cmd::train::Args),
+    Eval(cmd::eval::Args),
 }
 
 fn main() -> ExitCode {
@@ -35,6 +38,9 @@ fn main() -> ExitCode {
         Command::Info(a) => cmd::info::run(&a),
         Command::Lut(a) => cmd::lut::run(&a),
         Command::Pano(a) => cmd::pano::run(&a),
+        Command::Synth(a) => cmd::synth::run(&a),
+        Command::Train(a) => cmd::train::run(&a),
+        Command::Eval(a) => cmd::eval::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,70 @@
+//! `omnimvs synth` end to end, at a tiny image size.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // helpers of tests
+
+use std::process::Command;
+
+fn omnimvs(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_omnimvs"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn synth_writes_a_dataset_and_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("things");
+    let out_s = out.to_str().unwrap();
+    let args = [
+        "synth", "--kind", "things", "--frames", "1..2", "--out", out_s, "--size", "48x50",
+        "--seed", "3",
+    ];
+    let o = omnimvs(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "config.yaml",
+        "synth.json",
+        "cam1/00001.png",
+        "cam4/00002.png",
+        "omnidepth_gt_640/00002.tiff",
+        "scene/00001.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let o = omnimvs(&args);
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("0 frame(s) rendered"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+}
+
+#[test]
+fn synth_rejects_bad_input_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let out_s = out.to_str().unwrap();
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["--kind", "rooms", "--frames", "1"],
+            "unknown kind \"rooms\"",
+        ),
+        (&["--kind", "things", "--frames", "5..2"], "reversed"),
+        (
+            &["--kind", "things", "--frames", "1", "--rig", "/no/rig.yaml"],
+            "/no/rig.yaml",
+        ),
+        (
+            &["--kind", "things", "--frames", "1", "--shard", "3/2"],
+            "--shard",
+        ),
+    ];
+    for (extra, want) in cases {
+        let mut args = vec!["synth", "--out", out_s, "--size", "48x50"];
+        args.extend_from_slice(extra);
+        let o = omnimvs(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(want), "{args:?}: {err}");
+    }
+}
