@@ -28,8 +28,6 @@ enum Command {
     Lut(cmd::lut::Args),
     Pano(cmd::pano::Args),
     Synth(cmd::synth::Args),
-    Train(cmd::train::Args),
-    Eval(cmd::eval::Args),
 }
 
 fn main() -> ExitCode {
@@ -39,8 +37,6 @@ fn main() -> ExitCode {
         Command::Lut(a) => cmd::lut::run(&a),
         Command::Pano(a) => cmd::pano::run(&a),
         Command::Synth(a) => cmd::synth::run(&a),
-        Command::Train(a) => cmd::train::run(&a),
-        Command::Eval(a) => cmd::eval::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
