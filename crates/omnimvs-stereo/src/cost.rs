@@ -32,7 +32,10 @@ pub const ZNCC_VARIANCE_EPS: f32 = 1e-3;
 
 /// Spheres whose costs are computed together before being written into the
 /// `[row][col][n]` volume (bounds the scratch memory).
-const SPHERE_GROUP: usize = 16;
+const SPHERE_GROUP: usize = 32;
+
+/// Spheres one thread computes side by side (see [`Matcher::sphere_group`]).
+const INTERLEAVE: usize = 4;
 
 /// A cost volume in fixed point: `data[(row * width + col) * ndepth + n]`,
 /// cost times [`COST_SCALE`].
@@ -90,13 +93,22 @@ struct Scratch {
     values: Vec<f32>,
     /// Same layout: 1 where the sample is missing.
     missing: Vec<f32>,
-    /// `[col][quantity]`: sums down the window's rows.
+    /// `[quantity][col]`: sums down the window's rows.
     colsum: Vec<f32>,
+    /// `[quantity][col]`: full window sums of the current row.
+    boxsum: Vec<f32>,
     /// `[quantity]`: the running window sum along the row.
     window: Vec<f32>,
+    /// `[cam][col]`: window mean and `1 / std` of each camera.
     mean: Vec<f32>,
     inv_std: Vec<f32>,
-    complete: Vec<bool>,
+    /// `[col]`: sum of pair costs and number of pairs.
+    cost_sum: Vec<f32>,
+    pair_count: Vec<f32>,
+    /// `[col]`: fisheye positions of the row being warped.
+    pos_col: Vec<f32>,
+    pos_row: Vec<f32>,
+    table_pos: Vec<f32>,
 }
 
 impl Scratch {
@@ -115,11 +127,16 @@ impl Scratch {
             pairs,
             values: vec![0.0; ncam * patch * width],
             missing: vec![0.0; ncam * patch * width],
-            colsum: vec![0.0; width * q],
+            colsum: vec![0.0; q * width],
+            boxsum: vec![0.0; q * width],
             window: vec![0.0; q],
-            mean: vec![0.0; ncam],
-            inv_std: vec![0.0; ncam],
-            complete: vec![false; ncam],
+            mean: vec![0.0; ncam * width],
+            inv_std: vec![0.0; ncam * width],
+            cost_sum: vec![0.0; width],
+            pair_count: vec![0.0; width],
+            pos_col: vec![0.0; width],
+            pos_row: vec![0.0; width],
+            table_pos: vec![0.0; width],
         }
     }
 
@@ -134,28 +151,35 @@ impl Scratch {
         start..start + self.width
     }
 
+    fn quantity(&self, q: usize) -> std::ops::Range<usize> {
+        q * self.width..(q + 1) * self.width
+    }
+
     /// Adds (`sign = 1`) or removes (`-1`) the row in `slot` from the column sums.
     fn accumulate(&mut self, slot: usize, sign: f32) {
-        let (ncam, q, w) = (self.ncam, self.quantities(), self.width);
+        let ncam = self.ncam;
         for cam in 0..ncam {
             let r = self.row_slice(cam, slot);
             let vals = &self.values[r.clone()];
             let miss = &self.missing[r];
-            for (x, (&v, &m)) in vals.iter().zip(miss).enumerate() {
-                let base = x * q;
-                self.colsum[base + cam] += sign * v;
-                self.colsum[base + ncam + cam] += sign * v * v;
-                self.colsum[base + 2 * ncam + cam] += sign * m;
+            let (s1, rest) = self.colsum.split_at_mut((ncam + cam) * self.width);
+            let sum = &mut s1[cam * self.width..(cam + 1) * self.width];
+            let (s2, s3) = rest.split_at_mut(ncam * self.width);
+            let sq = &mut s2[..self.width];
+            let ms = &mut s3[..self.width];
+            for ((((s, q), m), &v), &mv) in sum.iter_mut().zip(sq).zip(ms).zip(vals).zip(miss) {
+                *s += sign * v;
+                *q += sign * v * v;
+                *m += sign * mv;
             }
         }
         for (k, &(a, b)) in self.pairs.iter().enumerate() {
-            let ra = self.row_slice(a, slot);
-            let rb = self.row_slice(b, slot);
-            let va = &self.values[ra];
-            let vb = &self.values[rb];
-            let col = &mut self.colsum[3 * ncam + k..];
-            for x in 0..w {
-                col[x * q] += sign * va[x] * vb[x];
+            let va = &self.values[self.row_slice(a, slot)];
+            let vb = &self.values[self.row_slice(b, slot)];
+            let r = (3 * ncam + k) * self.width;
+            let col = &mut self.colsum[r..r + self.width];
+            for ((c, &x), &y) in col.iter_mut().zip(va).zip(vb) {
+                *c += sign * x * y;
             }
         }
     }
@@ -166,23 +190,26 @@ impl Matcher<'_> {
         2 * self.radius + 1
     }
 
-    /// Samples grid row `row` of every camera on the sphere `inv_depth` into
-    /// the ring slot of that row.
-    fn warp_row(&self, s: &mut Scratch, row: usize, inv_depth: f32) {
+    /// Samples grid row `row` of camera `cam` on the sphere `inv_depth`
+    /// into the ring slot of that row.
+    fn warp_row(&self, s: &mut Scratch, cam: usize, row: usize, inv_depth: f32) {
         let w = self.grid.width;
         let slot = row % s.patch;
-        for (cam, (proj, view)) in self.projectors.iter().zip(self.views).enumerate() {
-            let r = s.row_slice(cam, slot);
-            let (vals, miss) = (&mut s.values[r.clone()], &mut s.missing[r]);
-            for x in 0..w {
-                let sample = proj
-                    .project(row * w + x, inv_depth)
-                    .and_then(|(c, r)| view.sample(c, r));
-                (vals[x], miss[x]) = match sample {
-                    Some(v) => (v, 0.0),
-                    None => (0.0, 1.0),
-                };
-            }
+        let view = &self.views[cam];
+        self.projectors[cam].project_run(
+            row * w,
+            inv_depth,
+            &mut s.pos_col,
+            &mut s.pos_row,
+            &mut s.table_pos,
+        );
+        let r = s.row_slice(cam, slot);
+        let (vals, miss) = (&mut s.values[r.clone()], &mut s.missing[r]);
+        for (((v, m), &c), &r) in vals.iter_mut().zip(miss).zip(&s.pos_col).zip(&s.pos_row) {
+            (*v, *m) = match view.sample(c, r) {
+                Some(v) => (v, 0.0),
+                None => (0.0, 1.0),
+            };
         }
     }
 
@@ -192,77 +219,131 @@ impl Matcher<'_> {
         let (w, h, r) = (self.grid.width, self.grid.height, self.radius);
         let q = s.quantities();
         let ncam = s.ncam;
-        let rows = (row + r).min(h - 1) - row.saturating_sub(r) + 1;
-        let inv_n = 1.0 / (rows * self.patch()) as f32;
+        // Window sums along the row: one running sum per quantity, the
+        // quantities interleaved so that the additions are independent.
         s.window.fill(0.0);
         for k in 0..self.patch() {
             let x = (k + w - r) % w;
-            for (acc, v) in s.window.iter_mut().zip(&s.colsum[x * q..(x + 1) * q]) {
-                *acc += v;
+            for (j, acc) in s.window.iter_mut().enumerate() {
+                *acc += s.colsum[j * w + x];
             }
         }
-        for (x, dst) in out.iter_mut().enumerate() {
-            for c in 0..ncam {
-                let mean = s.window[c] * inv_n;
-                let var = (s.window[ncam + c] * inv_n - mean * mean).max(0.0);
-                s.mean[c] = mean;
-                s.inv_std[c] = 1.0 / (var + ZNCC_VARIANCE_EPS).sqrt();
-                s.complete[c] = s.window[2 * ncam + c] < 0.5;
+        for x in 0..w {
+            let enter = (x + r + 1) % w;
+            let leave = (x + w - r) % w;
+            for (j, acc) in s.window.iter_mut().enumerate() {
+                s.boxsum[j * w + x] = *acc;
+                *acc += s.colsum[j * w + enter] - s.colsum[j * w + leave];
             }
-            let (mut sum, mut count) = (0f32, 0u32);
-            for (k, &(a, b)) in s.pairs.iter().enumerate() {
-                if s.complete[a] && s.complete[b] {
-                    let cov = s.window[3 * ncam + k] * inv_n - s.mean[a] * s.mean[b];
-                    let zncc = (cov * s.inv_std[a] * s.inv_std[b]).clamp(-1.0, 1.0);
-                    sum += 0.5 * (1.0 - zncc);
-                    count += 1;
-                }
+        }
+        let _ = q;
+        // ZNCC, vectorised along the row.
+        let rows = (row + r).min(h - 1) - row.saturating_sub(r) + 1;
+        let inv_n = 1.0 / (rows * self.patch()) as f32;
+        for c in 0..ncam {
+            let sum = &s.boxsum[s.quantity(c)];
+            let sq = &s.boxsum[s.quantity(ncam + c)];
+            let miss = &s.boxsum[s.quantity(2 * ncam + c)];
+            let mean = &mut s.mean[c * w..(c + 1) * w];
+            let inv_std = &mut s.inv_std[c * w..(c + 1) * w];
+            for ((((m, is), &a), &b), &k) in mean.iter_mut().zip(inv_std).zip(sum).zip(sq).zip(miss)
+            {
+                let mu = a * inv_n;
+                let var = (b * inv_n - mu * mu).max(0.0);
+                *m = mu;
+                // A window with a missing sample gets inv_std = 0 and is
+                // skipped below.
+                *is = if k < 0.5 {
+                    1.0 / (var + ZNCC_VARIANCE_EPS).sqrt()
+                } else {
+                    0.0
+                };
             }
-            let cost = if count > 0 {
-                sum / count as f32
+        }
+        s.cost_sum.fill(0.0);
+        s.pair_count.fill(0.0);
+        for (k, &(a, b)) in s.pairs.iter().enumerate() {
+            let prod = &s.boxsum[s.quantity(3 * ncam + k)];
+            let (ma, mb) = (&s.mean[a * w..(a + 1) * w], &s.mean[b * w..(b + 1) * w]);
+            let (ia, ib) = (
+                &s.inv_std[a * w..(a + 1) * w],
+                &s.inv_std[b * w..(b + 1) * w],
+            );
+            for x in 0..w {
+                let norm = ia[x] * ib[x];
+                let cov = prod[x] * inv_n - ma[x] * mb[x];
+                let zncc = (cov * norm).clamp(-1.0, 1.0);
+                let used = if norm > 0.0 { 1.0 } else { 0.0 };
+                s.cost_sum[x] += used * 0.5 * (1.0 - zncc);
+                s.pair_count[x] += used;
+            }
+        }
+        for ((dst, &sum), &count) in out.iter_mut().zip(&s.cost_sum).zip(&s.pair_count) {
+            let cost = if count > 0.0 {
+                sum / count
             } else {
                 NO_PAIR_COST
             };
-            *dst = (cost * COST_SCALE).round() as u16;
-            // Slide the window one column right.
-            let enter = (x + r + 1) % w;
-            let leave = (x + w - r) % w;
-            let (e, l) = (&s.colsum[enter * q..(enter + 1) * q], &s.colsum[leave * q..(leave + 1) * q]);
-            for ((acc, a), b) in s.window.iter_mut().zip(e).zip(l) {
-                *acc += a - b;
-            }
+            *dst = (cost * COST_SCALE + 0.5) as u16;
         }
     }
 
-    /// The `[row][col]` cost slice of the sphere at `inv_depth` (1/m); returns
-    /// the time spent warping and matching.
-    fn sphere_slice(&self, s: &mut Scratch, inv_depth: f32, out: &mut [u16]) -> (Duration, Duration) {
+    /// The `[row][col]` cost slices of a few spheres (`inv_depths`, 1/m)
+    /// into consecutive planes of `out`; returns the time spent warping and
+    /// matching. The spheres are interleaved row by row: for one grid row,
+    /// neighbouring spheres sample nearly the same fisheye pixels, so the
+    /// images stay in cache.
+    fn sphere_group(
+        &self,
+        scratch: &mut [Scratch],
+        inv_depths: &[f32],
+        out: &mut [u16],
+    ) -> (Duration, Duration) {
         let (w, h, r) = (self.grid.width, self.grid.height, self.radius);
+        let ncam = self.views.len();
+        let plane = w * h;
         let (mut warp, mut cost) = (Duration::ZERO, Duration::ZERO);
-        s.colsum.fill(0.0);
+        let scratch = &mut scratch[..inv_depths.len()];
+        for s in scratch.iter_mut() {
+            s.colsum.fill(0.0);
+        }
+        let warp_rows = |scratch: &mut [Scratch], row: usize| {
+            for cam in 0..ncam {
+                for (s, &d) in scratch.iter_mut().zip(inv_depths) {
+                    self.warp_row(s, cam, row, d);
+                }
+            }
+        };
         for row in 0..r.min(h) {
             let t0 = Instant::now();
-            self.warp_row(s, row, inv_depth);
+            warp_rows(scratch, row);
             let t1 = Instant::now();
-            s.accumulate(row % s.patch, 1.0);
+            for s in scratch.iter_mut() {
+                s.accumulate(row % s.patch, 1.0);
+            }
             warp += t1 - t0;
             cost += t1.elapsed();
         }
         for row in 0..h {
             let t0 = Instant::now();
             if row > r {
-                s.accumulate((row - r - 1) % s.patch, -1.0);
+                for s in scratch.iter_mut() {
+                    s.accumulate((row - r - 1) % s.patch, -1.0);
+                }
             }
             let t1 = Instant::now();
             let add = row + r;
             if add < h {
-                self.warp_row(s, add, inv_depth);
+                warp_rows(scratch, add);
             }
             let t2 = Instant::now();
-            if add < h {
-                s.accumulate(add % s.patch, 1.0);
+            for (g, s) in scratch.iter_mut().enumerate() {
+                if add < h {
+                    s.accumulate(add % s.patch, 1.0);
+                }
+                let dst = g * plane + row * w;
+                self.cost_row(s, row, &mut out[dst..dst + w]);
             }
-            self.cost_row(s, row, &mut out[row * w..(row + 1) * w]);
             warp += t2 - t1;
             cost += (t1 - t0) + t2.elapsed();
         }
@@ -307,27 +388,36 @@ impl Matcher<'_> {
         let mut slices = vec![0u16; group_len * plane];
         for group in computed.chunks(group_len) {
             slices[..group.len() * plane]
-                .par_chunks_mut(plane)
-                .zip(group.par_iter())
+                .par_chunks_mut(INTERLEAVE * plane)
+                .zip(group.par_chunks(INTERLEAVE))
                 .for_each_init(
-                    || Scratch::new(ncam, self.patch(), w),
-                    |scratch, (out, &n)| {
-                        let d = hyps.inv_depth(n as f64) as f32;
-                        let (tw, tc) = self.sphere_slice(scratch, d, out);
+                    || {
+                        (0..INTERLEAVE)
+                            .map(|_| Scratch::new(ncam, self.patch(), w))
+                            .collect::<Vec<_>>()
+                    },
+                    |scratch, (out, ns)| {
+                        let d: Vec<f32> = ns
+                            .iter()
+                            .map(|&n| hyps.inv_depth(n as f64) as f32)
+                            .collect();
+                        let (tw, tc) = self.sphere_group(scratch, &d, out);
                         warp_ns.fetch_add(tw.as_nanos() as u64, Ordering::Relaxed);
                         cost_ns.fetch_add(tc.as_nanos() as u64, Ordering::Relaxed);
                     },
                 );
             let t = Instant::now();
             let slices = &slices;
-            data.par_chunks_mut(w * nd).enumerate().for_each(|(row, dst)| {
-                for (x, px) in dst.chunks_exact_mut(nd).enumerate() {
-                    let i = row * w + x;
-                    for (g, &n) in group.iter().enumerate() {
-                        px[n] = slices[g * plane + i];
+            data.par_chunks_mut(w * nd)
+                .enumerate()
+                .for_each(|(row, dst)| {
+                    for (x, px) in dst.chunks_exact_mut(nd).enumerate() {
+                        let i = row * w + x;
+                        for (g, &n) in group.iter().enumerate() {
+                            px[n] = slices[g * plane + i];
+                        }
                     }
-                }
-            });
+                });
             transpose += t.elapsed();
         }
         if step == 2 {

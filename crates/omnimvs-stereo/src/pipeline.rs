@@ -174,7 +174,10 @@ impl SphericalStereo {
     ///
     /// # Errors
     /// [`StereoError::Volume`] for a volume of another size.
-    pub fn aggregate(&self, cost: &CostVolume) -> Result<(AggregatedVolume, Duration), StereoError> {
+    pub fn aggregate(
+        &self,
+        cost: &CostVolume,
+    ) -> Result<(AggregatedVolume, Duration), StereoError> {
         let (g, n) = (&self.grid, self.hypotheses.count);
         if (cost.height, cost.width, cost.ndepth) != (g.height, g.width, n) {
             return Err(StereoError::Volume(format!(

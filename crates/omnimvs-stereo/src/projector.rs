@@ -46,7 +46,11 @@ impl SphereProjector {
     /// # Errors
     /// [`StereoError::Camera`] for a field of view of 360 degrees or more
     /// (no half-angle table) or a degenerate affine matrix.
-    pub fn new(camera: &Camera, camera_number: usize, grid: &EquirectGrid) -> Result<Self, StereoError> {
+    pub fn new(
+        camera: &Camera,
+        camera_number: usize,
+        grid: &EquirectGrid,
+    ) -> Result<Self, StereoError> {
         let CameraModel::Ocam(model) = &camera.model;
         let half_fov = model.half_fov_rad();
         if !(half_fov > 0.0 && half_fov < std::f64::consts::PI) {
@@ -68,7 +72,11 @@ impl SphereProjector {
                 let s = (k as f64 * ds).max(ds * 1e-3);
                 let alpha = 2.0 * s.atan();
                 let theta = alpha - std::f64::consts::FRAC_PI_2;
-                let rho = model.inv_poly.iter().rev().fold(0.0, |acc, &a| acc * theta + a);
+                let rho = model
+                    .inv_poly
+                    .iter()
+                    .rev()
+                    .fold(0.0, |acc, &a| acc * theta + a);
                 (rho * (1.0 + s * s) / (2.0 * s)) as f32
             })
             .collect();
@@ -134,6 +142,64 @@ impl SphereProjector {
         Some((col, row))
     }
 
+    /// [`Self::project`] for the grid pixels `start..start + cols.len()`,
+    /// written as fisheye columns and rows; a point outside the field of
+    /// view gets column `-1` (rejected by every sampler). `table_pos` is
+    /// scratch of the same length. The square roots and divisions run in a
+    /// branch-free loop that vectorises; only the table look-up is scalar.
+    pub fn project_run(
+        &self,
+        start: usize,
+        inv_depth: f32,
+        cols: &mut [f32],
+        rows: &mut [f32],
+        table_pos: &mut [f32],
+    ) {
+        let n = cols.len();
+        let (rx, ry, rz) = (
+            &self.rays[0][start..start + n],
+            &self.rays[1][start..start + n],
+            &self.rays[2][start..start + n],
+        );
+        let [tx, ty, tz] = self.t;
+        let last = (TABLE_LEN - 2) as f32;
+        let (c, d, e) = (self.c, self.d, self.e);
+        let table_pos = &mut table_pos[..n];
+        let rows = &mut rows[..n];
+        for i in 0..n {
+            let x = rx[i] + inv_depth * tx;
+            let y = ry[i] + inv_depth * ty;
+            let z = rz[i] + inv_depth * tz;
+            let n2 = x * x + y * y;
+            let norm = (n2 + z * z).sqrt();
+            let s = n2.sqrt() / (norm + z);
+            let inv_norm = 1.0 / norm;
+            // NaN (0/0) and points behind (den ~ 0, s huge) fail this test.
+            let valid = s <= self.s_max;
+            table_pos[i] = if valid {
+                (s * self.inv_ds).min(last)
+            } else {
+                -1.0
+            };
+            // OCamCalib: x_ocam = Y rho / n (rows), y_ocam = X rho / n (cols);
+            // rho / n = g(s) / norm.
+            cols[i] = (e * y + x) * inv_norm;
+            rows[i] = (c * y + d * x) * inv_norm;
+        }
+        for ((col, row), &pos) in cols.iter_mut().zip(rows.iter_mut()).zip(table_pos.iter()) {
+            if pos < 0.0 {
+                *col = -1.0;
+                continue;
+            }
+            let k = pos as usize;
+            let frac = pos - k as f32;
+            let g0 = self.table[k];
+            let g = g0 + frac * (self.table[k + 1] - g0);
+            *col = *col * g + self.center_col;
+            *row = *row * g + self.center_row;
+        }
+    }
+
     /// Number of grid pixels.
     pub fn len(&self) -> usize {
         self.rays[0].len()
@@ -175,12 +241,25 @@ mod tests {
                         continue;
                     }
                     let (c, r) = ours.expect("valid in the table");
-                    worst = worst.max((f64::from(c) - lc).abs()).max((f64::from(r) - lr).abs());
+                    worst = worst
+                        .max((f64::from(c) - lc).abs())
+                        .max((f64::from(r) - lr).abs());
                     checked += 1;
                 }
             }
         }
         assert!(checked > 1000);
+        // The batch version agrees with the single one.
+        let p = SphereProjector::new(&rig.cameras[1], 2, &grid).unwrap();
+        let (mut cols, mut rows) = (vec![0f32; grid.len()], vec![0f32; grid.len()]);
+        let mut tmp = vec![0f32; grid.len()];
+        p.project_run(0, 0.3, &mut cols, &mut rows, &mut tmp);
+        for i in 0..grid.len() {
+            match p.project(i, 0.3) {
+                Some((c, r)) => assert!((c - cols[i]).abs() < 1e-4 && (r - rows[i]).abs() < 1e-4),
+                None => assert_eq!(cols[i], -1.0),
+            }
+        }
         assert!(worst < 2e-3, "worst difference {worst} px");
     }
 }

@@ -100,14 +100,7 @@ fn horizontal_row(cost: &[u16], sum: &mut [u16], nd: usize, p1: i16, p2: i16) {
 
 /// The vertical and diagonal paths that run down (`dy = 1`) or up the
 /// rows, with column offsets `dxs`; one row of path state per direction.
-fn vertical_pass(
-    cost: &CostVolume,
-    sum: &mut [u16],
-    dxs: &[isize],
-    down: bool,
-    p1: i16,
-    p2: i16,
-) {
+fn vertical_pass(cost: &CostVolume, sum: &mut [u16], dxs: &[isize], down: bool, p1: i16, p2: i16) {
     let (w, h, nd) = (cost.width, cost.height, cost.ndepth);
     let nd2 = nd + 2;
     let ndir = dxs.len();
@@ -219,7 +212,9 @@ mod tests {
 
     #[test]
     fn zero_penalties_sum_the_cost_once_per_path() {
-        let c = volume(5, 7, 4, |y, x, n| ((y * 7 + x * 3 + n * 5) % 11) as f32 / 11.0);
+        let c = volume(5, 7, 4, |y, x, n| {
+            ((y * 7 + x * 3 + n * 5) % 11) as f32 / 11.0
+        });
         for (dirs, k) in [(Directions::Four, 4u16), (Directions::Eight, 8)] {
             let p = SgmParams {
                 p1: 0.0,
@@ -258,7 +253,12 @@ mod tests {
         // predecessor; on the ring it sees column w-1. A 1-row volume
         // isolates the horizontal paths (vertical ones are single pixels).
         let (h, w, nd) = (1, 6, 3);
-        let c = volume(h, w, nd, |_, x, n| if x == w - 1 && n == 0 { 0.0 } else { 0.5 });
+        let c = volume(
+            h,
+            w,
+            nd,
+            |_, x, n| if x == w - 1 && n == 0 { 0.0 } else { 0.5 },
+        );
         let p = SgmParams {
             p1: 1.0,
             p2: 1.0,
@@ -267,6 +267,9 @@ mod tests {
         };
         let (agg, _) = aggregate(&c, &p).unwrap();
         let px = agg.pixel(0, 0);
-        assert!(px[0] < px[1], "column 0 inherits column w-1's preference: {px:?}");
+        assert!(
+            px[0] < px[1],
+            "column 0 inherits column w-1's preference: {px:?}"
+        );
     }
 }

@@ -19,8 +19,19 @@ use rayon::prelude::*;
 pub fn fixture_rig(scale: f64) -> Rig {
     let poly = [-1.966_560e2, 0.0, 3.053_428e-3, -9.784_996e-6, 2.278_718e-8];
     let inv_poly = [
-        300.888_356, 180.967_781, -21.353_055, 14.896_848, 31.786_1, -12.778_866, -10.889_768,
-        20.862_822, 6.557_302, -10.383_775, -2.519_069, 2.891_402, 1.028_544,
+        300.888_356,
+        180.967_781,
+        -21.353_055,
+        14.896_848,
+        31.786_1,
+        -12.778_866,
+        -10.889_768,
+        20.862_822,
+        6.557_302,
+        -10.383_775,
+        -2.519_069,
+        2.891_402,
+        1.028_544,
     ];
     // z'(rho') = s z(rho'/s): a_i' = a_i s^(1-i); rho' = s rho.
     let model = OcamModel {
@@ -193,7 +204,11 @@ impl Scene {
             -rng.uniform(1.5, 2.5),
             -rng.uniform(2.5, 5.0),
         ];
-        let max = [rng.uniform(2.5, 5.0), rng.uniform(1.0, 1.6), rng.uniform(2.5, 5.0)];
+        let max = [
+            rng.uniform(2.5, 5.0),
+            rng.uniform(1.0, 1.6),
+            rng.uniform(2.5, 5.0),
+        ];
         let mut surfaces = vec![Surface::Room { min, max }];
         let count = 3 + (rng.next() % 4) as usize;
         for _ in 0..count {
@@ -206,7 +221,7 @@ impl Scene {
             if (c[0] * c[0] + c[2] * c[2]).sqrt() - size * 1.8 < 0.9 {
                 continue;
             }
-            if rng.next() % 2 == 0 {
+            if rng.next().is_multiple_of(2) {
                 surfaces.push(Surface::Sphere {
                     center: c,
                     radius: size,
@@ -227,7 +242,11 @@ impl Scene {
     }
 
     /// The nearest hit of a ray (unit `dir`): distance and point.
-    pub fn intersect(&self, origin: &Point3<f64>, dir: &Vector3<f64>) -> Option<(f64, Point3<f64>)> {
+    pub fn intersect(
+        &self,
+        origin: &Point3<f64>,
+        dir: &Vector3<f64>,
+    ) -> Option<(f64, Point3<f64>)> {
         let t = self
             .surfaces
             .iter()
@@ -323,7 +342,10 @@ mod tests {
                     assert!(((pa.row + 0.5) * 0.25 - 0.5 - pb.row).abs() < 1e-6);
                     let ray = b.ray_in_rig(pb).unwrap();
                     let want = (p - b.center_in_rig()).normalize();
-                    assert!((ray - want).norm() < 1e-3, "unprojection of the scaled model");
+                    assert!(
+                        (ray - want).norm() < 1e-3,
+                        "unprojection of the scaled model"
+                    );
                 }
                 (None, None) => {}
                 _ => panic!("visibility differs"),
@@ -335,10 +357,19 @@ mod tests {
     fn sphere_depth_and_room_hits() {
         let s = Scene::textured_sphere(3.0, 1);
         let grid = EquirectGrid::new(8, 16, 45.0).unwrap();
-        assert!(s.inverse_depth(&grid).data.iter().all(|&d| (d - 1.0 / 3.0).abs() < 1e-6));
+        assert!(
+            s.inverse_depth(&grid)
+                .data
+                .iter()
+                .all(|&d| (d - 1.0 / 3.0).abs() < 1e-6)
+        );
         let room = Scene::room(7);
         let inv = room.inverse_depth(&grid);
-        assert!(inv.data.iter().all(|&d| d > 0.1 && d < 1.0), "{:?}", inv.data);
+        assert!(
+            inv.data.iter().all(|&d| d > 0.1 && d < 1.0),
+            "{:?}",
+            inv.data
+        );
         let v: Vec<f32> = (0..50)
             .map(|k| room.intensity(&Point3::new(k as f64 * 0.05, 0.3, 1.0)))
             .collect();

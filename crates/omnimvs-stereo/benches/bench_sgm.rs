@@ -1,0 +1,63 @@
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+//! The whole method and its stages at the paper's size: four 768x800
+//! fisheye images of a generated room, a 160x640 output, N = 192.
+//!
+//! `RAYON_NUM_THREADS=2 cargo bench -p omnimvs-stereo --bench bench_sgm`
+//!
+//! The stage split (warp / cost / aggregation / WTA) of one frame is printed
+//! before the measurements; `examples/full_size.rs` prints it per frame
+//! with the CPU time and peak memory.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use omnimvs_stereo::synthetic::{Scene, fixture_rig};
+use omnimvs_stereo::{SgmParams, SphericalStereo, SweepStep, winner_take_all};
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+
+fn bench(c: &mut Criterion) {
+    let rig = fixture_rig(1.0);
+    let grid = EquirectGrid::new(160, 640, 45.0).unwrap();
+    let hyps = InvDepthHypotheses::new(192, 1.0).unwrap();
+    let stereo = SphericalStereo::new(&rig, grid, hyps, SgmParams::default()).unwrap();
+    let images = Scene::room(2000).render_frame(&rig);
+    let t = stereo.compute(&images, None).unwrap().timings;
+    eprintln!(
+        "stages of one frame ({} threads): warp {:.3} s, cost {:.3} s, aggregation {:.3} s, wta {:.3} s, total {:.3} s",
+        rayon::current_num_threads(),
+        t.warp_s,
+        t.cost_s,
+        t.aggregation_s,
+        t.wta_s,
+        t.total_s
+    );
+    let mut g = c.benchmark_group("sgm_4cam_768x800_160x640_N192");
+    g.sample_size(10);
+    g.bench_function("whole_method", |b| {
+        b.iter(|| stereo.compute(&images, None).unwrap())
+    });
+    let half = SphericalStereo::new(
+        &rig,
+        grid,
+        hyps,
+        SgmParams {
+            sweep: SweepStep::EveryOther,
+            ..SgmParams::default()
+        },
+    )
+    .unwrap();
+    g.bench_function("whole_method_every_other_sphere", |b| {
+        b.iter(|| half.compute(&images, None).unwrap())
+    });
+    g.bench_function("warp_and_cost", |b| {
+        b.iter(|| stereo.cost_volume(&images, None).unwrap())
+    });
+    let (cost, _) = stereo.cost_volume(&images, None).unwrap();
+    g.bench_function("aggregation_8_paths", |b| {
+        b.iter(|| stereo.aggregate(&cost).unwrap())
+    });
+    let (agg, _) = stereo.aggregate(&cost).unwrap();
+    g.bench_function("wta", |b| b.iter(|| winner_take_all(&agg)));
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
