@@ -2,9 +2,9 @@
 //! saves their contact sheets (4 fisheyes + ground truth in colour), e.g.
 //!
 //! ```text
-//! cargo run --release -p omnimvs-synth --example contact_sheet -- docs/images 1 4
+//! cargo run --release -p omnimvs-synth --example contact_sheet -- docs/images 2 3 1
 //! ```
-//! (output folder, frame, samples per pixel).
+//! (output folder, `things` frame, `house` frame, samples per pixel; seed 0).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -18,13 +18,17 @@ use omnimvs_synth::{GenParams, SceneKind, generate};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let out = PathBuf::from(args.first().map_or("docs/images", String::as_str));
-    let frame: u32 = args.get(1).map_or(Ok(1), |s| s.parse())?;
-    let spp: u32 = args.get(2).map_or(Ok(4), |s| s.parse())?;
+    let things_frame: u32 = args.get(1).map_or(Ok(2), |s| s.parse())?;
+    let house_frame: u32 = args.get(2).map_or(Ok(3), |s| s.parse())?;
+    let spp: u32 = args.get(3).map_or(Ok(1), |s| s.parse())?;
     std::fs::create_dir_all(&out)?;
     let source = preset_rig()?;
     let params = GenParams::new(source.min_depth_m, rig_radius_m(&source.rig));
     let grid = EquirectGrid::new(GT_HEIGHT, GT_WIDTH, GT_PHI_DEG)?;
-    for kind in [SceneKind::Things, SceneKind::House] {
+    for (kind, frame) in [
+        (SceneKind::Things, things_frame),
+        (SceneKind::House, house_frame),
+    ] {
         let t0 = Instant::now();
         let scene = generate(kind, 0, frame, &params)?;
         let (images, inv_depth) = render_scene(&scene, &[], &source.rig, spp, &grid)?;
@@ -51,9 +55,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let path = out.join(format!("synth_{}.png", kind.name()));
         omnimvs_data::image_io::write_png_u8(&path, sheet.width, sheet.height, 3, &sheet.data)?;
         println!(
-            "{}: frame {frame}, {} objects, {spp} spp, rendered in {:.2} s -> {}",
+            "{}: frame {frame}, {} objects, {}, {spp} spp, rendered in {:.2} s -> {}",
             kind.name(),
             scene.objects.len(),
+            if scene.sky.is_some() { "sky" } else { "room" },
             elapsed.as_secs_f64(),
             path.display()
         );
