@@ -1,0 +1,190 @@
+//! `omnimvs train`: end-to-end training of the network on dataset folders.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use omnimvs_net::NetConfig;
+use omnimvs_net::train::{EpochRecord, StepInfo, TrainConfig, Trainer};
+
+use crate::args::Frames;
+
+/// Train the OmniMVS network end to end (paper, sections 3.3 and 5.1): L1 loss between the
+/// predicted and the rounded ground-truth index over valid pixels, SGD with momentum 0.9,
+/// learning rate --lr then --lr-low for the last third of the epochs, random cyclic camera
+/// order and small rig rotations (a fixed seeded set of precomputed rotations, ground truth
+/// rotated to match). A loader thread prepares samples while the step runs.
+///
+/// Writes RUN_DIR/train_config.json, metrics.jsonl (one line per epoch), curves.png,
+/// model.safetensors (+ .json: last epoch), best.safetensors (lowest validation MAE) and
+/// checkpoints/ (model + optimiser, every epoch, atomic): kill it at any moment and
+/// `--resume RUN_DIR` continues from the last finished epoch exactly.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Dataset folders with ground truth, comma-separated.
+    #[arg(long, value_delimiter = ',', required_unless_present = "resume")]
+    pub data: Vec<PathBuf>,
+    /// Network sizes: tiny or paper.
+    #[arg(long, default_value = "tiny")]
+    pub preset: String,
+    /// Run folder (new). With --resume, the run folder to continue.
+    #[arg(long, required_unless_present = "resume")]
+    pub out: Option<PathBuf>,
+    /// Continue the run in this folder from its last checkpoint (its configuration is
+    /// reused; --epochs may raise the total).
+    #[arg(long, conflicts_with_all = ["data", "out", "init"])]
+    pub resume: Option<PathBuf>,
+    /// Start from these weights (fine-tuning, the paper's "-ft"): .safetensors with its
+    /// .json, or a reference PyTorch checkpoint.
+    #[arg(long)]
+    pub init: Option<PathBuf>,
+    /// Number of epochs.
+    #[arg(long)]
+    pub epochs: Option<usize>,
+    /// Learning rate of the first epochs.
+    #[arg(long, default_value_t = 0.003)]
+    pub lr: f64,
+    /// Learning rate of the last epochs.
+    #[arg(long, default_value_t = 0.0003)]
+    pub lr_low: f64,
+    /// Epochs at --lr-low (default: a third of the epochs).
+    #[arg(long)]
+    pub low_lr_epochs: Option<usize>,
+    /// SGD momentum.
+    #[arg(long, default_value_t = 0.9)]
+    pub momentum: f64,
+    /// Seed of the initial weights, shuffling and augmentation.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Training frames, A..B (default: every frame outside the validation frames).
+    #[arg(long)]
+    pub train_frames: Option<Frames>,
+    /// Validation frames, A..B (default: the last 10% of each dataset's frames).
+    #[arg(long)]
+    pub val_frames: Option<Frames>,
+    /// Precomputed rig rotations for augmentation, identity included (1: off).
+    #[arg(long, default_value_t = 8)]
+    pub rotations: usize,
+    /// Largest augmentation rotation, degrees.
+    #[arg(long, default_value_t = 5.0)]
+    pub max_rotation_deg: f64,
+    /// Keep the rig's camera order at the concatenation (no permutation augmentation).
+    #[arg(long)]
+    pub no_permute: bool,
+    /// Steps per epoch at most (default: every training frame once).
+    #[arg(long)]
+    pub max_steps: Option<usize>,
+    /// Validation frames per epoch at most.
+    #[arg(long)]
+    pub max_val_frames: Option<usize>,
+    /// Stop after this many epochs of this invocation (the run continues with --resume).
+    #[arg(long)]
+    pub stop_after: Option<usize>,
+}
+
+fn print_epoch(r: &EpochRecord) {
+    let val = match (r.val_loss, r.val) {
+        (Some(loss), Some(m)) => format!(
+            "val loss {loss:.3}  >1 {:.2}%  >3 {:.2}%  >5 {:.2}%  MAE {:.3}  RMS {:.3}",
+            m.over1_pct, m.over3_pct, m.over5_pct, m.mae, m.rms
+        ),
+        _ => "no validation frames".into(),
+    };
+    println!(
+        "epoch {:3}  lr {:.0e}  train loss {:.3}  {} steps  {:.3} steps/s (loader wait {:.1} s)  {val}",
+        r.epoch, r.lr, r.train_loss, r.steps, r.steps_per_second, r.loader_wait_seconds
+    );
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let device = burn::tensor::Device::flex();
+    let mut trainer = match &args.resume {
+        Some(dir) => Trainer::resume(dir, args.epochs, &device)
+            .with_context(|| format!("resuming {}", dir.display()))?,
+        None => {
+            let Some(out) = &args.out else {
+                bail!("--out RUN_DIR is required for a new run");
+            };
+            let config = TrainConfig {
+                net: NetConfig::preset(&args.preset)?,
+                data: args.data.clone(),
+                train_frames: args.train_frames.as_ref().map(|f| (*f.0.start(), *f.0.end())),
+                val_frames: args.val_frames.as_ref().map(|f| (*f.0.start(), *f.0.end())),
+                epochs: args.epochs.unwrap_or(30),
+                lr: args.lr,
+                lr_low: args.lr_low,
+                low_lr_epochs: args.low_lr_epochs,
+                momentum: args.momentum,
+                seed: args.seed,
+                rotations: args.rotations,
+                max_rotation_deg: args.max_rotation_deg,
+                permute_cameras: !args.no_permute,
+                max_steps_per_epoch: args.max_steps,
+                max_val_frames: args.max_val_frames,
+                init: args.init.clone(),
+                ..TrainConfig::default()
+            };
+            Trainer::create(config, out, &device)
+                .with_context(|| format!("starting a run in {}", out.display()))?
+        }
+    };
+    let config = trainer.config.clone();
+    let (train, val): (usize, usize) = trainer
+        .splits
+        .iter()
+        .fold((0, 0), |acc, (t, v)| (acc.0 + t.len(), acc.1 + v.len()));
+    println!(
+        "{}: {} training and {} validation frames from {} dataset(s); epochs {}..{} of {}; \
+         {} rotations up to {} deg; camera permutation {}",
+        trainer.run_dir.display(),
+        train,
+        val,
+        config.data.len(),
+        trainer.state.epochs_done + 1,
+        config.epochs,
+        config.epochs,
+        config.rotations,
+        config.max_rotation_deg,
+        if config.permute_cameras { "on" } else { "off" }
+    );
+    let last = match args.stop_after {
+        Some(n) => (trainer.state.epochs_done + n).min(config.epochs),
+        None => config.epochs,
+    };
+    let bar = ProgressBar::new(0);
+    bar.set_style(ProgressStyle::with_template(
+        "epoch {prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} steps, {per_sec}, loss {msg}",
+    )?);
+    let started = Instant::now();
+    let mut ema: Option<f64> = None;
+    let mut on_step = |s: &StepInfo| {
+        if s.step == 0 {
+            bar.reset();
+            bar.set_length(s.steps as u64);
+            bar.set_prefix(format!("{}/{}", s.epoch + 1, config.epochs));
+            ema = None;
+        }
+        let loss = f64::from(s.loss);
+        let smooth = ema.map_or(loss, |e| 0.9 * e + 0.1 * loss);
+        ema = Some(smooth);
+        bar.set_message(format!("{loss:.3} (avg {smooth:.3})"));
+        bar.inc(1);
+    };
+    while trainer.state.epochs_done < last {
+        let record = trainer.train_epoch(&mut on_step)?;
+        bar.suspend(|| print_epoch(&record));
+    }
+    bar.finish_and_clear();
+    println!(
+        "{} epoch(s) in {:.1} s; weights {}; best {}",
+        trainer.state.epochs_done,
+        started.elapsed().as_secs_f64(),
+        trainer.run_dir.join("model.safetensors").display(),
+        match trainer.state.best {
+            Some((epoch, mae)) => format!("epoch {epoch} (val MAE {mae:.3}): best.safetensors"),
+            None => "none (no validation frames)".into(),
+        }
+    );
+    Ok(())
+}

@@ -1,0 +1,25 @@
+//! End-to-end training (ICCV 2019 paper, sections 3.3 and 5.1).
+//!
+//! - [`config`]: the training configuration written next to every run.
+//! - [`rng`]: the seeded generator behind shuffling and augmentation (resumable by epoch).
+//! - [`augment`]: the fixed set of small rig rotations and the ground truth rotated to match.
+//! - [`sample`]: reading one training sample (normalised inputs, ground-truth indices).
+//! - [`loader`]: a loader thread that prepares samples while the step runs.
+//! - [`learner`]: the model, the optimiser, the masked L1 loss, one step, checkpoints.
+//! - [`trainer`]: epochs over datasets, validation, metrics log, curves, checkpoints.
+//! - [`plot`]: the PNG of the training and validation curves.
+
+pub mod augment;
+pub mod config;
+pub mod learner;
+pub mod loader;
+pub mod plot;
+pub mod rng;
+pub mod sample;
+pub mod trainer;
+
+pub use augment::{RotationSet, resample_ground_truth};
+pub use config::TrainConfig;
+pub use learner::{Learner, masked_l1};
+pub use sample::{Sample, SampleSource};
+pub use trainer::{EpochRecord, StepInfo, Trainer};

@@ -1,0 +1,444 @@
+//! Epochs over the training frames of one or more datasets, validation, the metrics log, the
+//! curves and the checkpoints of a run folder:
+//!
+//! ```text
+//! RUN_DIR/train_config.json        the TrainConfig (read back by resume)
+//! RUN_DIR/metrics.jsonl            one EpochRecord per line
+//! RUN_DIR/curves.png               training and validation loss per epoch
+//! RUN_DIR/model.safetensors+.json  weights after the last finished epoch
+//! RUN_DIR/best.safetensors+.json   weights of the epoch with the lowest validation MAE
+//! RUN_DIR/latest.json              which checkpoint to resume from
+//! RUN_DIR/checkpoints/epoch-EEEE/  model.bpk, optim.bpk, state.json
+//! ```
+//!
+//! Every file is written under a temporary name and renamed, so killing the process at any
+//! moment leaves the previous epoch's checkpoint usable: at most one epoch is lost.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use burn::tensor::{Device, Tensor, TensorData};
+use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
+use serde::{Deserialize, Serialize};
+
+use super::augment::RotationSet;
+use super::config::TrainConfig;
+use super::learner::{Learner, target_data};
+use super::loader::{Loader, PlanItem};
+use super::plot::plot_curves;
+use super::rng::SplitMix64;
+use super::sample::SampleSource;
+use crate::error::NetError;
+use crate::model::SweepTaps;
+use crate::weights;
+
+/// Progress of one training step.
+#[derive(Clone, Copy, Debug)]
+pub struct StepInfo {
+    /// Epoch, 0-based.
+    pub epoch: usize,
+    /// Step within the epoch, 0-based.
+    pub step: usize,
+    /// Steps of the epoch.
+    pub steps: usize,
+    /// Loss of the step (mean absolute index error over valid pixels).
+    pub loss: f32,
+    /// Learning rate.
+    pub lr: f64,
+}
+
+/// One line of `metrics.jsonl`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EpochRecord {
+    /// Epoch, 1-based (number of epochs finished).
+    pub epoch: usize,
+    /// Learning rate of the epoch.
+    pub lr: f64,
+    /// Mean training loss (index units).
+    pub train_loss: f64,
+    /// Training steps.
+    pub steps: usize,
+    /// Wall time of the training steps, seconds.
+    pub train_seconds: f64,
+    /// Training steps per second.
+    pub steps_per_second: f64,
+    /// Time the steps waited for the loader thread, seconds.
+    pub loader_wait_seconds: f64,
+    /// Mean validation loss (index units), if there are validation frames.
+    pub val_loss: Option<f64>,
+    /// The paper's metrics on the validation frames.
+    pub val: Option<Metrics>,
+    /// Wall time of the validation, seconds.
+    pub val_seconds: f64,
+}
+
+/// What a checkpoint records besides the tensors.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunState {
+    /// Epochs finished.
+    pub epochs_done: usize,
+    /// Every finished epoch.
+    pub history: Vec<EpochRecord>,
+    /// Epoch (1-based) with the lowest validation MAE so far and that MAE.
+    pub best: Option<(usize, f64)>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Latest {
+    checkpoint: PathBuf,
+    epochs_done: usize,
+}
+
+fn io_error(path: &Path, source: std::io::Error) -> NetError {
+    NetError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Writes `text` to `path` through a temporary file and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), NetError> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).map_err(|e| io_error(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| io_error(path, e))
+}
+
+fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), NetError> {
+    let text = serde_json::to_string_pretty(value).map_err(|source| NetError::Json {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    write_atomic(path, (text + "\n").as_bytes())
+}
+
+fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, NetError> {
+    let text = std::fs::read_to_string(path).map_err(|e| io_error(path, e))?;
+    serde_json::from_str(&text).map_err(|source| NetError::Json {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Saves weights (safetensors + JSON) under `name` in `dir` atomically.
+fn export_weights(learner: &Learner, dir: &Path, name: &str) -> Result<(), NetError> {
+    let tmp = dir.join(format!("{name}.partial.safetensors"));
+    weights::save(&learner.net, &tmp)?;
+    for ext in ["json", "safetensors"] {
+        let from = tmp.with_extension(ext);
+        let to = dir.join(format!("{name}.{ext}"));
+        std::fs::rename(&from, &to).map_err(|e| io_error(&to, e))?;
+    }
+    Ok(())
+}
+
+/// A training run on dataset folders.
+pub struct Trainer {
+    /// The run's configuration.
+    pub config: TrainConfig,
+    /// The run folder.
+    pub run_dir: PathBuf,
+    /// Model and optimiser.
+    pub learner: Learner,
+    /// The datasets.
+    pub sources: Arc<Vec<SampleSource>>,
+    /// `(train, validation)` frames of every source.
+    pub splits: Vec<(Vec<u32>, Vec<u32>)>,
+    /// Progress of the run.
+    pub state: RunState,
+    taps: HashMap<(usize, usize), Vec<SweepTaps>>,
+}
+
+impl Trainer {
+    /// Starts a new run in `run_dir`, writing `train_config.json`.
+    ///
+    /// # Errors
+    /// [`NetError`] for an invalid configuration, unreadable data, no training frame, or a
+    /// run folder that already holds a run.
+    pub fn create(config: TrainConfig, run_dir: &Path, device: &Device) -> Result<Self, NetError> {
+        let config_path = run_dir.join("train_config.json");
+        if config_path.exists() {
+            return Err(NetError::InvalidConfig {
+                field: "out",
+                message: format!(
+                    "{} already holds a run; resume it or choose another folder",
+                    run_dir.display()
+                ),
+            });
+        }
+        let trainer = Self::build(config, run_dir, device)?;
+        write_json(&config_path, &trainer.config)?;
+        Ok(trainer)
+    }
+
+    /// Resumes the run in `run_dir` from its latest checkpoint; `epochs` replaces the total
+    /// number of epochs when given (the schedule follows the new total).
+    ///
+    /// # Errors
+    /// [`NetError`] when the run folder or its checkpoint cannot be read.
+    pub fn resume(run_dir: &Path, epochs: Option<usize>, device: &Device) -> Result<Self, NetError> {
+        let config_path = run_dir.join("train_config.json");
+        let mut config: TrainConfig = read_json(&config_path)?;
+        if let Some(epochs) = epochs {
+            config.epochs = epochs;
+            write_json(&config_path, &config)?;
+        }
+        let mut trainer = Self::build(config, run_dir, device)?;
+        let latest_path = run_dir.join("latest.json");
+        if latest_path.exists() {
+            let latest: Latest = read_json(&latest_path)?;
+            let dir = run_dir.join(&latest.checkpoint);
+            trainer.learner.load_checkpoint(&dir)?;
+            trainer.state = read_json(&dir.join("state.json"))?;
+        }
+        Ok(trainer)
+    }
+
+    fn build(config: TrainConfig, run_dir: &Path, device: &Device) -> Result<Self, NetError> {
+        config.validate()?;
+        if config.data.is_empty() {
+            return Err(NetError::InvalidConfig {
+                field: "data",
+                message: "needs at least one dataset folder".into(),
+            });
+        }
+        std::fs::create_dir_all(run_dir).map_err(|e| io_error(run_dir, e))?;
+        let rotations = RotationSet::new(config.rotations, config.max_rotation_deg, config.seed);
+        let sources = config
+            .data
+            .iter()
+            .map(|path| SampleSource::open(path, &config.net, rotations.clone()))
+            .collect::<Result<Vec<_>, _>>()?;
+        let splits: Vec<_> = sources
+            .iter()
+            .map(|s| config.split(&s.frames_with_gt()))
+            .collect();
+        if splits.iter().all(|(train, _)| train.is_empty()) {
+            return Err(NetError::InvalidConfig {
+                field: "train_frames",
+                message: "no training frame with ground truth in the datasets".into(),
+            });
+        }
+        let learner = Learner::new(&config, device)?;
+        Ok(Self {
+            config,
+            run_dir: run_dir.to_path_buf(),
+            learner,
+            sources: Arc::new(sources),
+            splits,
+            state: RunState::default(),
+            taps: HashMap::new(),
+        })
+    }
+
+    /// The samples of `epoch` in order: a shuffle of every training frame with a random
+    /// rotation and camera shift, from the `(seed, epoch)` stream.
+    pub fn plan(&self, epoch: usize) -> Vec<PlanItem> {
+        let mut rng = SplitMix64::for_epoch(self.config.seed, epoch);
+        let mut items: Vec<(usize, u32)> = self
+            .splits
+            .iter()
+            .enumerate()
+            .flat_map(|(s, (train, _))| train.iter().map(move |&f| (s, f)))
+            .collect();
+        rng.shuffle(&mut items);
+        if let Some(max) = self.config.max_steps_per_epoch {
+            items.truncate(max);
+        }
+        let cams = self.config.net.num_cameras;
+        items
+            .into_iter()
+            .map(|(source, frame)| PlanItem {
+                source,
+                frame,
+                rotation: rng.below(self.config.rotations),
+                shift: if self.config.permute_cameras { rng.below(cams) } else { 0 },
+            })
+            .collect()
+    }
+
+    fn taps_for(&mut self, source: usize, rotation: usize) -> &[SweepTaps] {
+        let (learner, sources) = (&self.learner, &self.sources);
+        self.taps
+            .entry((source, rotation))
+            .or_insert_with(|| learner.taps(&sources[source].grids[rotation]))
+    }
+
+    /// Trains until `config.epochs`, validating and checkpointing after every epoch.
+    ///
+    /// # Errors
+    /// [`NetError`] when a sample cannot be read or a file cannot be written.
+    pub fn run(
+        &mut self,
+        on_step: &mut dyn FnMut(&StepInfo),
+        on_epoch: &mut dyn FnMut(&EpochRecord),
+    ) -> Result<(), NetError> {
+        while self.state.epochs_done < self.config.epochs {
+            let record = self.train_epoch(on_step)?;
+            on_epoch(&record);
+        }
+        Ok(())
+    }
+
+    /// Trains one epoch, validates, writes the log, the curves and a checkpoint.
+    ///
+    /// # Errors
+    /// See [`Trainer::run`].
+    pub fn train_epoch(&mut self, on_step: &mut dyn FnMut(&StepInfo)) -> Result<EpochRecord, NetError> {
+        let epoch = self.state.epochs_done;
+        let lr = self.config.lr_at(epoch);
+        let plan = self.plan(epoch);
+        let steps = plan.len();
+        let loader = Loader::spawn(Arc::clone(&self.sources), plan, self.config.prefetch);
+        let cams = self.config.net.num_cameras;
+        let (mut loss_sum, mut wait) = (0f64, 0f64);
+        let start = Instant::now();
+        for step in 0..steps {
+            let waited = Instant::now();
+            let Ok((item, sample)) = loader.samples.recv() else {
+                break;
+            };
+            wait += waited.elapsed().as_secs_f64();
+            let sample = sample?;
+            let order: Vec<usize> = (0..cams).map(|j| (j + item.shift) % cams).collect();
+            let taps = self.taps_for(item.source, item.rotation).to_vec();
+            let loss = self.learner.step(&sample, &taps, &order, lr)?;
+            loss_sum += f64::from(loss);
+            on_step(&StepInfo { epoch, step, steps, loss, lr });
+        }
+        drop(loader);
+        let train_seconds = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let (val_loss, val) = self.validate()?;
+        let record = EpochRecord {
+            epoch: epoch + 1,
+            lr,
+            train_loss: loss_sum / steps.max(1) as f64,
+            steps,
+            train_seconds,
+            steps_per_second: steps as f64 / train_seconds.max(1e-9),
+            loader_wait_seconds: wait,
+            val_loss,
+            val,
+            val_seconds: start.elapsed().as_secs_f64(),
+        };
+        self.state.epochs_done = epoch + 1;
+        self.state.history.push(record.clone());
+        let improved = match (val, self.state.best) {
+            (Some(m), Some((_, best))) => m.mae < best,
+            (Some(_), None) => true,
+            (None, _) => false,
+        };
+        if improved && let Some(m) = val {
+            self.state.best = Some((epoch + 1, m.mae));
+        }
+        self.write_outputs(improved)?;
+        Ok(record)
+    }
+
+    /// Mean loss and metrics on the validation frames (identity rotation and camera order,
+    /// inference mode).
+    ///
+    /// # Errors
+    /// [`NetError`] when a frame cannot be read.
+    pub fn validate(&self) -> Result<(Option<f64>, Option<Metrics>), NetError> {
+        let net = self.learner.inference_net();
+        let device = self.learner.device.clone().without_autodiff();
+        let order = net.identity_order();
+        let c = net.config.clone();
+        let mut losses = Vec::new();
+        let mut metrics = Vec::new();
+        let frames: Vec<(usize, u32)> = self
+            .splits
+            .iter()
+            .enumerate()
+            .flat_map(|(s, (_, val))| val.iter().map(move |&f| (s, f)))
+            .take(self.config.max_val_frames.unwrap_or(usize::MAX))
+            .collect();
+        for (s, frame) in frames {
+            let source = &self.sources[s];
+            let sample = source.load(s, frame, 0)?;
+            let images: Vec<Tensor<4>> = sample
+                .images
+                .iter()
+                .map(|image| {
+                    Tensor::from_data(
+                        TensorData::new(image.clone(), [1, 1, c.input_height, c.input_width]),
+                        &device,
+                    )
+                })
+                .collect();
+            let out = net.infer(&images, &source.grids[0], &order)?;
+            let (target, mask) = target_data(&sample.gt);
+            let loss = super::learner::masked_l1(
+                out.index.clone(),
+                Tensor::from_data(target, &device),
+                Tensor::from_data(mask, &device),
+            )
+            .into_scalar::<f32>();
+            losses.push(f64::from(loss));
+            let index = out
+                .index
+                .into_data()
+                .try_into_vec_as::<f32>()
+                .map_err(|e| NetError::Shape {
+                    what: format!("index map ({e:?})"),
+                    expected: vec![],
+                    actual: vec![],
+                })?;
+            metrics.push(frame_metrics(&index, &sample.gt, c.num_invdepth)?);
+        }
+        let loss = (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64);
+        Ok((loss, mean_metrics(&metrics)))
+    }
+
+    fn write_outputs(&self, improved: bool) -> Result<(), NetError> {
+        let dir = &self.run_dir;
+        // Metrics log and curves first: they only describe finished epochs.
+        let mut log = String::new();
+        for record in &self.state.history {
+            let line = serde_json::to_string(record).map_err(|source| NetError::Json {
+                path: dir.join("metrics.jsonl"),
+                source,
+            })?;
+            log.push_str(&line);
+            log.push('\n');
+        }
+        write_atomic(&dir.join("metrics.jsonl"), log.as_bytes())?;
+        plot_curves(&self.state.history, &dir.join("curves.png"))?;
+        // Checkpoint: a new folder, then the pointer to it, then the old folders go.
+        let name = format!("epoch-{:04}", self.state.epochs_done);
+        let checkpoints = dir.join("checkpoints");
+        let tmp = checkpoints.join(format!("{name}.partial"));
+        if tmp.exists() {
+            std::fs::remove_dir_all(&tmp).map_err(|e| io_error(&tmp, e))?;
+        }
+        self.learner.save_checkpoint(&tmp)?;
+        write_json(&tmp.join("state.json"), &self.state)?;
+        let final_dir = checkpoints.join(&name);
+        if final_dir.exists() {
+            std::fs::remove_dir_all(&final_dir).map_err(|e| io_error(&final_dir, e))?;
+        }
+        std::fs::rename(&tmp, &final_dir).map_err(|e| io_error(&final_dir, e))?;
+        write_json(
+            &dir.join("latest.json"),
+            &Latest {
+                checkpoint: PathBuf::from("checkpoints").join(&name),
+                epochs_done: self.state.epochs_done,
+            },
+        )?;
+        if let Ok(entries) = std::fs::read_dir(&checkpoints) {
+            for entry in entries.flatten() {
+                if entry.file_name().to_string_lossy() != name {
+                    let _ = std::fs::remove_dir_all(entry.path());
+                }
+            }
+        }
+        export_weights(&self.learner, dir, "model")?;
+        if improved {
+            export_weights(&self.learner, dir, "best")?;
+        }
+        Ok(())
+    }
+}
