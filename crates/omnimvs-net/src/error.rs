@@ -50,6 +50,12 @@ pub enum NetError {
         /// The cause.
         source: serde_json::Error,
     },
+    /// Reading the dataset (images, masks, ground truth) failed.
+    #[error(transparent)]
+    Data(#[from] omnimvs_data::DataError),
+    /// Building or reading the lookup table failed.
+    #[error(transparent)]
+    Sweep(#[from] omnimvs_sweep::SweepError),
     /// A weight file could not be read, written or applied to the model.
     #[error("{path}: {message}")]
     Weights {

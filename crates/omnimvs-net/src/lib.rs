@@ -8,10 +8,14 @@
 //! - [`config`]: sizes, layouts (ICCV paper / published weights) and presets.
 //! - [`model`]: the burn modules, named like the reference PyTorch state dict.
 //! - [`taps`]: bilinear taps of a lookup table and the host warp kernel.
+//! - [`weights`]: our safetensors files and the import of reference PyTorch checkpoints.
+//! - [`infer`]: running a network on a dataset's frames.
+//! - [`bench`]: per-stage forward timings.
 
 pub mod bench;
 pub mod config;
 pub mod error;
+pub mod infer;
 pub mod model;
 pub mod taps;
 pub mod weights;

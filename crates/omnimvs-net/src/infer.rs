@@ -1,0 +1,275 @@
+//! Inference on a dataset: lookup table from the cache, input preparation (normalisation,
+//! resizing to the network input), forward pass, inverse depth and entropy maps.
+
+use burn::tensor::{Device, Tensor, TensorData};
+use omnimvs_camera::ValidityMask;
+use omnimvs_data::Dataset;
+use omnimvs_data::image_io::normalize_for_network;
+use omnimvs_sweep::{
+    CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache, SphereSet,
+};
+
+use crate::error::NetError;
+use crate::model::{OmniMvsNet, StageTimings};
+use crate::taps::SweepGrid;
+
+/// Downscale factor above which the input is low-pass filtered before resampling.
+const ANTIALIAS_FACTOR: f64 = 1.5;
+
+/// A network ready to run on the frames of one rig.
+pub struct Inference {
+    /// The network (batch norms possibly folded).
+    pub net: OmniMvsNet,
+    /// Lookup table of every camera for the network's output grid.
+    pub grids: Vec<SweepGrid>,
+    /// The `N` inverse-depth hypotheses of the dataset.
+    pub hypotheses: InvDepthHypotheses,
+    /// The output grid.
+    pub grid: EquirectGrid,
+    /// Validity mask of every camera, at the dataset's image size.
+    pub masks: Vec<ValidityMask>,
+    /// Camera concatenation order.
+    pub order: Vec<usize>,
+    /// Device the network runs on.
+    pub device: Device,
+}
+
+/// The network's results for one frame, on the `height x width` output grid.
+#[derive(Clone, Debug)]
+pub struct FrameResult {
+    /// Rows of the maps.
+    pub height: usize,
+    /// Columns of the maps.
+    pub width: usize,
+    /// Softargmin hypothesis index `n_hat` in `[0, N - 1]`.
+    pub index: Vec<f32>,
+    /// Inverse depth (1/m) of the index.
+    pub inv_depth: Vec<f32>,
+    /// Entropy of the per-pixel distribution (nats).
+    pub entropy: Vec<f32>,
+    /// Stage timings of the forward pass.
+    pub timings: StageTimings,
+}
+
+impl Inference {
+    /// Prepares `net` for `dataset`: checks the camera count, loads or builds the lookup
+    /// table in `cache` (the network sweeps every other sphere) and reads the masks.
+    ///
+    /// # Errors
+    /// [`NetError`] when the rig does not match the network or the table cannot be built.
+    pub fn new(
+        net: OmniMvsNet,
+        dataset: &Dataset,
+        cache: &LutCache,
+        device: Device,
+    ) -> Result<(Self, CacheStatus), NetError> {
+        let config = net.config.clone();
+        if dataset.rig.len() != config.num_cameras {
+            return Err(NetError::Shape {
+                what: format!("cameras of {}", dataset.config_path.display()),
+                expected: vec![config.num_cameras],
+                actual: vec![dataset.rig.len()],
+            });
+        }
+        let grid = EquirectGrid::new(config.out_height, config.out_width, config.phi_deg)?;
+        let hypotheses = dataset.hypotheses(config.num_invdepth)?;
+        let (lut, status) =
+            cache.load_or_build(&dataset.rig, &grid, &hypotheses, SphereSet::EveryOther)?;
+        let grids = SweepGrid::split_table(
+            &lut.data,
+            config.num_cameras,
+            config.num_spheres(),
+            config.out_height,
+            config.out_width,
+        )?;
+        let masks = dataset.masks()?;
+        let order = net.identity_order();
+        Ok((
+            Self {
+                net,
+                grids,
+                hypotheses,
+                grid,
+                masks,
+                order,
+                device,
+            },
+            status,
+        ))
+    }
+
+    /// Network inputs `[1, 1, H_I, W_I]`: each gray image normalised over its valid pixels,
+    /// then resized to the network's input size.
+    ///
+    /// # Errors
+    /// [`NetError`] for a wrong number of images or a mask of another size.
+    pub fn input_tensors(&self, images: &[GrayImage]) -> Result<Vec<Tensor<4>>, NetError> {
+        let config = &self.net.config;
+        if images.len() != config.num_cameras {
+            return Err(NetError::Shape {
+                what: "images per frame".into(),
+                expected: vec![config.num_cameras],
+                actual: vec![images.len()],
+            });
+        }
+        images
+            .iter()
+            .zip(&self.masks)
+            .map(|(image, mask)| {
+                let normalized = normalize_for_network(image, Some(mask))?;
+                let resized = resize_bilinear(&normalized, config.input_width, config.input_height);
+                Ok(Tensor::from_data(
+                    TensorData::new(
+                        resized.data,
+                        [1, 1, config.input_height, config.input_width],
+                    ),
+                    &self.device,
+                ))
+            })
+            .collect()
+    }
+
+    /// Runs the network on one frame's gray images (camera order of the rig).
+    ///
+    /// # Errors
+    /// [`NetError`] for inconsistent inputs.
+    pub fn run(&self, images: &[GrayImage]) -> Result<FrameResult, NetError> {
+        let inputs = self.input_tensors(images)?;
+        let (out, timings) = self.net.infer_timed(&inputs, &self.grids, &self.order)?;
+        let entropy = out.entropy();
+        let read = |t: Tensor<3>, what: &str| {
+            t.into_data()
+                .try_into_vec_as::<f32>()
+                .map_err(|e| NetError::Shape {
+                    what: format!("{what} ({e:?})"),
+                    expected: vec![],
+                    actual: vec![],
+                })
+        };
+        let index = read(out.index, "index map")?;
+        let entropy = read(entropy, "entropy map")?;
+        let inv_depth = index
+            .iter()
+            .map(|&n| self.hypotheses.inv_depth(f64::from(n)) as f32)
+            .collect();
+        Ok(FrameResult {
+            height: self.net.config.out_height,
+            width: self.net.config.out_width,
+            index,
+            inv_depth,
+            entropy,
+            timings,
+        })
+    }
+}
+
+/// Names of the compute backends of this build, for `--backend`.
+pub const BACKENDS: [&str; 1] = ["cpu"];
+
+/// The device of a backend name: `cpu` (or `flex`) is the pure-Rust CPU backend.
+///
+/// # Errors
+/// [`NetError::InvalidConfig`] for a backend this build does not have.
+pub fn device_from_name(name: &str) -> Result<Device, NetError> {
+    match name {
+        "cpu" | "flex" => Ok(Device::flex()),
+        other => Err(NetError::InvalidConfig {
+            field: "backend",
+            message: format!(
+                "`{other}` is not available in this build (expected one of {BACKENDS:?})"
+            ),
+        }),
+    }
+}
+
+/// Resizes a gray image to `width x height` by bilinear interpolation with corners aligned
+/// (pixel `(0, 0)` and the last pixel keep their place), so that lookup-table coordinates,
+/// normalised the same way, stay valid. Downscaling by more than 1.5 first smooths with a
+/// `[1, 2, 1] / 4` kernel per halving to limit aliasing.
+pub fn resize_bilinear(image: &GrayImage, width: usize, height: usize) -> GrayImage {
+    if image.width == width && image.height == height {
+        return image.clone();
+    }
+    let mut src = image.clone();
+    let factor = (image.width as f64 / width as f64).max(image.height as f64 / height as f64);
+    let mut f = factor;
+    while f > ANTIALIAS_FACTOR {
+        src = blur_121(&src);
+        f /= 2.0;
+    }
+    let sx = if width > 1 {
+        (src.width as f64 - 1.0) / (width as f64 - 1.0)
+    } else {
+        0.0
+    };
+    let sy = if height > 1 {
+        (src.height as f64 - 1.0) / (height as f64 - 1.0)
+    } else {
+        0.0
+    };
+    let mut data = Vec::with_capacity(width * height);
+    for row in 0..height {
+        for col in 0..width {
+            data.push(src.sample(col as f64 * sx, row as f64 * sy));
+        }
+    }
+    GrayImage {
+        width,
+        height,
+        data,
+    }
+}
+
+/// Separable `[1, 2, 1] / 4` smoothing with clamped borders.
+fn blur_121(image: &GrayImage) -> GrayImage {
+    let (w, h) = (image.width, image.height);
+    let at = |d: &[f32], r: usize, c: usize| d[r * w + c];
+    let mut tmp = vec![0f32; w * h];
+    for r in 0..h {
+        for c in 0..w {
+            let l = at(&image.data, r, c.saturating_sub(1));
+            let m = at(&image.data, r, c);
+            let rr = at(&image.data, r, (c + 1).min(w - 1));
+            tmp[r * w + c] = 0.25 * l + 0.5 * m + 0.25 * rr;
+        }
+    }
+    let mut data = vec![0f32; w * h];
+    for r in 0..h {
+        for c in 0..w {
+            let u = at(&tmp, r.saturating_sub(1), c);
+            let m = at(&tmp, r, c);
+            let d = at(&tmp, (r + 1).min(h - 1), c);
+            data[r * w + c] = 0.25 * u + 0.5 * m + 0.25 * d;
+        }
+    }
+    GrayImage {
+        width: w,
+        height: h,
+        data,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resize_keeps_corners_and_linear_ramps() {
+        let (w, h) = (9, 5);
+        let data = (0..h)
+            .flat_map(|r| (0..w).map(move |c| (2 * c + 3 * r) as f32))
+            .collect();
+        let image = GrayImage {
+            width: w,
+            height: h,
+            data,
+        };
+        let small = resize_bilinear(&image, 5, 3);
+        // A linear ramp stays linear under bilinear sampling and the [1, 2, 1] blur
+        // (away from the clamped borders the blur is exact).
+        assert_eq!(small.data[0], image.data[0]);
+        assert!((small.data[5 + 2] - (2.0 * 4.0 + 3.0 * 2.0)).abs() < 1e-4);
+        let same = resize_bilinear(&image, w, h);
+        assert_eq!(same, image);
+    }
+}
