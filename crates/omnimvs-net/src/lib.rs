@@ -11,6 +11,7 @@
 //! - [`weights`]: our safetensors files and the import of reference PyTorch checkpoints.
 //! - [`infer`]: running a network on a dataset's frames.
 //! - [`bench`]: per-stage forward timings.
+//! - [`train`]: end-to-end training (loss, SGD, augmentation, loader, checkpoints).
 
 pub mod bench;
 pub mod config;
@@ -18,6 +19,7 @@ pub mod error;
 pub mod infer;
 pub mod model;
 pub mod taps;
+pub mod train;
 pub mod weights;
 
 pub use config::{Layout, NetConfig};

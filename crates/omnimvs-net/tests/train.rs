@@ -108,7 +108,10 @@ fn resume_gives_the_uninterrupted_next_step_loss() {
         .map(|_| resumed.step(&sample, &taps, &[1, 0], 0.01).unwrap())
         .collect();
     for (e, a) in expected.iter().zip(&actual) {
-        assert!((e - a).abs() <= 1e-5 * e.abs().max(1.0), "{expected:?} vs {actual:?}");
+        assert!(
+            (e - a).abs() <= 1e-5 * e.abs().max(1.0),
+            "{expected:?} vs {actual:?}"
+        );
     }
 
     // The optimiser state matters: without the momentum the second loss differs.

@@ -79,7 +79,13 @@ struct EvalReport {
     methods: Vec<MethodResult>,
 }
 
-fn write_index_png(path: &Path, index: &[f32], gt: &GroundTruth, ndepth: usize, mask: bool) -> Result<()> {
+fn write_index_png(
+    path: &Path,
+    index: &[f32],
+    gt: &GroundTruth,
+    ndepth: usize,
+    mask: bool,
+) -> Result<()> {
     let valid = mask.then_some(gt.valid.as_slice());
     let rgb = colorize(index, 0.0, (ndepth - 1) as f64, Colormap::Turbo, valid);
     write_png_u8(path, gt.width, gt.height, 3, &rgb)?;
@@ -88,9 +94,18 @@ fn write_index_png(path: &Path, index: &[f32], gt: &GroundTruth, ndepth: usize, 
 
 pub fn run(args: &Args) -> Result<()> {
     let ds = Dataset::open(&args.data)?;
-    let frames: Vec<u32> = args.frames.0.clone().filter(|&f| ds.gt_path(f).is_some()).collect();
+    let frames: Vec<u32> = args
+        .frames
+        .0
+        .clone()
+        .filter(|&f| ds.gt_path(f).is_some())
+        .collect();
     if frames.is_empty() {
-        bail!("no frame of {:?} has ground truth in {}", args.frames.0, ds.root.display());
+        bail!(
+            "no frame of {:?} has ground truth in {}",
+            args.frames.0,
+            ds.root.display()
+        );
     }
     let device = burn::tensor::Device::flex();
     let weights: Vec<PathBuf> = if args.weights.is_empty() {
@@ -109,7 +124,12 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let tiny = NetConfig::tiny();
     let (height, width, ndepth, phi_deg) = match nets.first() {
-        Some((_, net)) => (net.config.out_height, net.config.out_width, net.config.num_invdepth, net.config.phi_deg),
+        Some((_, net)) => (
+            net.config.out_height,
+            net.config.out_width,
+            net.config.num_invdepth,
+            net.config.phi_deg,
+        ),
         None => (
             args.size.map_or(tiny.out_height, |s| s.height),
             args.size.map_or(tiny.out_width, |s| s.width),
@@ -123,49 +143,95 @@ pub fn run(args: &Args) -> Result<()> {
     let mut gts = Vec::new();
     for &f in &frames {
         let map = ds.read_gt(f)?.context("ground truth vanished")?;
-        gts.push(resample_ground_truth(&map, &grid, &Rotation3::identity(), &hyps)?);
+        gts.push(resample_ground_truth(
+            &map,
+            &grid,
+            &Rotation3::identity(),
+            &hyps,
+        )?);
     }
     if let Some(out) = &args.out {
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
         if args.pictures {
-            write_index_png(&out.join(format!("{:05}_gt.png", frames[0])), &gts[0].index, &gts[0], ndepth, true)?;
+            write_index_png(
+                &out.join(format!("{:05}_gt.png", frames[0])),
+                &gts[0].index,
+                &gts[0],
+                ndepth,
+                true,
+            )?;
         }
     }
 
     let mut methods = Vec::new();
     let bar = ProgressBar::new(0);
-    bar.set_style(ProgressStyle::with_template("{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} frames")?);
-    let mut evaluate = |name: String, file: &str, run: &mut dyn FnMut(u32) -> Result<Vec<f32>>| -> Result<()> {
-        bar.reset();
-        bar.set_length(frames.len() as u64);
-        bar.set_prefix(name.clone());
-        let mut per_frame = Vec::new();
-        let start = Instant::now();
-        for (k, (&f, gt)) in frames.iter().zip(&gts).enumerate() {
-            let index = run(f)?;
-            if k == 0 && args.pictures && let Some(out) = &args.out {
-                write_index_png(&out.join(format!("{f:05}_{file}.png")), &index, gt, ndepth, false)?;
+    bar.set_style(ProgressStyle::with_template(
+        "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} frames",
+    )?);
+    let mut evaluate =
+        |name: String, file: &str, run: &mut dyn FnMut(u32) -> Result<Vec<f32>>| -> Result<()> {
+            bar.reset();
+            bar.set_length(frames.len() as u64);
+            bar.set_prefix(name.clone());
+            let mut per_frame = Vec::new();
+            let start = Instant::now();
+            for (k, (&f, gt)) in frames.iter().zip(&gts).enumerate() {
+                let index = run(f)?;
+                if k == 0
+                    && args.pictures
+                    && let Some(out) = &args.out
+                {
+                    write_index_png(
+                        &out.join(format!("{f:05}_{file}.png")),
+                        &index,
+                        gt,
+                        ndepth,
+                        false,
+                    )?;
+                }
+                per_frame.push((f, frame_metrics(&index, gt, ndepth)?));
+                bar.inc(1);
             }
-            per_frame.push((f, frame_metrics(&index, gt, ndepth)?));
-            bar.inc(1);
-        }
-        let seconds_per_frame = start.elapsed().as_secs_f64() / frames.len() as f64;
-        let all: Vec<Metrics> = per_frame.iter().map(|p| p.1).collect();
-        let metrics = mean_metrics(&all).context("no frame evaluated")?;
-        methods.push(MethodResult { method: name, metrics, per_frame, seconds_per_frame });
-        Ok(())
-    };
+            let seconds_per_frame = start.elapsed().as_secs_f64() / frames.len() as f64;
+            let all: Vec<Metrics> = per_frame.iter().map(|p| p.1).collect();
+            let metrics = mean_metrics(&all).context("no frame evaluated")?;
+            methods.push(MethodResult {
+                method: name,
+                metrics,
+                per_frame,
+                seconds_per_frame,
+            });
+            Ok(())
+        };
     for method in &args.method {
         match method.as_str() {
             "net" => {
                 for (path, net) in std::mem::take(&mut nets) {
                     let c = net.config.clone();
                     if (c.out_height, c.out_width, c.num_invdepth) != (height, width, ndepth) {
-                        bail!("{}: output {}x{} N={} differs from the evaluation grid {height}x{width} N={ndepth}", path.display(), c.out_height, c.out_width, c.num_invdepth);
+                        bail!(
+                            "{}: output {}x{} N={} differs from the evaluation grid {height}x{width} N={ndepth}",
+                            path.display(),
+                            c.out_height,
+                            c.out_width,
+                            c.num_invdepth
+                        );
                     }
-                    let (inference, _) = Inference::new(net.fold_batch_norm(), &ds, &LutCache::default_location(), device.clone())?;
-                    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-                    let name = if weights.len() > 1 { format!("net ({stem})") } else { "net".into() };
+                    let (inference, _) = Inference::new(
+                        net.fold_batch_norm(),
+                        &ds,
+                        &LutCache::default_location(),
+                        device.clone(),
+                    )?;
+                    let stem = path
+                        .file_stem()
+                        .map(|s| s.to_string_lossy().into_owned())
+                        .unwrap_or_default();
+                    let name = if weights.len() > 1 {
+                        format!("net ({stem})")
+                    } else {
+                        "net".into()
+                    };
                     evaluate(name, &format!("net_{stem}"), &mut |f| {
                         let images = ds.read_frame(f)?;
                         Ok(inference.run(&images)?.index)
@@ -201,8 +267,18 @@ pub fn run(args: &Args) -> Result<()> {
         println!("{}: {:.3} s/frame", m.method, m.seconds_per_frame);
     }
     if let Some(out) = &args.out {
-        let report = EvalReport { dataset: ds.root.clone(), frames: frames.clone(), height, width, ndepth, methods };
-        std::fs::write(out.join("eval.json"), serde_json::to_string_pretty(&report)? + "\n")?;
+        let report = EvalReport {
+            dataset: ds.root.clone(),
+            frames: frames.clone(),
+            height,
+            width,
+            ndepth,
+            methods,
+        };
+        std::fs::write(
+            out.join("eval.json"),
+            serde_json::to_string_pretty(&report)? + "\n",
+        )?;
         std::fs::write(out.join("eval.md"), &table)?;
         println!("wrote {}", out.join("eval.json").display());
     }

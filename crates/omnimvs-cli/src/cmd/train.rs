@@ -109,7 +109,10 @@ pub fn run(args: &Args) -> Result<()> {
             let config = TrainConfig {
                 net: NetConfig::preset(&args.preset)?,
                 data: args.data.clone(),
-                train_frames: args.train_frames.as_ref().map(|f| (*f.0.start(), *f.0.end())),
+                train_frames: args
+                    .train_frames
+                    .as_ref()
+                    .map(|f| (*f.0.start(), *f.0.end())),
                 val_frames: args.val_frames.as_ref().map(|f| (*f.0.start(), *f.0.end())),
                 epochs: args.epochs.unwrap_or(30),
                 lr: args.lr,

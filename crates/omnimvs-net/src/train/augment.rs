@@ -141,7 +141,11 @@ mod tests {
         let data = (0..height)
             .flat_map(|_| (0..width).map(move |c| 0.05 + 0.5 * c as f32 / width as f32))
             .collect();
-        InvDepthMap { width, height, data }
+        InvDepthMap {
+            width,
+            height,
+            data,
+        }
     }
 
     #[test]
@@ -160,8 +164,16 @@ mod tests {
         // the ground truth by one column, in one direction or the other.
         let yaw = Rotation3::new(Vector3::new(0.0, 360.0f64.to_radians() / 128.0, 0.0));
         let rotated = resample_ground_truth(&map, &grid, &yaw, &hyps).unwrap();
-        let shifted = [39, 41].iter().any(|&c| (at(&rotated, 10, 40) - at(&gt, 10, c)).abs() < 1e-4);
-        assert!(shifted, "{} vs {} / {}", at(&rotated, 10, 40), at(&gt, 10, 39), at(&gt, 10, 41));
+        let shifted = [39, 41]
+            .iter()
+            .any(|&c| (at(&rotated, 10, 40) - at(&gt, 10, c)).abs() < 1e-4);
+        assert!(
+            shifted,
+            "{} vs {} / {}",
+            at(&rotated, 10, 40),
+            at(&gt, 10, 39),
+            at(&gt, 10, 41)
+        );
     }
 
     #[test]

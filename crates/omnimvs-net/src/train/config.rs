@@ -105,18 +105,33 @@ impl TrainConfig {
             return Err(invalid("epochs", "must be at least 1".into()));
         }
         if !(self.lr > 0.0 && self.lr_low > 0.0) {
-            return Err(invalid("lr", format!("must be positive, got {} and {}", self.lr, self.lr_low)));
+            return Err(invalid(
+                "lr",
+                format!("must be positive, got {} and {}", self.lr, self.lr_low),
+            ));
         }
         if !(0.0..1.0).contains(&self.momentum) {
-            return Err(invalid("momentum", format!("must be in [0, 1), got {}", self.momentum)));
+            return Err(invalid(
+                "momentum",
+                format!("must be in [0, 1), got {}", self.momentum),
+            ));
         }
         if self.rotations == 0 {
-            return Err(invalid("rotations", "must be at least 1 (the identity)".into()));
+            return Err(invalid(
+                "rotations",
+                "must be at least 1 (the identity)".into(),
+            ));
         }
         if !(0.0..=1.0).contains(&self.val_fraction) {
-            return Err(invalid("val_fraction", format!("must be in [0, 1], got {}", self.val_fraction)));
+            return Err(invalid(
+                "val_fraction",
+                format!("must be in [0, 1], got {}", self.val_fraction),
+            ));
         }
-        for (field, range) in [("train_frames", self.train_frames), ("val_frames", self.val_frames)] {
+        for (field, range) in [
+            ("train_frames", self.train_frames),
+            ("val_frames", self.val_frames),
+        ] {
             if let Some((a, b)) = range
                 && b < a
             {
@@ -130,7 +145,11 @@ impl TrainConfig {
     pub fn split(&self, found: &[u32]) -> (Vec<u32>, Vec<u32>) {
         let inside = |r: Option<(u32, u32)>, f: u32| r.is_some_and(|(a, b)| (a..=b).contains(&f));
         let val: Vec<u32> = match self.val_frames {
-            Some(_) => found.iter().copied().filter(|&f| inside(self.val_frames, f)).collect(),
+            Some(_) => found
+                .iter()
+                .copied()
+                .filter(|&f| inside(self.val_frames, f))
+                .collect(),
             None => {
                 let count = ((found.len() as f64 * self.val_fraction).round() as usize)
                     .clamp(usize::from(found.len() > 1), found.len().saturating_sub(1));
@@ -158,15 +177,25 @@ mod tests {
 
     #[test]
     fn schedule_drops_for_the_last_third() {
-        let config = TrainConfig { epochs: 30, ..TrainConfig::default() };
+        let config = TrainConfig {
+            epochs: 30,
+            ..TrainConfig::default()
+        };
         assert_eq!(config.lr_at(0), 0.003);
         assert_eq!(config.lr_at(19), 0.003);
         assert_eq!(config.lr_at(20), 0.0003);
         assert_eq!(config.lr_at(29), 0.0003);
-        let ft = TrainConfig { epochs: 16, low_lr_epochs: Some(4), ..TrainConfig::default() };
+        let ft = TrainConfig {
+            epochs: 16,
+            low_lr_epochs: Some(4),
+            ..TrainConfig::default()
+        };
         assert_eq!(ft.lr_at(11), 0.003);
         assert_eq!(ft.lr_at(12), 0.0003);
-        let one = TrainConfig { epochs: 1, ..TrainConfig::default() };
+        let one = TrainConfig {
+            epochs: 1,
+            ..TrainConfig::default()
+        };
         assert_eq!(one.lr_at(0), 0.003);
     }
 
@@ -187,6 +216,13 @@ mod tests {
         assert_eq!(val, vec![10, 11, 12]);
         let json = serde_json::to_string(&config).unwrap();
         assert_eq!(serde_json::from_str::<TrainConfig>(&json).unwrap(), config);
-        assert!(TrainConfig { epochs: 0, ..config }.validate().is_err());
+        assert!(
+            TrainConfig {
+                epochs: 0,
+                ..config
+            }
+            .validate()
+            .is_err()
+        );
     }
 }

@@ -150,7 +150,12 @@ pub fn plot_curves(history: &[EpochRecord], path: &Path) -> Result<(), NetError>
         let y = y0 + value / max_loss * (y1 - y0);
         canvas.line((x0, y), (x1, y), GRID_COLOR);
         let label = format!("{value:.2}");
-        canvas.text(LEFT - 8 - text_width(&label), y as usize - 5, &label, AXIS_COLOR);
+        canvas.text(
+            LEFT - 8 - text_width(&label),
+            y as usize - 5,
+            &label,
+            AXIS_COLOR,
+        );
     }
     let ticks = (max_epoch as usize - 1).min(10).max(1);
     for k in 0..=ticks {
@@ -158,11 +163,21 @@ pub fn plot_curves(history: &[EpochRecord], path: &Path) -> Result<(), NetError>
         let (x, _) = px((epoch, 0.0));
         canvas.line((x, y0), (x, y0 + 5.0), AXIS_COLOR);
         let label = format!("{}", epoch.round() as usize);
-        canvas.text(x as usize - text_width(&label) / 2, y0 as usize + 10, &label, AXIS_COLOR);
+        canvas.text(
+            x as usize - text_width(&label) / 2,
+            y0 as usize + 10,
+            &label,
+            AXIS_COLOR,
+        );
     }
     canvas.line((x0, y0), (x1, y0), AXIS_COLOR);
     canvas.line((x0, y0), (x0, y1), AXIS_COLOR);
-    canvas.text(WIDTH / 2 - text_width("epoch") / 2, HEIGHT - 20, "epoch", AXIS_COLOR);
+    canvas.text(
+        WIDTH / 2 - text_width("epoch") / 2,
+        HEIGHT - 20,
+        "epoch",
+        AXIS_COLOR,
+    );
     canvas.text(10, 12, "loss", AXIS_COLOR);
     // Legend.
     canvas.line((x1 - 150.0, 18.0), (x1 - 125.0, 18.0), TRAIN_COLOR);

@@ -58,7 +58,9 @@ mod tests {
 
     #[test]
     fn epochs_have_distinct_reproducible_streams() {
-        let a: Vec<u64> = (0..4).map(|_| SplitMix64::for_epoch(7, 3).next_u64()).collect();
+        let a: Vec<u64> = (0..4)
+            .map(|_| SplitMix64::for_epoch(7, 3).next_u64())
+            .collect();
         assert!(a.windows(2).all(|w| w[0] == w[1]));
         assert_ne!(
             SplitMix64::for_epoch(7, 3).next_u64(),

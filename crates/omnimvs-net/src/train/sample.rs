@@ -115,13 +115,17 @@ impl SampleSource {
     pub fn load(&self, source: usize, frame: u32, rotation: usize) -> Result<Sample, NetError> {
         let images = self.dataset.read_frame(frame)?;
         let images = self.inputs(&images)?;
-        let map = self.dataset.read_gt(frame)?.ok_or_else(|| {
-            omnimvs_data::DataError::Mismatch {
-                what: format!("{}: ground truth of frame {frame}", self.dataset.root.display()),
-                expected: "a ground-truth file".into(),
-                found: "none".into(),
-            }
-        })?;
+        let map =
+            self.dataset
+                .read_gt(frame)?
+                .ok_or_else(|| omnimvs_data::DataError::Mismatch {
+                    what: format!(
+                        "{}: ground truth of frame {frame}",
+                        self.dataset.root.display()
+                    ),
+                    expected: "a ground-truth file".into(),
+                    found: "none".into(),
+                })?;
         let gt = resample_ground_truth(
             &map,
             &self.grid,

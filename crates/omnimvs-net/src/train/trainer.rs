@@ -177,7 +177,11 @@ impl Trainer {
     ///
     /// # Errors
     /// [`NetError`] when the run folder or its checkpoint cannot be read.
-    pub fn resume(run_dir: &Path, epochs: Option<usize>, device: &Device) -> Result<Self, NetError> {
+    pub fn resume(
+        run_dir: &Path,
+        epochs: Option<usize>,
+        device: &Device,
+    ) -> Result<Self, NetError> {
         let config_path = run_dir.join("train_config.json");
         let mut config: TrainConfig = read_json(&config_path)?;
         if let Some(epochs) = epochs {
@@ -253,7 +257,11 @@ impl Trainer {
                 source,
                 frame,
                 rotation: rng.below(self.config.rotations),
-                shift: if self.config.permute_cameras { rng.below(cams) } else { 0 },
+                shift: if self.config.permute_cameras {
+                    rng.below(cams)
+                } else {
+                    0
+                },
             })
             .collect()
     }
@@ -285,7 +293,10 @@ impl Trainer {
     ///
     /// # Errors
     /// See [`Trainer::run`].
-    pub fn train_epoch(&mut self, on_step: &mut dyn FnMut(&StepInfo)) -> Result<EpochRecord, NetError> {
+    pub fn train_epoch(
+        &mut self,
+        on_step: &mut dyn FnMut(&StepInfo),
+    ) -> Result<EpochRecord, NetError> {
         let epoch = self.state.epochs_done;
         let lr = self.config.lr_at(epoch);
         let plan = self.plan(epoch);
@@ -305,7 +316,13 @@ impl Trainer {
             let taps = self.taps_for(item.source, item.rotation).to_vec();
             let loss = self.learner.step(&sample, &taps, &order, lr)?;
             loss_sum += f64::from(loss);
-            on_step(&StepInfo { epoch, step, steps, loss, lr });
+            on_step(&StepInfo {
+                epoch,
+                step,
+                steps,
+                loss,
+                lr,
+            });
         }
         drop(loader);
         let train_seconds = start.elapsed().as_secs_f64();
