@@ -77,7 +77,7 @@ fn main() {
     println!("{}", evaluate(0.0, 0.0).markdown_row("ZNCC only (no SGM)"));
     let mut best = (f64::INFINITY, 0.0, 0.0);
     for &p1 in &[0.01f32, 0.02, 0.05, 0.1, 0.2] {
-        for &p2 in &[0.1f32, 0.2, 0.4, 0.6, 1.0, 2.0, 4.0] {
+        for &p2 in &[0.2f32, 0.4, 0.6, 1.0, 1.5, 2.0, 3.0] {
             if p2 < p1 {
                 continue;
             }

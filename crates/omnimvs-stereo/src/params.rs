@@ -10,11 +10,11 @@ pub const COST_SCALE: f32 = 512.0;
 /// Default `P1` (small inverse-depth changes), in matching-cost units
 /// (`(1 - zncc) / 2`, in `[0, 1]`). Tuned on generated validation rooms only
 /// (`examples/tune_sgm.rs`, README of this crate).
-pub const DEFAULT_P1: f32 = 0.05;
+pub const DEFAULT_P1: f32 = 0.1;
 
 /// Default `P2` (jumps of more than one hypothesis), in matching-cost units.
 /// Tuned with [`DEFAULT_P1`].
-pub const DEFAULT_P2: f32 = 0.6;
+pub const DEFAULT_P2: f32 = 2.0;
 
 /// Which SGM paths are aggregated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
