@@ -32,7 +32,6 @@ impl std::fmt::Display for Size {
 
 /// A frame range `A..B` (inclusive) or a single frame `A`.
 #[derive(Debug, Clone, PartialEq, Eq)]
-#[allow(dead_code)] // for the frame-range subcommands (synth, sgm, infer)
 pub struct Frames(pub RangeInclusive<u32>);
 
 impl std::str::FromStr for Frames {

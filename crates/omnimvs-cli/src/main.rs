@@ -28,6 +28,7 @@ enum Command {
     Lut(cmd::lut::Args),
     Pano(cmd::pano::Args),
     Synth(cmd::synth::Args),
+    Sgm(cmd::sgm::Args),
 }
 
 fn main() -> ExitCode {
@@ -37,6 +38,7 @@ fn main() -> ExitCode {
         Command::Lut(a) => cmd::lut::run(&a),
         Command::Pano(a) => cmd::pano::run(&a),
         Command::Synth(a) => cmd::synth::run(&a),
+        Command::Sgm(a) => cmd::sgm::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

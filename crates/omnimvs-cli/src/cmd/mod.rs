@@ -3,4 +3,5 @@
 pub mod info;
 pub mod lut;
 pub mod pano;
+pub mod sgm;
 pub mod synth;
