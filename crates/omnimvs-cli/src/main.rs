@@ -24,6 +24,7 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    Infer(cmd::infer::Args),
     Info(cmd::info::Args),
     Lut(cmd::lut::Args),
     Pano(cmd::pano::Args),
@@ -34,6 +35,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Infer(a) => cmd::infer::run(&a),
         Command::Info(a) => cmd::info::run(&a),
         Command::Lut(a) => cmd::lut::run(&a),
         Command::Pano(a) => cmd::pano::run(&a),

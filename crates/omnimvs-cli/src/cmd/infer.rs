@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
@@ -10,7 +10,7 @@ use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use omnimvs_data::ply::{ColoredPoint, write_ply};
-use omnimvs_net::infer::{FrameResult, Inference, resize_bilinear};
+use omnimvs_net::infer::{FrameResult, Inference, device_from_name, resize_bilinear};
 use omnimvs_net::weights::load_any;
 use omnimvs_net::{NetConfig, OmniMvsNet};
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
@@ -57,10 +57,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let device = match args.backend.as_str() {
-        "cpu" | "flex" => burn::tensor::Device::flex(),
-        other => bail!("--backend {other}: only `cpu` is available in this build"),
-    };
+    let device = device_from_name(&args.backend)?;
     let ds = Dataset::open(&args.dataset)?;
     let base = NetConfig::preset(&args.preset)?;
     let net = match &args.weights {
@@ -96,18 +93,27 @@ pub fn run(args: &Args) -> Result<()> {
         "order": inference.order,
         "backend": args.backend,
     });
-    std::fs::write(args.out.join("infer.json"), serde_json::to_string_pretty(&settings)? + "\n")?;
+    std::fs::write(
+        args.out.join("infer.json"),
+        serde_json::to_string_pretty(&settings)? + "\n",
+    )?;
 
     let frames: Vec<u32> = args.frames.0.clone().collect();
     let bar = ProgressBar::new(frames.len() as u64);
     bar.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} frames, {elapsed} elapsed, eta {eta} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} frames, {elapsed} elapsed, eta {eta} {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let mut metrics: Vec<(u32, Metrics)> = Vec::new();
     for &frame in &frames {
-        let images = ds.read_frame(frame).with_context(|| format!("frame {frame}"))?;
-        let result = inference.run(&images).with_context(|| format!("frame {frame}"))?;
+        let images = ds
+            .read_frame(frame)
+            .with_context(|| format!("frame {frame}"))?;
+        let result = inference
+            .run(&images)
+            .with_context(|| format!("frame {frame}"))?;
         let error = write_frame(args, &ds, &inference, frame, &images, &result)?;
         if let Some(m) = error {
             bar.set_message(format!("frame {frame}: MAE {:.3}", m.mae));
@@ -125,7 +131,10 @@ pub fn run(args: &Args) -> Result<()> {
             "frames": metrics.iter().map(|(f, m)| serde_json::json!({"frame": f, "metrics": m})).collect::<Vec<_>>(),
             "mean": mean,
         });
-        std::fs::write(args.out.join("metrics.json"), serde_json::to_string_pretty(&json)? + "\n")?;
+        std::fs::write(
+            args.out.join("metrics.json"),
+            serde_json::to_string_pretty(&json)? + "\n",
+        )?;
         if let Some(mean) = mean {
             println!("{}", mean.markdown_row("OmniMVS (burn)"));
         }
@@ -154,7 +163,10 @@ fn write_frame(
 
     let ndepth = inference.net.config.num_invdepth;
     let gt = ds.ground_truth(frame, h, w, &inference.hypotheses)?;
-    let metrics = gt.as_ref().map(|gt| frame_metrics(&result.index, gt, ndepth)).transpose()?;
+    let metrics = gt
+        .as_ref()
+        .map(|gt| frame_metrics(&result.index, gt, ndepth))
+        .transpose()?;
 
     let pano = compose_panorama(
         &ds.rig,
@@ -163,8 +175,13 @@ fn write_frame(
         Some(&inference.masks),
         InvDepthSource::Map(&result.inv_depth),
     )?;
-    let entropy_rgb =
-        colorize(&result.entropy, 0.0, (ndepth as f64).ln(), Colormap::Inferno, None);
+    let entropy_rgb = colorize(
+        &result.entropy,
+        0.0,
+        (ndepth as f64).ln(),
+        Colormap::Inferno,
+        None,
+    );
     let mut rows: Vec<Vec<u8>> = vec![
         fisheye_strip(images, w),
         gray_to_rgb(&pano.image),
@@ -178,10 +195,22 @@ fn write_frame(
             .zip(&gt.index)
             .map(|(p, g)| (p - g).abs() / ndepth as f32 * 100.0)
             .collect();
-        rows.push(colorize(&err, 0.0, ERROR_MAP_MAX_PCT, Colormap::Inferno, Some(&gt.valid)));
+        rows.push(colorize(
+            &err,
+            0.0,
+            ERROR_MAP_MAX_PCT,
+            Colormap::Inferno,
+            Some(&gt.valid),
+        ));
     }
     let composite: Vec<u8> = rows.concat();
-    write_png_u8(&out("_vis.png"), w, composite.len() / (3 * w), 3, &composite)?;
+    write_png_u8(
+        &out("_vis.png"),
+        w,
+        composite.len() / (3 * w),
+        3,
+        &composite,
+    )?;
 
     if args.ply {
         let points: Vec<ColoredPoint> = (0..h * w)
@@ -190,7 +219,10 @@ fn write_frame(
                 let ray = inference.grid.ray((i / w) as f64, (i % w) as f64);
                 let p = ray / f64::from(result.inv_depth[i]);
                 let v = pano.image.data[i].clamp(0.0, 255.0) as u8;
-                ColoredPoint { xyz_m: [p.x as f32, p.y as f32, p.z as f32], rgb: [v, v, v] }
+                ColoredPoint {
+                    xyz_m: [p.x as f32, p.y as f32, p.z as f32],
+                    rgb: [v, v, v],
+                }
             })
             .collect();
         write_ply(&out(".ply"), &points)?;
@@ -231,4 +263,3 @@ fn gray_to_rgb(image: &GrayImage) -> Vec<u8> {
         })
         .collect()
 }
-

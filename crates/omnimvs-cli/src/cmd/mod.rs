@@ -1,5 +1,6 @@
 //! One module per subcommand.
 
+pub mod infer;
 pub mod info;
 pub mod lut;
 pub mod pano;
