@@ -124,6 +124,30 @@ pub fn load(path: &Path, device: &Device) -> Result<OmniMvsNet, NetError> {
     Ok(net)
 }
 
+/// Loads a network from in-memory files: the configuration JSON and the safetensors bytes
+/// (e.g. a model bundled into a binary with `include_bytes!`). `name` labels errors.
+///
+/// # Errors
+/// [`NetError`] when the configuration or the weights do not parse or do not match.
+pub fn load_bytes(
+    name: &Path,
+    config_json: &str,
+    safetensors: &[u8],
+    device: &Device,
+) -> Result<OmniMvsNet, NetError> {
+    let config: NetConfig = serde_json::from_str(config_json).map_err(|source| NetError::Json {
+        path: config_path(name),
+        source,
+    })?;
+    let mut net = OmniMvsNet::new(&config, device)?;
+    let mut store = SafetensorsStore::from_bytes(Some(safetensors.to_vec()));
+    let result = net
+        .load_from(&mut store)
+        .map_err(|e| weights_error(name, e.to_string()))?;
+    check_applied(name, &result)?;
+    Ok(net)
+}
+
 /// What a reference checkpoint says about the network it holds.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct CheckpointInfo {

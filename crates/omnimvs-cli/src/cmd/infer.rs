@@ -11,11 +11,19 @@ use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use omnimvs_data::ply::{ColoredPoint, write_ply};
 use omnimvs_net::infer::{FrameResult, Inference, device_from_name, resize_bilinear};
-use omnimvs_net::weights::load_any;
+use omnimvs_net::weights::{load_any, load_bytes};
 use omnimvs_net::{NetConfig, OmniMvsNet};
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
 use crate::args::Frames;
+
+/// The bundled model (`models/omnimvs-tiny.*`), compiled into the binary.
+const BUNDLED_NAME: &str = "models/omnimvs-tiny.safetensors";
+const BUNDLED_CONFIG: &str = include_str!("../../../../models/omnimvs-tiny.json");
+const BUNDLED_WEIGHTS: &[u8] = include_bytes!("../../../../models/omnimvs-tiny.safetensors");
+
+/// `--weights` value that asks for a randomly initialised network.
+const RANDOM_WEIGHTS: &str = "random";
 
 /// Inverse depths below this (farther than 1 km) are left out of point clouds.
 const FAR_INV_DEPTH: f32 = 1e-3;
@@ -31,12 +39,13 @@ const ERROR_MAP_MAX_PCT: f64 = 10.0;
 pub struct Args {
     /// Dataset folder (or its config.yaml).
     pub dataset: PathBuf,
-    /// Weights: our .safetensors (with its .json beside it) or a reference
-    /// PyTorch checkpoint (.pt/.pth with net_state_dict and CH). Without it, a
-    /// randomly initialised network of --preset (no trained model is bundled yet).
+    /// Weights: our .safetensors (with its .json beside it), a reference
+    /// PyTorch checkpoint (.pt/.pth with net_state_dict and CH), or `random`
+    /// for a randomly initialised --preset network (smoke tests, timing).
+    /// Default: the bundled `omnimvs-tiny` model (models/ in the repository).
     #[arg(long)]
     pub weights: Option<PathBuf>,
-    /// Architecture sizes for a PyTorch checkpoint or random weights: paper or tiny.
+    /// Architecture sizes for a PyTorch checkpoint or `--weights random`: paper or tiny.
     #[arg(long, default_value = "paper")]
     pub preset: String,
     /// Frames, A..B (inclusive) or a single frame.
@@ -61,16 +70,21 @@ pub fn run(args: &Args) -> Result<()> {
     let ds = Dataset::open(&args.dataset)?;
     let base = NetConfig::preset(&args.preset)?;
     let net = match &args.weights {
-        Some(path) => load_any(path, &base, &device)
-            .with_context(|| format!("loading weights {}", path.display()))?,
-        None => {
+        Some(path) if path.as_os_str() == RANDOM_WEIGHTS => {
             eprintln!(
-                "warning: no --weights and no bundled model yet: using a randomly initialised \
-                 `{}` network, its outputs are meaningless",
+                "warning: randomly initialised `{}` network, its outputs are meaningless",
                 args.preset
             );
             OmniMvsNet::new(&base, &device)?
         }
+        Some(path) => load_any(path, &base, &device)
+            .with_context(|| format!("loading weights {}", path.display()))?,
+        None => load_bytes(
+            std::path::Path::new(BUNDLED_NAME),
+            BUNDLED_CONFIG,
+            BUNDLED_WEIGHTS,
+            &device,
+        )?,
     };
     let config = net.config.clone();
     let net = net.fold_batch_norm();
