@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 
 mod args;
 mod cmd;
+mod pictures;
 
 /// 360-degree depth maps from a rig of ultra-wide (220-degree) fisheye cameras,
 /// after OmniMVS (ICCV 2019).
@@ -24,23 +25,29 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    Demo(cmd::demo::Args),
     Infer(cmd::infer::Args),
     Info(cmd::info::Args),
     Lut(cmd::lut::Args),
     Pano(cmd::pano::Args),
-    Synth(cmd::synth::Args),
     Sgm(cmd::sgm::Args),
+    Synth(cmd::synth::Args),
+    Train(cmd::train::Args),
+    Eval(cmd::eval::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Demo(a) => cmd::demo::run(&a),
         Command::Infer(a) => cmd::infer::run(&a),
         Command::Info(a) => cmd::info::run(&a),
         Command::Lut(a) => cmd::lut::run(&a),
         Command::Pano(a) => cmd::pano::run(&a),
-        Command::Synth(a) => cmd::synth::run(&a),
         Command::Sgm(a) => cmd::sgm::run(&a),
+        Command::Synth(a) => cmd::synth::run(&a),
+        Command::Train(a) => cmd::train::run(&a),
+        Command::Eval(a) => cmd::eval::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,7 +1,7 @@
 use std::path::{Path, PathBuf};
 
 use omnimvs_camera::{Rig, ValidityMask, parse_config_rig};
-use omnimvs_sweep::{GrayImage, InvDepthHypotheses};
+use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 
 use crate::gt::{GroundTruth, InvDepthMap, ground_truth_index, read_inv_depth};
 use crate::image_io::read_gray_sized;
@@ -187,10 +187,15 @@ impl Dataset {
     }
 
     /// The ground truth of `frame` as indices for an output of `height x
-    /// width` and `hyps`, cropped and masked as for evaluation.
+    /// width` and `hyps`, masked as for evaluation. At the ground truth's own
+    /// width the middle rows are cropped, exactly as the reference does; at
+    /// another width (a smaller network grid, say) the indices and the
+    /// validity, computed at full resolution, are sampled (nearest pixel) at
+    /// the rays of the `height x width` grid, which covers `±180*height/width`
+    /// degrees like every equirectangular output here.
     ///
     /// # Errors
-    /// An unreadable file, or a width that differs from the output's.
+    /// An unreadable file, or an output grid outside the map's latitudes.
     pub fn ground_truth(
         &self,
         frame: u32,
@@ -201,14 +206,37 @@ impl Dataset {
         let Some(map) = self.read_gt(frame)? else {
             return Ok(None);
         };
-        if map.width != width {
+        if map.width == width {
+            let cropped = map.crop_rows_centered(height)?;
+            return Ok(Some(ground_truth_index(&cropped, hyps)));
+        }
+        let full = ground_truth_index(&map, hyps);
+        let phi_deg = 180.0 * height as f64 / width as f64;
+        if phi_deg > map.phi_deg() + 1e-9 {
             return Err(DataError::mismatch(
-                format!("frame {frame} ground-truth width"),
-                format!("{width} (the output width)"),
-                map.width,
+                format!("frame {frame} ground-truth latitude range"),
+                format!("at least ±{phi_deg} degrees (a {height}x{width} output)"),
+                format!("±{} degrees", map.phi_deg()),
             ));
         }
-        let cropped = map.crop_rows_centered(height)?;
-        Ok(Some(ground_truth_index(&cropped, hyps)))
+        let src = EquirectGrid::new(map.height, map.width, map.phi_deg())?;
+        let dst = EquirectGrid::new(height, width, phi_deg)?;
+        let mut index = Vec::with_capacity(dst.len());
+        let mut valid = Vec::with_capacity(dst.len());
+        for row in 0..height {
+            for col in 0..width {
+                let (r, c) = src.position_of(&dst.ray(row as f64, col as f64));
+                let r = (r.round().max(0.0) as usize).min(map.height - 1);
+                let c = (c.round() as usize) % map.width;
+                index.push(full.index[r * map.width + c]);
+                valid.push(full.valid[r * map.width + c]);
+            }
+        }
+        Ok(Some(GroundTruth {
+            width,
+            height,
+            index,
+            valid,
+        }))
     }
 }

@@ -230,5 +230,16 @@ fn dataset_ground_truth_is_cropped_and_indexed() {
     // Row 80 of the crop is row 160 of the full map: inside the band.
     let n = gt.index[80 * 640 + 5];
     assert!((f64::from(n) - hyps.index(0.5)).abs() < 1e-3);
-    assert!(ds.ground_truth(2, 160, 320, &hyps).is_err());
+    // A smaller grid samples the full-resolution ground truth at its rays.
+    let small = ds.ground_truth(2, 40, 160, &hyps).unwrap().unwrap();
+    assert_eq!(small.index.len(), 40 * 160);
+    assert_eq!(small.index[20 * 160 + 3], gt.index[80 * 640 + 12]);
+    // A grid wider in latitude than the map cannot be served.
+    let map160 = InvDepthMap {
+        width: 640,
+        height: 160,
+        data: vec![0.5; 640 * 160],
+    };
+    write_inv_depth_tiff(&dir.path().join("omnidepth_gt_640/00003.tiff"), &map160).unwrap();
+    assert!(ds.ground_truth(3, 160, 320, &hyps).is_err());
 }

@@ -53,6 +53,14 @@ pub struct LookupTable {
     pub data: Vec<f32>,
 }
 
+/// The source image size `(width, height)` of every camera of `rig`.
+fn camera_sizes(rig: &Rig) -> Vec<(u32, u32)> {
+    rig.cameras
+        .iter()
+        .map(|c| (c.model.width(), c.model.height()))
+        .collect()
+}
+
 fn normalise(px: f64, size: u32) -> f32 {
     (px / (f64::from(size) - 1.0) * 2.0 - 1.0) as f32
 }
@@ -117,11 +125,7 @@ impl LookupTable {
             grid: *grid,
             hypotheses: *hypotheses,
             sphere_indices,
-            camera_sizes: rig
-                .cameras
-                .iter()
-                .map(|c| (c.model.width(), c.model.height()))
-                .collect(),
+            camera_sizes: camera_sizes(rig),
             data,
         })
     }
@@ -231,11 +235,7 @@ impl LookupTable {
             grid: *grid,
             hypotheses: *hypotheses,
             sphere_indices,
-            camera_sizes: rig
-                .cameras
-                .iter()
-                .map(|c| (c.model.width(), c.model.height()))
-                .collect(),
+            camera_sizes: camera_sizes(rig),
             data,
         })
     }

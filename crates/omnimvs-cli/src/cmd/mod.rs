@@ -1,8 +1,11 @@
 //! One module per subcommand.
 
+pub mod demo;
+pub mod eval;
 pub mod infer;
 pub mod info;
 pub mod lut;
 pub mod pano;
 pub mod sgm;
 pub mod synth;
+pub mod train;

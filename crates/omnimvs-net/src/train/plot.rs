@@ -157,7 +157,7 @@ pub fn plot_curves(history: &[EpochRecord], path: &Path) -> Result<(), NetError>
             AXIS_COLOR,
         );
     }
-    let ticks = (max_epoch as usize - 1).min(10).max(1);
+    let ticks = (max_epoch as usize).saturating_sub(1).clamp(1, 10);
     for k in 0..=ticks {
         let epoch = 1.0 + (max_epoch - 1.0) * k as f64 / ticks as f64;
         let (x, _) = px((epoch, 0.0));

@@ -1,0 +1,280 @@
+//! `omnimvs demo`: the whole pipeline on a bundled default, in one command.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use omnimvs_data::Dataset;
+use omnimvs_data::colormap::{Colormap, colorize};
+use omnimvs_data::gt::{GroundTruth, read_inv_depth};
+use omnimvs_data::image_io::write_png_u8;
+use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
+use omnimvs_data::ply::{ColoredPoint, write_ply};
+use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
+
+use crate::args::{Frames, Size};
+use crate::cmd::{eval, infer, sgm, synth};
+use crate::pictures::{ERROR_MAP_MAX_PCT, fisheye_strip, gray_to_rgb, label_rows};
+
+/// Run the pipeline end to end on a default that needs nothing but this
+/// repository: render a few frames of a synthetic `things` scene with exact
+/// ground truth for the published 4-camera rig, estimate 360-degree depth with
+/// the classical method (ZNCC + SGM) and, when a trained model is bundled,
+/// with the network; print the paper's metrics table; write pictures
+/// (inputs, panorama, ground truth, estimates, error maps) and a PLY point
+/// cloud. If the reference samples are beside the repository
+/// (../shared/data/omnimvs-samples), the real itbt_sample frame 1 is
+/// processed as well.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Output folder (created; existing demo files are replaced).
+    #[arg(long, default_value = "demo-out")]
+    pub out: PathBuf,
+    /// Number of synthetic frames.
+    #[arg(long, default_value_t = 2)]
+    pub frames: u32,
+    /// Seed of the synthetic scenes.
+    #[arg(long, default_value_t = 2026)]
+    pub seed: u64,
+    /// Output grid, HEIGHTxWIDTH.
+    #[arg(long, default_value = "160x640")]
+    pub size: Size,
+    /// Number of inverse-depth hypotheses for the classical method.
+    #[arg(long, default_value_t = 192)]
+    pub ndepth: usize,
+    /// Folder of the reference samples (skipped when absent).
+    #[arg(long, default_value = "../shared/data/omnimvs-samples")]
+    pub samples: PathBuf,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let t0 = Instant::now();
+    let data_dir = args.out.join("things");
+    println!(
+        "[1/5] rendering {} synthetic `things` frames (published rig, 4 x 768x800) into {}",
+        args.frames,
+        data_dir.display()
+    );
+    synth::run(&synth::Args {
+        kind: "things".into(),
+        rig: "sunny".into(),
+        frames: Frames(1..=args.frames),
+        out: data_dir.clone(),
+        seed: args.seed,
+        size: None,
+        spp: 1,
+        shard: None,
+        meshes: Vec::new(),
+    })?;
+
+    println!(
+        "[2/5] classical method (ZNCC + SGM), {}x{}, N = {}",
+        args.size.height, args.size.width, args.ndepth
+    );
+    let sgm_dir = args.out.join("sgm");
+    sgm::run(&sgm_args(
+        &data_dir,
+        &sgm_dir,
+        args,
+        Some(Frames(1..=args.frames)),
+    ))?;
+
+    println!("[3/5] metrics and pictures of the classical method at full size");
+    let ds = Dataset::open(&data_dir)?;
+    let grid = EquirectGrid::new(args.size.height, args.size.width, 45.0)?;
+    let hyps = ds.hypotheses(args.ndepth)?;
+    let masks = ds.masks()?;
+    let mut frame_metrics_sgm = Vec::new();
+    for frame in 1..=args.frames {
+        let images = ds.read_frame(frame)?;
+        let index = read_inv_depth(&sgm_dir.join(format!("{frame:05}_index.tiff")))?;
+        let inv = read_inv_depth(&sgm_dir.join(format!("{frame:05}.tiff")))?;
+        let gt = ds
+            .ground_truth(frame, grid.height, grid.width, &hyps)?
+            .context("the synthetic frame has no ground truth")?;
+        frame_metrics_sgm.push(frame_metrics(&index.data, &gt, args.ndepth)?);
+        let pano = compose_panorama(
+            &ds.rig,
+            &grid,
+            &images,
+            Some(&masks),
+            InvDepthSource::Map(&inv.data),
+        )?;
+        let gt_inv: Vec<f32> = gt
+            .index
+            .iter()
+            .map(|&n| hyps.inv_depth(f64::from(n)) as f32)
+            .collect();
+        let max_inv = hyps.max_inv_depth();
+        let rows: Vec<(String, Vec<u8>)> = vec![
+            ("inputs".into(), fisheye_strip(&images, grid.width)),
+            (
+                "panorama at the estimated depth".into(),
+                gray_to_rgb(&pano.image),
+            ),
+            (
+                "ground truth".into(),
+                colorize(&gt_inv, 0.0, max_inv, Colormap::Turbo, Some(&gt.valid)),
+            ),
+            (
+                "ZNCC+SGM".into(),
+                colorize(&inv.data, 0.0, max_inv, Colormap::Turbo, None),
+            ),
+            (
+                "ZNCC+SGM error".into(),
+                error_map(&index.data, &gt, args.ndepth),
+            ),
+        ];
+        let (px, height) = label_rows(&rows, grid.width);
+        let path = args.out.join(format!("things_{frame:05}.png"));
+        write_png_u8(&path, grid.width, height, 3, &px)?;
+        write_point_cloud(
+            &args.out.join(format!("things_{frame:05}_sgm.ply")),
+            &grid,
+            &inv.data,
+            &pano.image.data,
+        )?;
+        println!("  wrote {} and its point cloud", path.display());
+    }
+    let mut table = vec![Metrics::MARKDOWN_HEADER.to_string()];
+    if let Some(mean) = mean_metrics(&frame_metrics_sgm) {
+        table.push(mean.markdown_row("ZNCC+SGM"));
+    }
+    let table = table.join("\n");
+    std::fs::write(args.out.join("metrics.md"), format!("{table}\n"))?;
+
+    let bundled = PathBuf::from(eval::BUNDLED_WEIGHTS);
+    let mut net_table = None;
+    if bundled.is_file() {
+        println!(
+            "[4/5] bundled network ({}) against the classical method at the network's grid",
+            bundled.display()
+        );
+        let eval_dir = args.out.join("eval");
+        eval::run(&eval::Args {
+            data: data_dir.clone(),
+            method: vec!["net".into(), "sgm".into()],
+            weights: vec![bundled.clone()],
+            frames: Frames(1..=args.frames),
+            size: None,
+            ndepth: None,
+            out: Some(eval_dir.clone()),
+            pictures: true,
+        })?;
+        net_table = std::fs::read_to_string(eval_dir.join("eval.md")).ok();
+        infer::run(&infer_args(
+            &data_dir,
+            &args.out.join("net"),
+            &bundled,
+            args.frames,
+        ))?;
+    } else {
+        println!(
+            "[4/5] no bundled model at {}: skipping the network",
+            bundled.display()
+        );
+    }
+
+    let itbt = args.samples.join("itbt_sample");
+    if itbt.join("config.yaml").is_file() {
+        println!("[5/5] real data: itbt_sample frame 1");
+        let out = args.out.join("itbt_sgm");
+        sgm::run(&sgm_args(&itbt, &out, args, Some(Frames(1..=1))))?;
+        println!("  ZNCC+SGM: {}", out.join("00001_invdepth.png").display());
+        if bundled.is_file() {
+            let out = args.out.join("itbt_net");
+            infer::run(&infer_args(&itbt, &out, &bundled, 1))?;
+            println!("  network: {}", out.join("00001_vis.png").display());
+        }
+    } else {
+        println!(
+            "[5/5] {} not found: skipping the real sample",
+            itbt.display()
+        );
+    }
+    println!(
+        "\nClassical method at {}x{}, N = {}, on {} synthetic frames (error in % of N; lower is better):\n{table}",
+        args.size.height, args.size.width, args.ndepth, args.frames
+    );
+    if let Some(t) = net_table {
+        println!(
+            "\nNetwork and classical method at the network's grid:\n{}",
+            t.trim_end()
+        );
+    }
+    println!(
+        "\ndone in {:.1} s: pictures, point clouds and metrics in {}",
+        t0.elapsed().as_secs_f64(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn infer_args(dataset: &Path, out: &Path, weights: &Path, frames: u32) -> infer::Args {
+    infer::Args {
+        dataset: dataset.to_path_buf(),
+        weights: Some(weights.to_path_buf()),
+        preset: "tiny".into(),
+        frames: Frames(1..=frames),
+        out: out.to_path_buf(),
+        backend: "cpu".into(),
+        ply: true,
+        order: None,
+    }
+}
+
+fn sgm_args(dataset: &Path, out: &Path, args: &Args, frames: Option<Frames>) -> sgm::Args {
+    sgm::Args {
+        dataset: dataset.to_path_buf(),
+        frames,
+        out: out.to_path_buf(),
+        size: args.size,
+        phi_deg: 45.0,
+        ndepth: args.ndepth,
+        p1: omnimvs_stereo::DEFAULT_P1,
+        p2: omnimvs_stereo::DEFAULT_P2,
+        four_paths: false,
+        every_other: false,
+    }
+}
+
+fn error_map(index: &[f32], gt: &GroundTruth, ndepth: usize) -> Vec<u8> {
+    let err: Vec<f32> = index
+        .iter()
+        .zip(&gt.index)
+        .map(|(p, g)| (p - g).abs() / ndepth as f32 * 100.0)
+        .collect();
+    colorize(
+        &err,
+        0.0,
+        ERROR_MAP_MAX_PCT,
+        Colormap::Inferno,
+        Some(&gt.valid),
+    )
+}
+
+/// A PLY point cloud of an inverse-depth map (rig frame, metres), gray from
+/// the panorama; points farther than 1 km are left out.
+fn write_point_cloud(
+    path: &Path,
+    grid: &EquirectGrid,
+    inv_depth: &[f32],
+    gray: &[f32],
+) -> Result<()> {
+    let points: Vec<ColoredPoint> = (0..grid.len())
+        .filter(|&i| inv_depth[i] > 1e-3)
+        .map(|i| {
+            let p = grid.ray((i / grid.width) as f64, (i % grid.width) as f64)
+                / f64::from(inv_depth[i]);
+            let v = gray[i].clamp(0.0, 255.0) as u8;
+            ColoredPoint {
+                xyz_m: [p.x as f32, p.y as f32, p.z as f32],
+                rgb: [v, v, v],
+            }
+        })
+        .collect();
+    write_ply(path, &points)?;
+    Ok(())
+}
