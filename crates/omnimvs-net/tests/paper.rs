@@ -14,7 +14,13 @@ const BUDGET_BYTES: u64 = 4 << 30;
 #[ignore = "paper preset: minutes of CPU and about 2 GB of memory"]
 fn paper_preset_inference_fits_in_4_gb() {
     let report = bench_forward(&NetConfig::paper(), 0, true, &Device::flex()).unwrap();
-    let peak = report.peak_rss_bytes.expect("peak RSS is read from /proc on Linux");
+    let peak = report
+        .peak_rss_bytes
+        .expect("peak RSS is read from /proc on Linux");
     eprintln!("paper preset peak RSS: {} MiB", peak >> 20);
-    assert!(peak < BUDGET_BYTES, "peak RSS {} MiB over the 4 GiB budget", peak >> 20);
+    assert!(
+        peak < BUDGET_BYTES,
+        "peak RSS {} MiB over the 4 GiB budget",
+        peak >> 20
+    );
 }

@@ -10,12 +10,13 @@ use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use omnimvs_data::ply::{ColoredPoint, write_ply};
-use omnimvs_net::infer::{FrameResult, Inference, device_from_name, resize_bilinear};
+use omnimvs_net::infer::{FrameResult, Inference, device_from_name};
 use omnimvs_net::weights::{load_any, load_bytes};
 use omnimvs_net::{NetConfig, OmniMvsNet};
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
 use crate::args::Frames;
+use crate::pictures::{ERROR_MAP_MAX_PCT, fisheye_strip, gray_to_rgb};
 
 /// The bundled model (`models/omnimvs-tiny.*`), compiled into the binary.
 const BUNDLED_NAME: &str = "models/omnimvs-tiny.safetensors";
@@ -27,8 +28,6 @@ const RANDOM_WEIGHTS: &str = "random";
 
 /// Inverse depths below this (farther than 1 km) are left out of point clouds.
 const FAR_INV_DEPTH: f32 = 1e-3;
-/// Error maps saturate at this error, in percent of N.
-const ERROR_MAP_MAX_PCT: f64 = 10.0;
 
 /// Estimate 360-degree inverse depth with the OmniMVS network. Writes per frame
 /// OUT/%05d.tiff (f32 inverse depth, 1/m), %05d_index.tiff (hypothesis index),
@@ -242,38 +241,4 @@ fn write_frame(
         write_ply(&out(".ply"), &points)?;
     }
     Ok(metrics)
-}
-
-/// The fisheye images side by side, scaled to a strip `width` pixels wide (RGB).
-fn fisheye_strip(images: &[GrayImage], width: usize) -> Vec<u8> {
-    let tile_w = width / images.len().max(1);
-    let tile_h = images
-        .iter()
-        .map(|im| tile_w * im.height / im.width.max(1))
-        .max()
-        .unwrap_or(0);
-    let mut rgb = vec![0u8; width * tile_h * 3];
-    for (k, im) in images.iter().enumerate() {
-        let th = tile_w * im.height / im.width.max(1);
-        let small = resize_bilinear(im, tile_w, th);
-        for r in 0..th {
-            for c in 0..tile_w {
-                let v = small.data[r * tile_w + c].clamp(0.0, 255.0) as u8;
-                let o = (r * width + k * tile_w + c) * 3;
-                rgb[o..o + 3].copy_from_slice(&[v, v, v]);
-            }
-        }
-    }
-    rgb
-}
-
-fn gray_to_rgb(image: &GrayImage) -> Vec<u8> {
-    image
-        .data
-        .iter()
-        .flat_map(|&v| {
-            let v = v.clamp(0.0, 255.0) as u8;
-            [v, v, v]
-        })
-        .collect()
 }
