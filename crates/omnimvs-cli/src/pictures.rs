@@ -1,9 +1,15 @@
 //! Building blocks of the result pictures (RGB8 rows stacked into one image).
 
-use omnimvs_sweep::GrayImage;
+use omnimvs_data::colormap::{Colormap, colorize};
+use omnimvs_data::gt::GroundTruth;
+use omnimvs_data::ply::ColoredPoint;
+use omnimvs_sweep::{EquirectGrid, GrayImage};
 
 /// Error maps saturate at this error, in percent of N.
 pub const ERROR_MAP_MAX_PCT: f64 = 10.0;
+
+/// Inverse depths below this (farther than 1 km) are left out of point clouds.
+pub const FAR_INV_DEPTH: f32 = 1e-3;
 
 /// Rows of separator between stacked pictures.
 const SEPARATOR_ROWS: usize = 3;
@@ -82,6 +88,40 @@ pub fn label_rows(rows: &[(String, Vec<u8>)], width: usize) -> (Vec<u8>, usize) 
     }
     let height = px.len() / (3 * width.max(1));
     (px, height)
+}
+
+/// The error `|n_hat - n*| / N * 100` of an index map as RGB8, saturating at
+/// [`ERROR_MAP_MAX_PCT`]; pixels invalid in the ground truth are black.
+pub fn error_map(index: &[f32], gt: &GroundTruth, ndepth: usize) -> Vec<u8> {
+    let err: Vec<f32> = index
+        .iter()
+        .zip(&gt.index)
+        .map(|(p, g)| (p - g).abs() / ndepth as f32 * 100.0)
+        .collect();
+    colorize(
+        &err,
+        0.0,
+        ERROR_MAP_MAX_PCT,
+        Colormap::Inferno,
+        Some(&gt.valid),
+    )
+}
+
+/// The points of an inverse-depth map on `grid` (rig frame, metres), gray
+/// from `gray` (the panorama); points farther than 1 km are left out.
+pub fn point_cloud(grid: &EquirectGrid, inv_depth: &[f32], gray: &[f32]) -> Vec<ColoredPoint> {
+    (0..grid.len())
+        .filter(|&i| inv_depth[i] > FAR_INV_DEPTH)
+        .map(|i| {
+            let p = grid.ray((i / grid.width) as f64, (i % grid.width) as f64)
+                / f64::from(inv_depth[i]);
+            let v = gray[i].clamp(0.0, 255.0) as u8;
+            ColoredPoint {
+                xyz_m: [p.x as f32, p.y as f32, p.z as f32],
+                rgb: [v, v, v],
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]

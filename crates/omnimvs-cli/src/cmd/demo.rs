@@ -6,15 +6,15 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
-use omnimvs_data::gt::{GroundTruth, read_inv_depth};
+use omnimvs_data::gt::read_inv_depth;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
-use omnimvs_data::ply::{ColoredPoint, write_ply};
+use omnimvs_data::ply::write_ply;
 use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
 
 use crate::args::{Frames, Size};
 use crate::cmd::{eval, infer, sgm, synth};
-use crate::pictures::{ERROR_MAP_MAX_PCT, fisheye_strip, gray_to_rgb, label_rows};
+use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud};
 
 /// Run the pipeline end to end on a default that needs nothing but this
 /// repository: render a few frames of a synthetic `things` scene with exact
@@ -130,11 +130,9 @@ pub fn run(args: &Args) -> Result<()> {
         let (px, height) = label_rows(&rows, grid.width);
         let path = args.out.join(format!("things_{frame:05}.png"));
         write_png_u8(&path, grid.width, height, 3, &px)?;
-        write_point_cloud(
+        write_ply(
             &args.out.join(format!("things_{frame:05}_sgm.ply")),
-            &grid,
-            &inv.data,
-            &pano.image.data,
+            &point_cloud(&grid, &inv.data, &pano.image.data),
         )?;
         println!("  wrote {} and its point cloud", path.display());
     }
@@ -238,43 +236,4 @@ fn sgm_args(dataset: &Path, out: &Path, args: &Args, frames: Option<Frames>) -> 
         four_paths: false,
         every_other: false,
     }
-}
-
-fn error_map(index: &[f32], gt: &GroundTruth, ndepth: usize) -> Vec<u8> {
-    let err: Vec<f32> = index
-        .iter()
-        .zip(&gt.index)
-        .map(|(p, g)| (p - g).abs() / ndepth as f32 * 100.0)
-        .collect();
-    colorize(
-        &err,
-        0.0,
-        ERROR_MAP_MAX_PCT,
-        Colormap::Inferno,
-        Some(&gt.valid),
-    )
-}
-
-/// A PLY point cloud of an inverse-depth map (rig frame, metres), gray from
-/// the panorama; points farther than 1 km are left out.
-fn write_point_cloud(
-    path: &Path,
-    grid: &EquirectGrid,
-    inv_depth: &[f32],
-    gray: &[f32],
-) -> Result<()> {
-    let points: Vec<ColoredPoint> = (0..grid.len())
-        .filter(|&i| inv_depth[i] > 1e-3)
-        .map(|i| {
-            let p = grid.ray((i / grid.width) as f64, (i % grid.width) as f64)
-                / f64::from(inv_depth[i]);
-            let v = gray[i].clamp(0.0, 255.0) as u8;
-            ColoredPoint {
-                xyz_m: [p.x as f32, p.y as f32, p.z as f32],
-                rgb: [v, v, v],
-            }
-        })
-        .collect();
-    write_ply(path, &points)?;
-    Ok(())
 }

@@ -9,14 +9,14 @@ use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
-use omnimvs_data::ply::{ColoredPoint, write_ply};
+use omnimvs_data::ply::write_ply;
 use omnimvs_net::infer::{FrameResult, Inference, device_from_name};
 use omnimvs_net::weights::{load_any, load_bytes};
 use omnimvs_net::{NetConfig, OmniMvsNet};
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
 use crate::args::Frames;
-use crate::pictures::{ERROR_MAP_MAX_PCT, fisheye_strip, gray_to_rgb};
+use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 
 /// The bundled model (`models/omnimvs-tiny.*`), compiled into the binary.
 const BUNDLED_NAME: &str = "models/omnimvs-tiny.safetensors";
@@ -25,9 +25,6 @@ const BUNDLED_WEIGHTS: &[u8] = include_bytes!("../../../../models/omnimvs-tiny.s
 
 /// `--weights` value that asks for a randomly initialised network.
 const RANDOM_WEIGHTS: &str = "random";
-
-/// Inverse depths below this (farther than 1 km) are left out of point clouds.
-const FAR_INV_DEPTH: f32 = 1e-3;
 
 /// Estimate 360-degree inverse depth with the OmniMVS network. Writes per frame
 /// OUT/%05d.tiff (f32 inverse depth, 1/m), %05d_index.tiff (hypothesis index),
@@ -202,19 +199,7 @@ fn write_frame(
         entropy_rgb,
     ];
     if let Some(gt) = &gt {
-        let err: Vec<f32> = result
-            .index
-            .iter()
-            .zip(&gt.index)
-            .map(|(p, g)| (p - g).abs() / ndepth as f32 * 100.0)
-            .collect();
-        rows.push(colorize(
-            &err,
-            0.0,
-            ERROR_MAP_MAX_PCT,
-            Colormap::Inferno,
-            Some(&gt.valid),
-        ));
+        rows.push(error_map(&result.index, gt, ndepth));
     }
     let composite: Vec<u8> = rows.concat();
     write_png_u8(
@@ -226,18 +211,7 @@ fn write_frame(
     )?;
 
     if args.ply {
-        let points: Vec<ColoredPoint> = (0..h * w)
-            .filter(|&i| result.inv_depth[i] > FAR_INV_DEPTH)
-            .map(|i| {
-                let ray = inference.grid.ray((i / w) as f64, (i % w) as f64);
-                let p = ray / f64::from(result.inv_depth[i]);
-                let v = pano.image.data[i].clamp(0.0, 255.0) as u8;
-                ColoredPoint {
-                    xyz_m: [p.x as f32, p.y as f32, p.z as f32],
-                    rgb: [v, v, v],
-                }
-            })
-            .collect();
+        let points = point_cloud(&inference.grid, &result.inv_depth, &pano.image.data);
         write_ply(&out(".ply"), &points)?;
     }
     Ok(metrics)
