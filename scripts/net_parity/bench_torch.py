@@ -1,13 +1,18 @@
 #!/usr/bin/env python3
-"""PyTorch-CPU forward timings of the OmniMVS layout, per stage, for comparison with
-`cargo run --release -p omnimvs-net --example bench_forward`. Not part of the test suite.
+"""PyTorch timings of the OmniMVS layout (forward per stage, training step, peak memory), for
+comparison with `omnimvs bench`. Not part of the test suite.
 
 Same stages as the Rust benchmark: features (all cameras), sweep (grid_sample + transference
 conv, all cameras), fusion, cost (3D encoder-decoder), softargmin. Random weights, random
 inputs, a synthetic lookup table with the same 220-degree coverage as the Rust one.
 
-Usage: /work/venv-torch/bin/python scripts/net_parity/bench_torch.py [tiny|paper] [repeats]
+The training step is the same as `omnimvs bench`'s: the full differentiable forward pass
+(grid_sample sweep), the masked L1 loss on a fixed target, backward and an SGD-momentum update.
+
+Usage: python scripts/net_parity/bench_torch.py [tiny|paper] [repeats]
+           [--device cpu|cuda[:N]] [--train-steps S] [--threads T]
 """
+import argparse
 import math
 import os
 import resource
@@ -47,56 +52,123 @@ def synthetic_grid(cam, n2, h, w, phi_deg=45.0):
     return torch.stack(grids)  # [N/2, H, W, 2]
 
 
+def sync(device):
+    if device.type == "cuda":
+        torch.cuda.synchronize(device)
+
+
+def forward_stages(net, imgs, grids, disps, device):
+    """One inference pass, stage by stage; returns the timings in seconds."""
+    sync(device)
+    t0 = time.perf_counter()
+    feats = [net.feature_layers(x) for x in imgs]
+    sync(device)
+    t1 = time.perf_counter()
+    sph = [net.spherical_sweep(f, g)[1] for f, g in zip(feats, grids)]
+    sync(device)
+    t2 = time.perf_counter()
+    vol = torch.cat(sph, 1).permute(1, 0, 2, 3).unsqueeze(0)
+    del sph
+    cc = net.cost_computes
+    fused = cc.fusion(vol)
+    del vol
+    sync(device)
+    t3 = time.perf_counter()
+    # Same as Cost.forward, minus the fusion.
+    c = cc.convs[0](fused)
+    skips = []
+    for level in range(5):
+        if level > 0:
+            c = cc.convs[3 * level](c)
+        skips.append(cc.convs[3 * level + 2](cc.convs[3 * level + 1](c)))
+    c = cc.deconv1(skips[4], residual=skips[3])
+    c = cc.deconv2(c, residual=skips[2])
+    c = cc.deconv3(c, residual=skips[1])
+    c = cc.deconv4(c, residual=skips[0])
+    cost = cc.deconv5(c).squeeze(1)
+    sync(device)
+    t4 = time.perf_counter()
+    prob = F.softmax(cost, 1)
+    idx = (prob * disps).sum(1)
+    idx.sum().item()
+    t5 = time.perf_counter()
+    return dict(features=t1 - t0, sweep=t2 - t1, fusion=t3 - t2, cost=t4 - t3,
+                softargmin=t5 - t4, total=t5 - t0)
+
+
+def train_step(net, opt, imgs, grids, disps, target):
+    feats = [net.feature_layers(x) for x in imgs]
+    sph = [net.spherical_sweep(f, g)[1] for f, g in zip(feats, grids)]
+    vol = torch.cat(sph, 1).permute(1, 0, 2, 3).unsqueeze(0)
+    cost = net.cost_computes(vol).squeeze(1)
+    idx = (F.softmax(cost, 1) * disps).sum(1)
+    loss = (idx - target).abs().mean()
+    opt.zero_grad()
+    loss.backward()
+    opt.step()
+    return loss.item()
+
+
+def median(values):
+    return sorted(values)[len(values) // 2]
+
+
+def peak_memory(device):
+    if device.type == "cuda":
+        return f"peak GPU memory {torch.cuda.max_memory_allocated(device) / 2**20:.0f} MiB"
+    return f"peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB"
+
+
 def main():
-    preset = sys.argv[1] if len(sys.argv) > 1 else "tiny"
-    repeats = int(sys.argv[2]) if len(sys.argv) > 2 else 3
-    p = PRESETS[preset]
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("preset", nargs="?", default="tiny", choices=sorted(PRESETS))
+    parser.add_argument("repeats", nargs="?", type=int, default=3)
+    parser.add_argument("--device", default="cpu")
+    parser.add_argument("--train-steps", type=int, default=0)
+    parser.add_argument("--threads", type=int, default=0)
+    args = parser.parse_args()
+    if args.threads > 0:
+        torch.set_num_threads(args.threads)
+    device = torch.device(args.device)
+    p = PRESETS[args.preset]
     torch.manual_seed(0)
-    net = Net(p["ch"], CAMS).eval()
-    grids = [synthetic_grid(c, p["n"] // 2, p["h"], p["w"]) for c in range(CAMS)]
-    imgs = [torch.randn(1, 1, p["ih"], p["iw"]) for _ in range(CAMS)]
-    disps = torch.arange(p["n"], dtype=torch.float32).view(1, -1, 1, 1)
-    print(f"torch {torch.__version__}, threads {torch.get_num_threads()}, preset {preset}")
+    net = Net(p["ch"], CAMS).to(device).eval()
+    grids = [synthetic_grid(c, p["n"] // 2, p["h"], p["w"]).to(device) for c in range(CAMS)]
+    imgs = [torch.randn(1, 1, p["ih"], p["iw"], device=device) for _ in range(CAMS)]
+    disps = torch.arange(p["n"], dtype=torch.float32, device=device).view(1, -1, 1, 1)
+    print(f"torch {torch.__version__}, device {device}, threads {torch.get_num_threads()}, "
+          f"preset {args.preset}")
     rows = []
     with torch.no_grad():
-        for run in range(repeats + 1):
-            t = {}
-            t0 = time.perf_counter()
-            feats = [net.feature_layers(x) for x in imgs]
-            t1 = time.perf_counter()
-            sph = [net.spherical_sweep(f, g)[1] for f, g in zip(feats, grids)]
-            t2 = time.perf_counter()
-            vol = torch.cat(sph, 1).permute(1, 0, 2, 3).unsqueeze(0)
-            del sph
-            cc = net.cost_computes
-            fused = cc.fusion(vol)
-            del vol
-            t3 = time.perf_counter()
-            # Same as Cost.forward, minus the fusion.
-            c = cc.convs[0](fused)
-            skips = []
-            for level in range(5):
-                if level > 0:
-                    c = cc.convs[3 * level](c)
-                skips.append(cc.convs[3 * level + 2](cc.convs[3 * level + 1](c)))
-            c = cc.deconv1(skips[4], residual=skips[3])
-            c = cc.deconv2(c, residual=skips[2])
-            c = cc.deconv3(c, residual=skips[1])
-            c = cc.deconv4(c, residual=skips[0])
-            cost = cc.deconv5(c).squeeze(1)
-            t4 = time.perf_counter()
-            prob = F.softmax(cost, 1)
-            idx = (prob * disps).sum(1)
-            t5 = time.perf_counter()
-            t = dict(features=t1 - t0, sweep=t2 - t1, fusion=t3 - t2, cost=t4 - t3,
-                     softargmin=t5 - t4, total=t5 - t0)
+        for run in range(args.repeats + 1):
+            t = forward_stages(net, imgs, grids, disps, device)
             print(("warm-up " if run == 0 else "run     ") +
-                  " ".join(f"{k} {v:.3f}s" for k, v in t.items()), flush=True)
+                  " ".join(f"{k} {v:.4f}s" for k, v in t.items()), flush=True)
             if run > 0:
                 rows.append(t)
-    med = {k: sorted(r[k] for r in rows)[len(rows) // 2] for k in rows[0]}
-    print("median  " + " ".join(f"{k} {v:.3f}s" for k, v in med.items()))
-    print(f"peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
+    if rows:
+        med = {k: median([r[k] for r in rows]) for k in rows[0]}
+        print("median  " + " ".join(f"{k} {v:.4f}s" for k, v in med.items()))
+    print(peak_memory(device) + " after the forward passes")
+    if args.train_steps > 0:
+        net.train()
+        opt = torch.optim.SGD(net.parameters(), lr=0.003, momentum=0.9)
+        target = (torch.arange(p["h"] * p["w"], dtype=torch.float32, device=device) % 97
+                  / 96 * (p["n"] - 1)).view(1, p["h"], p["w"])
+        times = []
+        for step in range(args.train_steps + 1):
+            sync(device)
+            t0 = time.perf_counter()
+            loss = train_step(net, opt, imgs, grids, disps, target)
+            sync(device)
+            dt = time.perf_counter() - t0
+            print(f"train step {step}{' (warm-up)' if step == 0 else ''}: {dt:.4f}s "
+                  f"(loss {loss:.3f})", flush=True)
+            if step > 0:
+                times.append(dt)
+        m = median(times)
+        print(f"train step median {m:.4f}s ({1 / m:.2f} steps/s)")
+        print(peak_memory(device) + " after the training steps")
 
 
 if __name__ == "__main__":

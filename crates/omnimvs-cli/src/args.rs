@@ -58,6 +58,18 @@ impl std::str::FromStr for Frames {
     }
 }
 
+/// Help of every `--backend` option.
+pub const BACKEND_HELP: &str = "Compute backend: cpu (burn flex, the default), libtorch, \
+     libtorch-cuda[:N], wgpu[:N], vulkan or wgpu-cpu; all but cpu need a build with the \
+     `libtorch` or `wgpu` Cargo feature (see the README)";
+
+/// Parses a `--backend` value and checks that this build has it.
+pub fn parse_backend(text: &str) -> Result<omnimvs_net::Backend, String> {
+    let backend: omnimvs_net::Backend = text.parse().map_err(|e| format!("{e}"))?;
+    backend.device().map_err(|e| format!("{e}"))?;
+    Ok(backend)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -25,6 +25,7 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    Bench(cmd::bench::Args),
     Demo(cmd::demo::Args),
     Infer(cmd::infer::Args),
     Info(cmd::info::Args),
@@ -39,6 +40,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Bench(a) => cmd::bench::run(&a),
         Command::Demo(a) => cmd::demo::run(&a),
         Command::Infer(a) => cmd::infer::run(&a),
         Command::Info(a) => cmd::info::run(&a),

@@ -2,14 +2,17 @@
 //! criterion bench, the `bench_forward` example and the CLI.
 
 use std::f32::consts::PI;
+use std::time::Instant;
 
 use burn::tensor::{Device, Distribution, Tensor};
+use omnimvs_data::gt::GroundTruth;
 use serde::Serialize;
 
 use crate::config::NetConfig;
 use crate::error::NetError;
-use crate::model::{OmniMvsNet, StageTimings};
+use crate::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
 use crate::taps::SweepGrid;
+use crate::train::{Learner, Sample, TrainConfig};
 
 /// Half field of view of the synthetic fisheyes, degrees (220 degree lenses).
 const HALF_FOV_DEG: f32 = 110.0;
@@ -131,7 +134,7 @@ pub fn synthetic_grids(config: &NetConfig) -> Vec<SweepGrid> {
 }
 
 /// Runs the memory-lean inference on random images `1 + repeats` times (the first run is a
-/// warm-up) and reports the stage timings.
+/// warm-up) and reports the stage timings; the sweep runs on the host.
 ///
 /// # Errors
 /// [`NetError`] for an invalid configuration.
@@ -141,6 +144,53 @@ pub fn bench_forward(
     fold_batch_norm: bool,
     device: &Device,
 ) -> Result<BenchReport, NetError> {
+    let options = ForwardOptions {
+        repeats,
+        fold_batch_norm,
+        ..ForwardOptions::default()
+    };
+    bench_forward_with(config, &options, device)
+}
+
+/// Options of [`bench_forward_with`].
+#[derive(Clone, Copy, Debug)]
+pub struct ForwardOptions {
+    /// Unmeasured runs first.
+    pub warmup: usize,
+    /// Measured runs.
+    pub repeats: usize,
+    /// Fold the batch norms into the convolutions.
+    pub fold_batch_norm: bool,
+    /// Sweep on the device (GPU backends) instead of the host.
+    pub device_sweep: bool,
+}
+
+impl Default for ForwardOptions {
+    fn default() -> Self {
+        Self {
+            warmup: 1,
+            repeats: 3,
+            fold_batch_norm: true,
+            device_sweep: false,
+        }
+    }
+}
+
+/// [`bench_forward`] with all options.
+///
+/// # Errors
+/// [`NetError`] for an invalid configuration.
+pub fn bench_forward_with(
+    config: &NetConfig,
+    options: &ForwardOptions,
+    device: &Device,
+) -> Result<BenchReport, NetError> {
+    let ForwardOptions {
+        warmup,
+        repeats,
+        fold_batch_norm,
+        device_sweep,
+    } = *options;
     let net = OmniMvsNet::new(config, device)?;
     let net = if fold_batch_norm {
         net.fold_batch_norm()
@@ -154,20 +204,26 @@ pub fn bench_forward(
         .filter(|xy| xy[0] > -2.0)
         .count();
     let total: usize = grids.iter().map(|g| g.coords.len() / 2).sum();
-    let images: Vec<Tensor<4>> = (0..config.num_cameras)
-        .map(|_| {
-            Tensor::random(
-                [1, 1, config.input_height, config.input_width],
-                Distribution::Normal(0.0, 1.0),
-                device,
-            )
-        })
-        .collect();
+    let taps: Vec<SweepTaps> = if device_sweep {
+        let size = config.feature_size();
+        grids
+            .iter()
+            .map(|g| SweepTaps::new(g, size, device))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let images = random_images(config, device);
     let order = net.identity_order();
     let mut runs = Vec::new();
-    for run in 0..=repeats {
-        let (_, timings) = net.infer_timed(&images, &grids, &order)?;
-        if run > 0 {
+    for run in 0..warmup + repeats {
+        let sweep = if device_sweep {
+            SweepInput::Device(&taps)
+        } else {
+            SweepInput::Host(&grids)
+        };
+        let (_, timings) = net.infer_timed_with(&images, sweep, &order)?;
+        if run >= warmup {
             runs.push(timings.into());
         }
     }
@@ -178,4 +234,93 @@ pub fn bench_forward(
         peak_rss_bytes: peak_rss_bytes(),
         valid_fraction: valid as f64 / total.max(1) as f64,
     })
+}
+
+/// Random `[1, 1, H_I, W_I]` images, one per camera.
+fn random_images(config: &NetConfig, device: &Device) -> Vec<Tensor<4>> {
+    (0..config.num_cameras)
+        .map(|_| {
+            Tensor::random(
+                [1, 1, config.input_height, config.input_width],
+                Distribution::Normal(0.0, 1.0),
+                device,
+            )
+        })
+        .collect()
+}
+
+/// Result of [`bench_train_step`].
+#[derive(Clone, Debug, Serialize)]
+pub struct TrainStepReport {
+    /// Seconds of every measured step (forward, backward, SGD update), the warm-up excluded.
+    pub steps: Vec<f64>,
+    /// The loss before each measured step.
+    pub losses: Vec<f32>,
+    /// Peak resident memory of the process after the steps, bytes (Linux only).
+    pub peak_rss_bytes: Option<u64>,
+}
+
+impl TrainStepReport {
+    /// Median step time, seconds.
+    pub fn median(&self) -> Option<f64> {
+        let mut v = self.steps.clone();
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied()
+    }
+}
+
+/// Times `1 + steps` training steps (the first is a warm-up) on one random sample with a
+/// random ground truth: the paper's masked L1, backward through the whole network including
+/// the sweep taps, and the SGD-momentum update, on `device` with autodiff.
+///
+/// # Errors
+/// [`NetError`] for an invalid configuration.
+pub fn bench_train_step(
+    config: &NetConfig,
+    steps: usize,
+    device: &Device,
+) -> Result<TrainStepReport, NetError> {
+    let train = TrainConfig {
+        net: config.clone(),
+        ..TrainConfig::default()
+    };
+    let mut learner = Learner::new(&train, device)?;
+    let taps = learner.taps(&synthetic_grids(config));
+    let cells = config.out_height * config.out_width;
+    let n_max = (config.num_invdepth - 1) as f32;
+    let sample = Sample {
+        source: 0,
+        frame: 0,
+        rotation: 0,
+        images: (0..config.num_cameras)
+            .map(|cam| {
+                (0..config.input_height * config.input_width)
+                    .map(|i| ((i * 7 + cam * 13) % 29) as f32 / 14.0 - 1.0)
+                    .collect()
+            })
+            .collect(),
+        gt: GroundTruth {
+            width: config.out_width,
+            height: config.out_height,
+            index: (0..cells).map(|i| (i % 97) as f32 / 96.0 * n_max).collect(),
+            valid: vec![true; cells],
+        },
+    };
+    let order = learner.net.identity_order();
+    let mut report = TrainStepReport {
+        steps: Vec::new(),
+        losses: Vec::new(),
+        peak_rss_bytes: None,
+    };
+    for step in 0..=steps {
+        let start = Instant::now();
+        let loss = learner.step(&sample, &taps, &order, 0.003)?; // reads the loss: synchronises
+        let _ = learner.device.sync();
+        if step > 0 {
+            report.steps.push(start.elapsed().as_secs_f64());
+            report.losses.push(loss);
+        }
+    }
+    report.peak_rss_bytes = peak_rss_bytes();
+    Ok(report)
 }

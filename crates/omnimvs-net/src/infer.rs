@@ -9,8 +9,9 @@ use omnimvs_sweep::{
     CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache, SphereSet,
 };
 
+pub use crate::backend::device_from_name;
 use crate::error::NetError;
-use crate::model::{OmniMvsNet, StageTimings};
+use crate::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
 use crate::taps::SweepGrid;
 
 /// Downscale factor above which the input is low-pass filtered before resampling.
@@ -32,6 +33,8 @@ pub struct Inference {
     pub order: Vec<usize>,
     /// Device the network runs on.
     pub device: Device,
+    /// The lookup tables as taps on the device, when the sweep runs there (GPU backends).
+    pub device_taps: Option<Vec<SweepTaps>>,
 }
 
 /// The network's results for one frame, on the `height x width` output grid.
@@ -93,9 +96,22 @@ impl Inference {
                 masks,
                 order,
                 device,
+                device_taps: None,
             },
             status,
         ))
+    }
+
+    /// Runs the sweep on the device from now on (for GPU backends: the host kernel would copy
+    /// every camera's features to host memory and back).
+    pub fn sweep_on_device(&mut self) {
+        let size = self.net.config.feature_size();
+        self.device_taps = Some(
+            self.grids
+                .iter()
+                .map(|g| SweepTaps::new(g, size, &self.device))
+                .collect(),
+        );
     }
 
     /// Network inputs `[1, 1, H_I, W_I]`: each gray image normalised over its valid pixels,
@@ -135,7 +151,11 @@ impl Inference {
     /// [`NetError`] for inconsistent inputs.
     pub fn run(&self, images: &[GrayImage]) -> Result<FrameResult, NetError> {
         let inputs = self.input_tensors(images)?;
-        let (out, timings) = self.net.infer_timed(&inputs, &self.grids, &self.order)?;
+        let sweep = match &self.device_taps {
+            Some(taps) => SweepInput::Device(taps),
+            None => SweepInput::Host(&self.grids),
+        };
+        let (out, timings) = self.net.infer_timed_with(&inputs, sweep, &self.order)?;
         let entropy = out.entropy();
         let read = |t: Tensor<3>, what: &str| {
             t.into_data()
@@ -160,25 +180,6 @@ impl Inference {
             entropy,
             timings,
         })
-    }
-}
-
-/// Names of the compute backends of this build, for `--backend`.
-pub const BACKENDS: [&str; 1] = ["cpu"];
-
-/// The device of a backend name: `cpu` (or `flex`) is the pure-Rust CPU backend.
-///
-/// # Errors
-/// [`NetError::InvalidConfig`] for a backend this build does not have.
-pub fn device_from_name(name: &str) -> Result<Device, NetError> {
-    match name {
-        "cpu" | "flex" => Ok(Device::flex()),
-        other => Err(NetError::InvalidConfig {
-            field: "backend",
-            message: format!(
-                "`{other}` is not available in this build (expected one of {BACKENDS:?})"
-            ),
-        }),
     }
 }
 

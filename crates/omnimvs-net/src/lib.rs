@@ -10,9 +10,11 @@
 //! - [`taps`]: bilinear taps of a lookup table and the host warp kernel.
 //! - [`weights`]: our safetensors files and the import of reference PyTorch checkpoints.
 //! - [`infer`]: running a network on a dataset's frames.
+//! - [`backend`]: run-time choice of the compute backend (`cpu`, `libtorch`, `wgpu`, ...).
 //! - [`bench`]: per-stage forward timings.
 //! - [`train`]: end-to-end training (loss, SGD, augmentation, loader, checkpoints).
 
+pub mod backend;
 pub mod bench;
 pub mod config;
 pub mod error;
@@ -22,7 +24,8 @@ pub mod taps;
 pub mod train;
 pub mod weights;
 
+pub use backend::Backend;
 pub use config::{Layout, NetConfig};
 pub use error::NetError;
-pub use model::{NetOutput, OmniMvsNet, SweepTaps};
+pub use model::{NetOutput, OmniMvsNet, SweepInput, SweepTaps};
 pub use taps::SweepGrid;

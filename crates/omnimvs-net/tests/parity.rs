@@ -1,6 +1,8 @@
 //! Parity with PyTorch: `scripts/net_parity/make_parity.py` built the same layout with random
 //! weights, saved the checkpoint and its outputs on deterministic inputs
-//! (`tests/fixtures/parity/`). Our forward pass must match to 1e-4.
+//! (`tests/fixtures/parity/`). Our forward pass must match to 1e-4 on every backend of the
+//! build: `cpu` (flex) always, `libtorch` with the `libtorch` feature, and the wgpu backend
+//! named by `OMNIMVS_TEST_WGPU` (e.g. `wgpu-cpu` on Mesa's lavapipe) with the `wgpu` feature.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers
 
@@ -8,9 +10,26 @@ use std::path::{Path, PathBuf};
 
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_net::weights::{import_pytorch, inspect_pytorch};
-use omnimvs_net::{Layout, NetConfig, OmniMvsNet, SweepGrid, SweepTaps};
+use omnimvs_net::{Backend, Layout, NetConfig, OmniMvsNet, SweepGrid, SweepInput, SweepTaps};
 
 const TOLERANCE: f32 = 1e-4;
+
+/// The backends this build can test, with their devices.
+fn test_backends() -> Vec<(Backend, Device)> {
+    let mut backends = vec![Backend::Cpu];
+    if cfg!(feature = "libtorch") {
+        backends.push(Backend::LibTorch);
+    }
+    if cfg!(feature = "wgpu")
+        && let Ok(name) = std::env::var("OMNIMVS_TEST_WGPU")
+    {
+        backends.push(name.parse().unwrap());
+    }
+    backends
+        .into_iter()
+        .map(|b| (b, b.device().unwrap()))
+        .collect()
+}
 
 fn fixture_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/parity")
@@ -130,7 +149,14 @@ fn checkpoint_metadata_is_read() {
 
 #[test]
 fn differentiable_forward_matches_pytorch() {
-    let device = Device::flex();
+    for (backend, device) in test_backends() {
+        eprintln!("backend {backend}");
+        differentiable_forward_matches_pytorch_on(&device);
+    }
+}
+
+fn differentiable_forward_matches_pytorch_on(device: &Device) {
+    let device = device.clone();
     let (config, net) = load_net(&device);
     let grids = grids(&config);
     let images = images(&config, &device);
@@ -159,7 +185,14 @@ fn differentiable_forward_matches_pytorch() {
 
 #[test]
 fn inference_paths_match_pytorch() {
-    let device = Device::flex();
+    for (backend, device) in test_backends() {
+        eprintln!("backend {backend}");
+        inference_paths_match_pytorch_on(&device);
+    }
+}
+
+fn inference_paths_match_pytorch_on(device: &Device) {
+    let device = device.clone();
     let (config, net) = load_net(&device);
     let grids = grids(&config);
     let images = images(&config, &device);
@@ -172,4 +205,13 @@ fn inference_paths_match_pytorch() {
     assert!(max_abs_diff(out.cost.clone(), &read_f32("cost"), "folded cost") < TOLERANCE);
     assert!(max_abs_diff(out.index.clone(), &read_f32("index"), "folded index") < TOLERANCE);
     assert!(max_abs_diff(out.entropy(), &read_f32("entropy"), "folded entropy") < TOLERANCE);
+    let size = config.feature_size();
+    let taps: Vec<SweepTaps> = grids
+        .iter()
+        .map(|g| SweepTaps::new(g, size, &device))
+        .collect();
+    let (out, _) = folded
+        .infer_timed_with(&images, SweepInput::Device(&taps), &order)
+        .unwrap();
+    assert!(max_abs_diff(out.index, &read_f32("index"), "device-sweep index") < TOLERANCE);
 }

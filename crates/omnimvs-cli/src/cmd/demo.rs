@@ -160,6 +160,7 @@ pub fn run(args: &Args) -> Result<()> {
             ndepth: None,
             out: Some(eval_dir.clone()),
             pictures: true,
+            backend: omnimvs_net::Backend::Cpu,
         })?;
         net_table = std::fs::read_to_string(eval_dir.join("eval.md")).ok();
         infer::run(&infer_args(
@@ -217,7 +218,7 @@ fn infer_args(dataset: &Path, out: &Path, weights: &Path, frames: u32) -> infer:
         preset: "tiny".into(),
         frames: Frames(1..=frames),
         out: out.to_path_buf(),
-        backend: "cpu".into(),
+        backend: omnimvs_net::Backend::Cpu,
         ply: true,
         order: None,
     }

@@ -20,7 +20,7 @@ use omnimvs_stereo::{SgmParams, SphericalStereo};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LutCache};
 use serde::Serialize;
 
-use crate::args::{Frames, Size};
+use crate::args::{BACKEND_HELP, Frames, Size, parse_backend};
 
 /// Default weights of `--method net`: the bundled model.
 pub const BUNDLED_WEIGHTS: &str = "models/omnimvs-tiny.safetensors";
@@ -59,6 +59,8 @@ pub struct Args {
     /// ground truth to OUT.
     #[arg(long)]
     pub pictures: bool,
+    #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
+    pub backend: omnimvs_net::Backend,
 }
 
 #[derive(Serialize)]
@@ -107,7 +109,7 @@ pub fn run(args: &Args) -> Result<()> {
             ds.root.display()
         );
     }
-    let device = burn::tensor::Device::flex();
+    let device = args.backend.device()?;
     let weights: Vec<PathBuf> = if args.weights.is_empty() {
         vec![PathBuf::from(BUNDLED_WEIGHTS)]
     } else {
@@ -217,12 +219,15 @@ pub fn run(args: &Args) -> Result<()> {
                             c.num_invdepth
                         );
                     }
-                    let (inference, _) = Inference::new(
+                    let (mut inference, _) = Inference::new(
                         net.fold_batch_norm(),
                         &ds,
                         &LutCache::default_location(),
                         device.clone(),
                     )?;
+                    if args.backend.is_gpu() {
+                        inference.sweep_on_device();
+                    }
                     let stem = path
                         .file_stem()
                         .map(|s| s.to_string_lossy().into_owned())

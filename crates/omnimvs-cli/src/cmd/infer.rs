@@ -10,12 +10,12 @@ use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use omnimvs_data::ply::write_ply;
-use omnimvs_net::infer::{FrameResult, Inference, device_from_name};
+use omnimvs_net::infer::{FrameResult, Inference};
 use omnimvs_net::weights::{load_any, load_bytes};
-use omnimvs_net::{NetConfig, OmniMvsNet};
+use omnimvs_net::{Backend, NetConfig, OmniMvsNet};
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
-use crate::args::Frames;
+use crate::args::{BACKEND_HELP, Frames, parse_backend};
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 
 /// The bundled model (`models/omnimvs-tiny.*`), compiled into the binary.
@@ -50,9 +50,8 @@ pub struct Args {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
-    /// Compute backend; only `cpu` (the pure-Rust flex backend) for now.
-    #[arg(long, default_value = "cpu")]
-    pub backend: String,
+    #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
+    pub backend: Backend,
     /// Also write a PLY point cloud coloured by the panorama.
     #[arg(long)]
     pub ply: bool,
@@ -62,7 +61,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let device = device_from_name(&args.backend)?;
+    let device = args.backend.device()?;
     let ds = Dataset::open(&args.dataset)?;
     let base = NetConfig::preset(&args.preset)?;
     let net = match &args.weights {
@@ -90,6 +89,9 @@ pub fn run(args: &Args) -> Result<()> {
         CacheStatus::Built(p) => eprintln!("lookup table built and cached in {}", p.display()),
         CacheStatus::BuiltNotSaved(why) => eprintln!("lookup table built (not cached: {why})"),
     }
+    if args.backend.is_gpu() {
+        inference.sweep_on_device();
+    }
     if let Some(order) = &args.order {
         inference.net.check_order(order)?;
         inference.order = order.clone();
@@ -101,7 +103,7 @@ pub fn run(args: &Args) -> Result<()> {
         "weights": args.weights,
         "network": config,
         "order": inference.order,
-        "backend": args.backend,
+        "backend": args.backend.to_string(),
     });
     std::fs::write(
         args.out.join("infer.json"),

@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_net::NetConfig;
 use omnimvs_net::train::{EpochRecord, StepInfo, TrainConfig, Trainer};
 
-use crate::args::Frames;
+use crate::args::{BACKEND_HELP, Frames, parse_backend};
 
 /// Train the OmniMVS network end to end (paper, sections 3.3 and 5.1): L1 loss between the
 /// predicted and the rounded ground-truth index over valid pixels, SGD with momentum 0.9,
@@ -81,6 +81,8 @@ pub struct Args {
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
+    #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
+    pub backend: omnimvs_net::Backend,
 }
 
 fn print_epoch(r: &EpochRecord) {
@@ -98,7 +100,7 @@ fn print_epoch(r: &EpochRecord) {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let device = burn::tensor::Device::flex();
+    let device = args.backend.device()?;
     let mut trainer = match &args.resume {
         Some(dir) => Trainer::resume(dir, args.epochs, &device)
             .with_context(|| format!("resuming {}", dir.display()))?,

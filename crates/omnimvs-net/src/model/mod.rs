@@ -9,5 +9,5 @@ pub mod sweep;
 
 pub use cost::CostCompute;
 pub use feature::FeatureLayers;
-pub use net::{DEFAULT_SWEEP_CHUNK, NetOutput, OmniMvsNet, StageTimings};
+pub use net::{DEFAULT_SWEEP_CHUNK, NetOutput, OmniMvsNet, StageTimings, SweepInput};
 pub use sweep::{SphericalSweep, SweepTaps};

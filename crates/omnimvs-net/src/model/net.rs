@@ -61,6 +61,25 @@ fn sync<const D: usize>(tensor: &Tensor<D>) {
     let _ = tensor.device().sync();
 }
 
+/// Where the inference sweep runs: the lookup tables of every camera for the host kernel, or
+/// their taps already on the device.
+#[derive(Clone, Copy, Debug)]
+pub enum SweepInput<'a> {
+    /// Host warp kernel (skips invalid samples; best on CPU backends).
+    Host(&'a [SweepGrid]),
+    /// Gather on the device (GPU backends).
+    Device(&'a [SweepTaps]),
+}
+
+impl SweepInput<'_> {
+    fn len(&self) -> usize {
+        match self {
+            SweepInput::Host(grids) => grids.len(),
+            SweepInput::Device(taps) => taps.len(),
+        }
+    }
+}
+
 /// Outputs of a forward pass.
 #[derive(Clone, Debug)]
 pub struct NetOutput {
@@ -191,8 +210,22 @@ impl OmniMvsNet {
         grids: &[SweepGrid],
         order: &[usize],
     ) -> Result<(NetOutput, StageTimings), NetError> {
+        self.infer_timed_with(images, SweepInput::Host(grids), order)
+    }
+
+    /// Memory-lean inference with the sweep of `sweep`: the host kernel (CPU backends) or the
+    /// device taps (GPU backends, where a round trip through host memory would dominate).
+    ///
+    /// # Errors
+    /// See [`OmniMvsNet::infer`].
+    pub fn infer_timed_with(
+        &self,
+        images: &[Tensor<4>],
+        sweep: SweepInput<'_>,
+        order: &[usize],
+    ) -> Result<(NetOutput, StageTimings), NetError> {
         self.check_order(order)?;
-        self.check_inputs(images.len(), grids.len())?;
+        self.check_inputs(images.len(), sweep.len())?;
         let mut timings = StageTimings::default();
         let mut failure = None;
         let total = Instant::now();
@@ -204,9 +237,18 @@ impl OmniMvsNet {
                 sync(&feature);
                 timings.features += start.elapsed().as_secs_f64();
                 let start = Instant::now();
-                let spherical =
-                    self.spherical_sweep
-                        .forward_host(feature, &grids[camera], DEFAULT_SWEEP_CHUNK); // [1, CH, N/2, H/2, W/2]
+                let spherical = match sweep {
+                    SweepInput::Host(grids) => self.spherical_sweep.forward_host(
+                        feature,
+                        &grids[camera],
+                        DEFAULT_SWEEP_CHUNK,
+                    ),
+                    SweepInput::Device(taps) => Ok(self.spherical_sweep.forward(
+                        feature,
+                        &taps[camera],
+                        DEFAULT_SWEEP_CHUNK,
+                    )),
+                }; // [1, CH, N/2, H/2, W/2]
                 let spherical = match spherical {
                     Ok(spherical) => spherical,
                     Err(e) => {

@@ -1,0 +1,142 @@
+//! `omnimvs bench`: forward-pass time per stage, train-step time and peak memory of the
+//! network on a compute backend.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use omnimvs_camera::fs::write_atomic;
+use omnimvs_net::bench::{
+    BenchReport, ForwardOptions, TrainStepReport, bench_forward_with, bench_train_step,
+};
+use omnimvs_net::{Backend, NetConfig};
+use serde::Serialize;
+
+/// Time the network on a compute backend: the forward pass per stage (features,
+/// sweep, fusion, cost volume, softargmin), a training step (forward, backward,
+/// SGD update), and peak memory. Random weights, random inputs and a synthetic
+/// 220-degree lookup table; warm-up runs are not measured. Compare with
+/// PyTorch on the same machine: scripts/net_parity/bench_torch.py.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Network sizes: tiny or paper.
+    #[arg(long, default_value = "tiny")]
+    pub preset: String,
+    /// Compute backend: cpu (burn flex), libtorch, libtorch-cuda[:N], wgpu[:N],
+    /// vulkan, wgpu-cpu (the last five need a build with their Cargo feature).
+    #[arg(long, default_value = "cpu")]
+    pub backend: String,
+    /// Measured forward passes.
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
+    /// Unmeasured forward passes before them.
+    #[arg(long, default_value_t = 1)]
+    pub warmup: usize,
+    /// Measured training steps (after one warm-up); 0 skips the training step.
+    #[arg(long, default_value_t = 3)]
+    pub train_steps: usize,
+    /// Keep the batch norms as separate layers instead of folding them into the
+    /// convolutions.
+    #[arg(long)]
+    pub no_fold: bool,
+    /// Sweep on the host (`host`), on the device (`device`) or the backend's
+    /// best (`auto`: host on CPU backends, device on GPUs).
+    #[arg(long, default_value = "auto")]
+    pub sweep: String,
+    /// Also write the measurements as JSON to this file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct Report {
+    backend: String,
+    preset: String,
+    device_sweep: bool,
+    forward: BenchReport,
+    train_step: Option<TrainStepReport>,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let backend: Backend = args.backend.parse()?;
+    let device = backend.device()?;
+    let config = NetConfig::preset(&args.preset)?;
+    let device_sweep = match args.sweep.as_str() {
+        "auto" => backend.is_gpu(),
+        "host" => false,
+        "device" => true,
+        other => anyhow::bail!("--sweep: expected host, device or auto, got `{other}`"),
+    };
+    println!(
+        "preset {} (CH {}, N {}, {}x{} output, {} cameras of {}x{}), backend {backend}, sweep on the {}",
+        args.preset,
+        config.channels,
+        config.num_invdepth,
+        config.out_height,
+        config.out_width,
+        config.num_cameras,
+        config.input_width,
+        config.input_height,
+        if device_sweep { "device" } else { "host" },
+    );
+    let options = ForwardOptions {
+        warmup: args.warmup,
+        repeats: args.repeats,
+        fold_batch_norm: !args.no_fold,
+        device_sweep,
+    };
+    let forward = bench_forward_with(&config, &options, &device).context("forward benchmark")?;
+    println!(
+        "{:<8} {:>9} {:>9} {:>9} {:>9} {:>10} {:>9}",
+        "forward", "features", "sweep", "fusion", "cost", "softargmin", "total"
+    );
+    let median = forward.median();
+    let rows = forward
+        .runs
+        .iter()
+        .map(|r| ("run", r))
+        .chain(median.as_ref().map(|m| ("median", m)));
+    for (label, r) in rows {
+        println!(
+            "{label:<8} {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s {:>9.3}s {:>8.3}s",
+            r.features, r.sweep, r.fusion, r.cost, r.softargmin, r.total
+        );
+    }
+    print_peak("after the forward passes", forward.peak_rss_bytes);
+    let train_step = if args.train_steps > 0 {
+        let report =
+            bench_train_step(&config, args.train_steps, &device).context("train-step benchmark")?;
+        for (i, (seconds, loss)) in report.steps.iter().zip(&report.losses).enumerate() {
+            println!("train step {:>2}: {seconds:.3}s (loss {loss:.3})", i + 1);
+        }
+        if let Some(m) = report.median() {
+            println!("train step median {m:.3}s ({:.2} steps/s)", 1.0 / m);
+        }
+        print_peak("after the training steps", report.peak_rss_bytes);
+        Some(report)
+    } else {
+        None
+    };
+    if backend.is_gpu() {
+        println!("(peak memory above is host RSS; GPU memory is not measured here)");
+    }
+    if let Some(path) = &args.json {
+        let report = Report {
+            backend: backend.to_string(),
+            preset: args.preset.clone(),
+            device_sweep,
+            forward,
+            train_step,
+        };
+        let text = serde_json::to_string_pretty(&report)?;
+        write_atomic(path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn print_peak(when: &str, bytes: Option<u64>) {
+    if let Some(bytes) = bytes {
+        println!("peak RSS {when}: {} MiB", bytes / (1 << 20));
+    }
+}

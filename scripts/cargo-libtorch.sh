@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Runs cargo with the `libtorch` feature against the PyTorch of scripts/install-libtorch.sh:
+#
+#   scripts/cargo-libtorch.sh build --release            # -> target/libtorch/release/omnimvs
+#   scripts/cargo-libtorch.sh test --release -p omnimvs-net --test parity --test backends
+#
+# torch-sys finds libtorch through the venv's Python (LIBTORCH_USE_PYTORCH=1); our build script
+# (build/libtorch_rpath.rs) writes that torch/lib folder into the binaries' rpath, so they run
+# without LD_LIBRARY_PATH. The build goes to its own target folder (target/libtorch) so that it
+# does not invalidate the default CPU-only build. Extra cargo features can be added, e.g.
+# `--features wgpu`.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+venv="${OMNIMVS_TORCH_VENV:-$root/.venv-torch}"
+venv="$(cd "$venv" 2>/dev/null && pwd)" || {
+    echo "no PyTorch virtual environment at ${OMNIMVS_TORCH_VENV:-$root/.venv-torch}; run scripts/install-libtorch.sh" >&2
+    exit 1
+}
+command="$1"
+shift
+export VIRTUAL_ENV="$venv"
+export PATH="$venv/bin:$PATH"
+export LIBTORCH_USE_PYTORCH=1
+export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target/libtorch}"
+cd "$root"
+# `-p omnimvs-net` selects the library alone; everything else goes through the binary crate.
+features=omnimvs-cli/libtorch
+for arg in "$@"; do
+    case "$arg" in omnimvs-net) features=libtorch ;; esac
+done
+exec cargo "$command" --features "$features" "$@"
