@@ -152,3 +152,60 @@ fn bad_input_gives_clear_errors_and_non_zero_exit() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("config.yaml"), "{}", stderr(&o));
 }
+
+#[test]
+fn bench_reports_stages_train_step_and_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let o = omnimvs(&[
+        "bench",
+        "--preset",
+        "tiny",
+        "--repeats",
+        "1",
+        "--warmup",
+        "0",
+        "--train-steps",
+        "2",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("backend cpu, sweep on the host"), "{out}");
+    assert!(out.contains("train step median"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["backend"], "cpu");
+    let run = &v["forward"]["runs"][0];
+    let stages: f64 = ["features", "sweep", "fusion", "cost", "softargmin"]
+        .iter()
+        .map(|k| run[k].as_f64().unwrap())
+        .sum();
+    let total = run["total"].as_f64().unwrap();
+    assert!(stages > 0.0 && stages <= total * 1.001, "{run}");
+    let losses = v["train_step"]["losses"].as_array().unwrap();
+    assert_eq!(losses.len(), 2);
+    // The second step's loss follows an SGD update on the same sample: it must fall.
+    assert!(
+        losses[1].as_f64().unwrap() < losses[0].as_f64().unwrap(),
+        "{losses:?}"
+    );
+    assert!(v["forward"]["peak_rss_bytes"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn backends_missing_from_the_build_are_explained() {
+    let o = omnimvs(&["bench", "--backend", "gpu"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("unknown backend `gpu`"),
+        "{}",
+        stderr(&o)
+    );
+    if !cfg!(feature = "wgpu") {
+        let o = omnimvs(&["bench", "--backend", "wgpu"]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("--features wgpu"), "{}", stderr(&o));
+    }
+}

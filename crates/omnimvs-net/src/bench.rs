@@ -269,7 +269,7 @@ impl TrainStepReport {
     }
 }
 
-/// Times `1 + steps` training steps (the first is a warm-up) on one random sample with a
+/// Times `warmup + steps` training steps (the first `warmup` unmeasured) on one sample with a
 /// random ground truth: the paper's masked L1, backward through the whole network including
 /// the sweep taps, and the SGD-momentum update, on `device` with autodiff.
 ///
@@ -277,6 +277,7 @@ impl TrainStepReport {
 /// [`NetError`] for an invalid configuration.
 pub fn bench_train_step(
     config: &NetConfig,
+    warmup: usize,
     steps: usize,
     device: &Device,
 ) -> Result<TrainStepReport, NetError> {
@@ -312,11 +313,11 @@ pub fn bench_train_step(
         losses: Vec::new(),
         peak_rss_bytes: None,
     };
-    for step in 0..=steps {
+    for step in 0..warmup + steps {
         let start = Instant::now();
         let loss = learner.step(&sample, &taps, &order, 0.003)?; // reads the loss: synchronises
         let _ = learner.device.sync();
-        if step > 0 {
+        if step >= warmup {
             report.steps.push(start.elapsed().as_secs_f64());
             report.losses.push(loss);
         }

@@ -28,10 +28,10 @@ pub struct Args {
     /// Measured forward passes.
     #[arg(long, default_value_t = 3)]
     pub repeats: usize,
-    /// Unmeasured forward passes before them.
+    /// Unmeasured forward passes (and training steps) before the measured ones.
     #[arg(long, default_value_t = 1)]
     pub warmup: usize,
-    /// Measured training steps (after one warm-up); 0 skips the training step.
+    /// Measured training steps; 0 skips the training step.
     #[arg(long, default_value_t = 3)]
     pub train_steps: usize,
     /// Keep the batch norms as separate layers instead of folding them into the
@@ -103,8 +103,8 @@ pub fn run(args: &Args) -> Result<()> {
     }
     print_peak("after the forward passes", forward.peak_rss_bytes);
     let train_step = if args.train_steps > 0 {
-        let report =
-            bench_train_step(&config, args.train_steps, &device).context("train-step benchmark")?;
+        let report = bench_train_step(&config, args.warmup, args.train_steps, &device)
+            .context("train-step benchmark")?;
         for (i, (seconds, loss)) in report.steps.iter().zip(&report.losses).enumerate() {
             println!("train step {:>2}: {seconds:.3}s (loss {loss:.3})", i + 1);
         }
