@@ -1,5 +1,5 @@
-//! Forward-pass benchmark on synthetic inputs, per stage, with peak memory. Used by the
-//! criterion bench, the `bench_forward` example and the CLI.
+//! Forward-pass and training-step benchmarks on synthetic inputs, per stage, with peak memory.
+//! Used by `omnimvs bench` and the memory test of the paper preset.
 
 use std::f32::consts::PI;
 use std::time::Instant;
