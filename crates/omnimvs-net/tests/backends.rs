@@ -14,23 +14,13 @@ use omnimvs_net::bench::synthetic_grids;
 use omnimvs_net::weights::load_any;
 use omnimvs_net::{Backend, NetConfig, SweepInput, SweepTaps};
 
+mod support;
+use support::test_backends;
+
 const TOLERANCE: f32 = 1e-3;
 
 fn bundled_model() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/omnimvs-tiny.safetensors")
-}
-
-fn backends() -> Vec<Backend> {
-    let mut backends = vec![Backend::Cpu];
-    if cfg!(feature = "libtorch") {
-        backends.push(Backend::LibTorch);
-    }
-    if cfg!(feature = "wgpu")
-        && let Ok(name) = std::env::var("OMNIMVS_TEST_WGPU")
-    {
-        backends.push(name.parse().unwrap());
-    }
-    backends
 }
 
 /// Smooth deterministic images, one per camera.
@@ -80,7 +70,7 @@ fn every_backend_gives_the_same_index_map() {
     let spread = reference.iter().fold(0.0f32, |m, &v| m.max(v))
         - reference.iter().fold(f32::MAX, |m, &v| m.min(v));
     assert!(spread > 1.0, "degenerate reference map (spread {spread})");
-    for backend in backends() {
+    for backend in test_backends() {
         for device_sweep in [false, true] {
             let map = index_map(backend, device_sweep);
             assert_eq!(map.len(), reference.len());

@@ -12,20 +12,13 @@ use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_net::weights::{import_pytorch, inspect_pytorch};
 use omnimvs_net::{Backend, Layout, NetConfig, OmniMvsNet, SweepGrid, SweepInput, SweepTaps};
 
+mod support;
+
 const TOLERANCE: f32 = 1e-4;
 
 /// The backends this build can test, with their devices.
-fn test_backends() -> Vec<(Backend, Device)> {
-    let mut backends = vec![Backend::Cpu];
-    if cfg!(feature = "libtorch") {
-        backends.push(Backend::LibTorch);
-    }
-    if cfg!(feature = "wgpu")
-        && let Ok(name) = std::env::var("OMNIMVS_TEST_WGPU")
-    {
-        backends.push(name.parse().unwrap());
-    }
-    backends
+fn test_devices() -> Vec<(Backend, Device)> {
+    support::test_backends()
         .into_iter()
         .map(|b| (b, b.device().unwrap()))
         .collect()
@@ -149,7 +142,7 @@ fn checkpoint_metadata_is_read() {
 
 #[test]
 fn differentiable_forward_matches_pytorch() {
-    for (backend, device) in test_backends() {
+    for (backend, device) in test_devices() {
         eprintln!("backend {backend}");
         differentiable_forward_matches_pytorch_on(&device);
     }
@@ -185,7 +178,7 @@ fn differentiable_forward_matches_pytorch_on(device: &Device) {
 
 #[test]
 fn inference_paths_match_pytorch() {
-    for (backend, device) in test_backends() {
+    for (backend, device) in test_devices() {
         eprintln!("backend {backend}");
         inference_paths_match_pytorch_on(&device);
     }
