@@ -48,10 +48,10 @@ impl Backend {
 
     /// Whether this build has the backend.
     pub fn is_available(self) -> bool {
-        match self.feature() {
-            None => true,
-            Some("libtorch") => cfg!(feature = "libtorch"),
-            Some(_) => cfg!(feature = "wgpu"),
+        match self {
+            Backend::Cpu => true,
+            Backend::LibTorch | Backend::LibTorchCuda(_) => cfg!(feature = "libtorch"),
+            Backend::Wgpu(_) | Backend::Vulkan | Backend::WgpuCpu => cfg!(feature = "wgpu"),
         }
     }
 

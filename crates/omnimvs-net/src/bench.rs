@@ -205,23 +205,19 @@ pub fn bench_forward_with(
         .count();
     let total: usize = grids.iter().map(|g| g.coords.len() / 2).sum();
     let taps: Vec<SweepTaps> = if device_sweep {
-        let size = config.feature_size();
-        grids
-            .iter()
-            .map(|g| SweepTaps::new(g, size, device))
-            .collect()
+        SweepTaps::for_grids(&grids, config.feature_size(), device)
     } else {
         Vec::new()
+    };
+    let sweep = if device_sweep {
+        SweepInput::Device(&taps)
+    } else {
+        SweepInput::Host(&grids)
     };
     let images = random_images(config, device);
     let order = net.identity_order();
     let mut runs = Vec::new();
     for run in 0..warmup + repeats {
-        let sweep = if device_sweep {
-            SweepInput::Device(&taps)
-        } else {
-            SweepInput::Host(&grids)
-        };
         let (_, timings) = net.infer_timed_with(&images, sweep, &order)?;
         if run >= warmup {
             runs.push(timings.into());

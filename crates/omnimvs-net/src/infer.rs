@@ -10,6 +10,7 @@ use omnimvs_sweep::{
 };
 
 pub use crate::backend::device_from_name;
+use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
 use crate::taps::SweepGrid;
@@ -67,15 +68,7 @@ impl Inference {
         device: Device,
     ) -> Result<(Self, CacheStatus), NetError> {
         let config = net.config.clone();
-        if dataset.rig.len() != config.num_cameras {
-            return Err(NetError::Shape {
-                what: format!("cameras of {}", dataset.config_path.display()),
-                expected: vec![config.num_cameras],
-                actual: vec![dataset.rig.len()],
-            });
-        }
-        let grid = EquirectGrid::new(config.out_height, config.out_width, config.phi_deg)?;
-        let hypotheses = dataset.hypotheses(config.num_invdepth)?;
+        let (grid, hypotheses) = sweep_geometry(&config, dataset)?;
         let (lut, status) =
             cache.load_or_build(&dataset.rig, &grid, &hypotheses, SphereSet::EveryOther)?;
         let grids = SweepGrid::split_table(
@@ -106,12 +99,7 @@ impl Inference {
     /// every camera's features to host memory and back).
     pub fn sweep_on_device(&mut self) {
         let size = self.net.config.feature_size();
-        self.device_taps = Some(
-            self.grids
-                .iter()
-                .map(|g| SweepTaps::new(g, size, &self.device))
-                .collect(),
-        );
+        self.device_taps = Some(SweepTaps::for_grids(&self.grids, size, &self.device));
     }
 
     /// Network inputs `[1, 1, H_I, W_I]`: each gray image normalised over its valid pixels,
@@ -128,21 +116,16 @@ impl Inference {
                 actual: vec![images.len()],
             });
         }
-        images
-            .iter()
-            .zip(&self.masks)
-            .map(|(image, mask)| {
-                let normalized = normalize_for_network(image, Some(mask))?;
-                let resized = resize_bilinear(&normalized, config.input_width, config.input_height);
-                Ok(Tensor::from_data(
-                    TensorData::new(
-                        resized.data,
-                        [1, 1, config.input_height, config.input_width],
-                    ),
+        let size = [config.input_height, config.input_width];
+        Ok(network_inputs(images, &self.masks, size)?
+            .into_iter()
+            .map(|data| {
+                Tensor::from_data(
+                    TensorData::new(data, [1, 1, size[0], size[1]]),
                     &self.device,
-                ))
+                )
             })
-            .collect()
+            .collect())
     }
 
     /// Runs the network on one frame's gray images (camera order of the rig).
@@ -181,6 +164,48 @@ impl Inference {
             timings,
         })
     }
+}
+
+/// Checks that `dataset`'s rig has the network's number of cameras and returns the network's
+/// output grid and the dataset's `N` inverse-depth hypotheses.
+///
+/// # Errors
+/// [`NetError::Shape`] for another number of cameras; [`NetError`] for an invalid grid or
+/// minimum depth.
+pub fn sweep_geometry(
+    config: &NetConfig,
+    dataset: &Dataset,
+) -> Result<(EquirectGrid, InvDepthHypotheses), NetError> {
+    if dataset.rig.len() != config.num_cameras {
+        return Err(NetError::Shape {
+            what: format!("cameras of {}", dataset.config_path.display()),
+            expected: vec![config.num_cameras],
+            actual: vec![dataset.rig.len()],
+        });
+    }
+    let grid = EquirectGrid::new(config.out_height, config.out_width, config.phi_deg)?;
+    let hypotheses = dataset.hypotheses(config.num_invdepth)?;
+    Ok((grid, hypotheses))
+}
+
+/// Network inputs of a frame's gray images (camera order of `masks`): each normalised over
+/// its valid pixels, then resized to `size = [rows, cols]`, row-major.
+///
+/// # Errors
+/// [`NetError`] for a mask of another size than its image.
+pub fn network_inputs(
+    images: &[GrayImage],
+    masks: &[ValidityMask],
+    size: [usize; 2],
+) -> Result<Vec<Vec<f32>>, NetError> {
+    images
+        .iter()
+        .zip(masks)
+        .map(|(image, mask)| {
+            let normalized = normalize_for_network(image, Some(mask))?;
+            Ok(resize_bilinear(&normalized, size[1], size[0]).data)
+        })
+        .collect()
 }
 
 /// Resizes a gray image to `width x height` by bilinear interpolation with corners aligned

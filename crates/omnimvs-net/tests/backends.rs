@@ -49,10 +49,7 @@ fn index_map(backend: Backend, device_sweep: bool) -> Vec<f32> {
         .fold_batch_norm();
     let config = net.config.clone();
     let grids = synthetic_grids(&config);
-    let taps: Vec<SweepTaps> = grids
-        .iter()
-        .map(|g| SweepTaps::new(g, config.feature_size(), &device))
-        .collect();
+    let taps = SweepTaps::for_grids(&grids, config.feature_size(), &device);
     let sweep = if device_sweep {
         SweepInput::Device(&taps)
     } else {

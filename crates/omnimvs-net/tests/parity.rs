@@ -156,10 +156,7 @@ fn differentiable_forward_matches_pytorch_on(device: &Device) {
     let feature = net.features(images[0].clone());
     assert!(max_abs_diff(feature.clone(), &read_f32("feature0"), "feature0") < TOLERANCE);
     let [_, _, rows, cols] = feature.dims();
-    let taps: Vec<SweepTaps> = grids
-        .iter()
-        .map(|g| SweepTaps::new(g, [rows, cols], &device))
-        .collect();
+    let taps = SweepTaps::for_grids(&grids, [rows, cols], &device);
     let warped = taps[0].warp(feature.clone(), 0..4).squeeze_dim::<4>(0);
     assert!(max_abs_diff(warped, &read_f32("warped0"), "warped0[:4]") < TOLERANCE);
     // [1, C, N/2, H/2, W/2] -> the script's [N/2, C, H/2, W/2]
@@ -198,11 +195,7 @@ fn inference_paths_match_pytorch_on(device: &Device) {
     assert!(max_abs_diff(out.cost.clone(), &read_f32("cost"), "folded cost") < TOLERANCE);
     assert!(max_abs_diff(out.index.clone(), &read_f32("index"), "folded index") < TOLERANCE);
     assert!(max_abs_diff(out.entropy(), &read_f32("entropy"), "folded entropy") < TOLERANCE);
-    let size = config.feature_size();
-    let taps: Vec<SweepTaps> = grids
-        .iter()
-        .map(|g| SweepTaps::new(g, size, &device))
-        .collect();
+    let taps = SweepTaps::for_grids(&grids, config.feature_size(), &device);
     let (out, _) = folded
         .infer_timed_with(&images, SweepInput::Device(&taps), &order)
         .unwrap();

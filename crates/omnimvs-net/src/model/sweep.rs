@@ -53,6 +53,14 @@ impl SweepTaps {
         }
     }
 
+    /// The taps of every camera's grid, for feature maps of `src_size = [rows, cols]`.
+    pub fn for_grids(grids: &[SweepGrid], src_size: [usize; 2], device: &Device) -> Vec<Self> {
+        grids
+            .iter()
+            .map(|g| Self::new(g, src_size, device))
+            .collect()
+    }
+
     /// Bilinear warp of `feature` `[B, C, rows, cols]` onto `spheres`:
     /// `[B, spheres.len(), C, height, width]`.
     pub fn warp(&self, feature: Tensor<4>, spheres: Range<usize>) -> Tensor<5> {

@@ -127,11 +127,7 @@ impl Learner {
 
     /// Sweep taps of one camera set on the training device.
     pub fn taps(&self, grids: &[crate::taps::SweepGrid]) -> Vec<SweepTaps> {
-        let size = self.net.config.feature_size();
-        grids
-            .iter()
-            .map(|g| SweepTaps::new(g, size, &self.device))
-            .collect()
+        SweepTaps::for_grids(grids, self.net.config.feature_size(), &self.device)
     }
 
     /// Loss of `sample` with the current weights, without updating them.

@@ -6,13 +6,12 @@ use std::path::Path;
 use omnimvs_camera::ValidityMask;
 use omnimvs_data::Dataset;
 use omnimvs_data::gt::GroundTruth;
-use omnimvs_data::image_io::normalize_for_network;
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 
 use super::augment::{RotationSet, resample_ground_truth, rotated_grids};
 use crate::config::NetConfig;
 use crate::error::NetError;
-use crate::infer::resize_bilinear;
+use crate::infer::{network_inputs, sweep_geometry};
 use crate::taps::SweepGrid;
 
 /// A prepared sample.
@@ -57,15 +56,7 @@ impl SampleSource {
     /// [`NetError`] when the dataset cannot be read or its rig does not fit the network.
     pub fn open(path: &Path, net: &NetConfig, rotations: RotationSet) -> Result<Self, NetError> {
         let dataset = Dataset::open(path)?;
-        if dataset.rig.len() != net.num_cameras {
-            return Err(NetError::Shape {
-                what: format!("cameras of {}", dataset.config_path.display()),
-                expected: vec![net.num_cameras],
-                actual: vec![dataset.rig.len()],
-            });
-        }
-        let grid = EquirectGrid::new(net.out_height, net.out_width, net.phi_deg)?;
-        let hypotheses = dataset.hypotheses(net.num_invdepth)?;
+        let (grid, hypotheses) = sweep_geometry(net, &dataset)?;
         let grids = rotations
             .rotations
             .iter()
@@ -97,15 +88,7 @@ impl SampleSource {
     /// # Errors
     /// [`NetError`] for a mask of another size.
     pub fn inputs(&self, images: &[GrayImage]) -> Result<Vec<Vec<f32>>, NetError> {
-        let [rows, cols] = self.input_size;
-        images
-            .iter()
-            .zip(&self.masks)
-            .map(|(image, mask)| {
-                let normalized = normalize_for_network(image, Some(mask))?;
-                Ok(resize_bilinear(&normalized, cols, rows).data)
-            })
-            .collect()
+        network_inputs(images, &self.masks, self.input_size)
     }
 
     /// Reads `frame` for rotation `rotation` (`source` is only recorded in the sample).
