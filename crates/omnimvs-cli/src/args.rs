@@ -70,6 +70,23 @@ pub fn parse_backend(text: &str) -> Result<omnimvs_net::Backend, String> {
     Ok(backend)
 }
 
+/// Parses the path of an output file and checks, before any work is done, that its folder
+/// exists (a report written after minutes of benchmarking must not fail then).
+pub fn parse_output_file(text: &str) -> Result<std::path::PathBuf, String> {
+    let path = std::path::PathBuf::from(text);
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => std::path::Path::new("."),
+    };
+    if path.file_name().is_none() || !folder.is_dir() {
+        return Err(format!(
+            "expected a file in an existing folder, but {} is not a folder",
+            folder.display()
+        ));
+    }
+    Ok(path)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

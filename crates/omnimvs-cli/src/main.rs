@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 mod args;
 mod cmd;
 mod pictures;
+mod weights;
 
 /// 360-degree depth maps from a rig of ultra-wide (220-degree) fisheye cameras,
 /// after OmniMVS (ICCV 2019).
@@ -31,6 +32,7 @@ enum Command {
     Info(cmd::info::Args),
     Lut(cmd::lut::Args),
     Pano(cmd::pano::Args),
+    Parity(cmd::parity::Args),
     Sgm(cmd::sgm::Args),
     Synth(cmd::synth::Args),
     Train(cmd::train::Args),
@@ -46,6 +48,7 @@ fn main() -> ExitCode {
         Command::Info(a) => cmd::info::run(&a),
         Command::Lut(a) => cmd::lut::run(&a),
         Command::Pano(a) => cmd::pano::run(&a),
+        Command::Parity(a) => cmd::parity::run(&a),
         Command::Sgm(a) => cmd::sgm::run(&a),
         Command::Synth(a) => cmd::synth::run(&a),
         Command::Train(a) => cmd::train::run(&a),

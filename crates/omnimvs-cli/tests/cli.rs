@@ -209,3 +209,59 @@ fn backends_missing_from_the_build_are_explained() {
         assert!(stderr(&o).contains("--features wgpu"), "{}", stderr(&o));
     }
 }
+
+#[test]
+fn bench_checks_the_json_folder_before_running() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("missing/bench.json");
+    // The paper preset would run for minutes: the error must come before it starts.
+    let o = omnimvs(&[
+        "bench",
+        "--preset",
+        "paper",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("--json") && e.contains("missing"), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
+    assert!(!stdout(&o).contains("preset paper"), "{}", stdout(&o));
+}
+
+#[test]
+fn parity_compares_backends_on_a_real_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("parity.json");
+    let data = samples().join("itbt_sample");
+    let o = omnimvs(&[
+        "parity",
+        data.to_str().unwrap(),
+        "--backends",
+        "cpu",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("all backends agree"), "{}", stdout(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    // Host sweep and device sweep of the one backend.
+    assert_eq!(rows.len(), 2, "{v}");
+    assert_eq!(rows[1]["device_sweep"], true);
+    assert!(rows[1]["max_abs_diff"].as_f64().unwrap() < 1e-3, "{v}");
+    // The bundled model gives a structured map on the real frame, not a flat one.
+    assert!(v["reference_spread"].as_f64().unwrap() > 5.0, "{v}");
+
+    // A tolerance no real difference can meet (a negative one) must fail the check.
+    let o = omnimvs(&[
+        "parity",
+        data.to_str().unwrap(),
+        "--backends",
+        "cpu",
+        "--tolerance=-1",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("backends disagree"), "{}", stderr(&o));
+}

@@ -68,3 +68,57 @@ fn synth_rejects_bad_input_clearly() {
         assert!(!o.status.success() && err.contains(want), "{args:?}: {err}");
     }
 }
+
+/// `eval` and `infer` use the model compiled into the binary, so they work from any folder
+/// (here a fresh temporary one, with no `models/` beside it).
+#[test]
+fn bundled_model_runs_from_any_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("things");
+    let o = omnimvs(&[
+        "synth",
+        "--kind",
+        "things",
+        "--frames",
+        "1",
+        "--out",
+        data.to_str().unwrap(),
+        "--size",
+        "96x100",
+        "--seed",
+        "5",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let work = dir.path().join("elsewhere");
+    std::fs::create_dir(&work).unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_omnimvs"))
+            .args(args)
+            .current_dir(&work)
+            .env("OMNIMVS_CACHE_DIR", dir.path().join("cache"))
+            .output()
+            .unwrap()
+    };
+    let o = run(&[
+        "eval",
+        "--data",
+        "../things",
+        "--method",
+        "net",
+        "--frames",
+        "1",
+        "--out",
+        "eval",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(work.join("eval/eval.json")).unwrap())
+            .unwrap();
+    let mae = report["methods"][0]["metrics"]["mae"].as_f64().unwrap();
+    assert!(mae.is_finite() && mae > 0.0 && mae < 100.0, "{report}");
+    let o = run(&["infer", "../things", "--frames", "1", "--out", "net"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let settings = std::fs::read_to_string(work.join("net/infer.json")).unwrap();
+    assert!(settings.contains("bundled"), "{settings}");
+    assert!(work.join("net/00001_index.tiff").is_file());
+}

@@ -11,6 +11,8 @@ use omnimvs_net::bench::{
 use omnimvs_net::{Backend, NetConfig};
 use serde::Serialize;
 
+use crate::args::{BACKEND_HELP, parse_backend, parse_output_file};
+
 /// Time the network on a compute backend: the forward pass per stage (features,
 /// sweep, fusion, cost volume, softargmin), a training step (forward, backward,
 /// SGD update), and peak memory. Random weights, random inputs and a synthetic
@@ -21,10 +23,8 @@ pub struct Args {
     /// Network sizes: tiny or paper.
     #[arg(long, default_value = "tiny")]
     pub preset: String,
-    /// Compute backend: cpu (burn flex), libtorch, libtorch-cuda[:N], wgpu[:N],
-    /// vulkan, wgpu-cpu (the last five need a build with their Cargo feature).
-    #[arg(long, default_value = "cpu")]
-    pub backend: String,
+    #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
+    pub backend: Backend,
     /// Measured forward passes.
     #[arg(long, default_value_t = 3)]
     pub repeats: usize,
@@ -43,7 +43,7 @@ pub struct Args {
     #[arg(long, default_value = "auto")]
     pub sweep: String,
     /// Also write the measurements as JSON to this file.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_output_file)]
     pub json: Option<PathBuf>,
 }
 
@@ -57,7 +57,7 @@ struct Report {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let backend: Backend = args.backend.parse()?;
+    let backend = args.backend;
     let device = backend.device()?;
     let config = NetConfig::preset(&args.preset)?;
     let device_sweep = match args.sweep.as_str() {

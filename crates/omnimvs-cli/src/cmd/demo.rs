@@ -15,12 +15,12 @@ use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
 use crate::args::{Frames, Size};
 use crate::cmd::{eval, infer, sgm, synth};
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud};
+use crate::weights::Weights;
 
 /// Run the pipeline end to end on a default that needs nothing but this
 /// repository: render a few frames of a synthetic `things` scene with exact
 /// ground truth for the published 4-camera rig, estimate 360-degree depth with
-/// the classical method (ZNCC + SGM) and, when a trained model is bundled,
-/// with the network; print the paper's metrics table; write pictures
+/// the classical method (ZNCC + SGM) and with the bundled network; print the paper's metrics table; write pictures
 /// (inputs, panorama, ground truth, estimates, error maps) and a PLY point
 /// cloud. If the reference samples are beside the repository
 /// (../shared/data/omnimvs-samples), the real itbt_sample frame 1 is
@@ -143,38 +143,24 @@ pub fn run(args: &Args) -> Result<()> {
     let table = table.join("\n");
     std::fs::write(args.out.join("metrics.md"), format!("{table}\n"))?;
 
-    let bundled = PathBuf::from(eval::BUNDLED_WEIGHTS);
-    let mut net_table = None;
-    if bundled.is_file() {
-        println!(
-            "[4/5] bundled network ({}) against the classical method at the network's grid",
-            bundled.display()
-        );
-        let eval_dir = args.out.join("eval");
-        eval::run(&eval::Args {
-            data: data_dir.clone(),
-            method: vec!["net".into(), "sgm".into()],
-            weights: vec![bundled.clone()],
-            frames: Frames(1..=args.frames),
-            size: None,
-            ndepth: None,
-            out: Some(eval_dir.clone()),
-            pictures: true,
-            backend: omnimvs_net::Backend::Cpu,
-        })?;
-        net_table = std::fs::read_to_string(eval_dir.join("eval.md")).ok();
-        infer::run(&infer_args(
-            &data_dir,
-            &args.out.join("net"),
-            &bundled,
-            args.frames,
-        ))?;
-    } else {
-        println!(
-            "[4/5] no bundled model at {}: skipping the network",
-            bundled.display()
-        );
-    }
+    println!(
+        "[4/5] bundled network ({}) against the classical method at the network's grid",
+        Weights::Bundled
+    );
+    let eval_dir = args.out.join("eval");
+    eval::run(&eval::Args {
+        data: data_dir.clone(),
+        method: vec!["net".into(), "sgm".into()],
+        weights: vec![Weights::Bundled],
+        frames: Frames(1..=args.frames),
+        size: None,
+        ndepth: None,
+        out: Some(eval_dir.clone()),
+        pictures: true,
+        backend: omnimvs_net::Backend::Cpu,
+    })?;
+    let net_table = std::fs::read_to_string(eval_dir.join("eval.md")).ok();
+    infer::run(&infer_args(&data_dir, &args.out.join("net"), args.frames))?;
 
     let itbt = args.samples.join("itbt_sample");
     if itbt.join("config.yaml").is_file() {
@@ -182,11 +168,9 @@ pub fn run(args: &Args) -> Result<()> {
         let out = args.out.join("itbt_sgm");
         sgm::run(&sgm_args(&itbt, &out, args, Some(Frames(1..=1))))?;
         println!("  ZNCC+SGM: {}", out.join("00001_invdepth.png").display());
-        if bundled.is_file() {
-            let out = args.out.join("itbt_net");
-            infer::run(&infer_args(&itbt, &out, &bundled, 1))?;
-            println!("  network: {}", out.join("00001_vis.png").display());
-        }
+        let out = args.out.join("itbt_net");
+        infer::run(&infer_args(&itbt, &out, 1))?;
+        println!("  network: {}", out.join("00001_vis.png").display());
     } else {
         println!(
             "[5/5] {} not found: skipping the real sample",
@@ -211,10 +195,10 @@ pub fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
-fn infer_args(dataset: &Path, out: &Path, weights: &Path, frames: u32) -> infer::Args {
+fn infer_args(dataset: &Path, out: &Path, frames: u32) -> infer::Args {
     infer::Args {
         dataset: dataset.to_path_buf(),
-        weights: Some(weights.to_path_buf()),
+        weights: Weights::Bundled,
         preset: "tiny".into(),
         frames: Frames(1..=frames),
         out: out.to_path_buf(),

@@ -15,15 +15,12 @@ use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use omnimvs_net::NetConfig;
 use omnimvs_net::infer::Inference;
 use omnimvs_net::train::resample_ground_truth;
-use omnimvs_net::weights::load_any;
 use omnimvs_stereo::{SgmParams, SphericalStereo};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LutCache};
 use serde::Serialize;
 
 use crate::args::{BACKEND_HELP, Frames, Size, parse_backend};
-
-/// Default weights of `--method net`: the bundled model.
-pub const BUNDLED_WEIGHTS: &str = "models/omnimvs-tiny.safetensors";
+use crate::weights::{BUNDLED, Weights};
 
 /// Evaluate methods against ground truth with the paper's metrics: per pixel
 /// E = |n_hat - n*| / N * 100 over valid pixels; the percentages of E > 1, 3, 5, the mean
@@ -40,9 +37,10 @@ pub struct Args {
     /// Methods, comma-separated: net, sgm.
     #[arg(long, value_delimiter = ',', default_value = "net,sgm")]
     pub method: Vec<String>,
-    /// Network weights, comma-separated for several rows (default: the bundled model).
-    #[arg(long, value_delimiter = ',')]
-    pub weights: Vec<PathBuf>,
+    /// Network weights, comma-separated for several rows: `bundled` (the model compiled
+    /// into the binary, the default), our .safetensors files or reference checkpoints.
+    #[arg(long, value_delimiter = ',', default_value = BUNDLED, value_parser = Weights::parse)]
+    pub weights: Vec<Weights>,
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
     pub frames: Frames,
@@ -110,18 +108,11 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     let device = args.backend.device()?;
-    let weights: Vec<PathBuf> = if args.weights.is_empty() {
-        vec![PathBuf::from(BUNDLED_WEIGHTS)]
-    } else {
-        args.weights.clone()
-    };
     // The grid: the first network's, else the options, else the tiny preset's.
     let mut nets = Vec::new();
     if args.method.iter().any(|m| m == "net") {
-        for path in &weights {
-            let net = load_any(path, &NetConfig::tiny(), &device)
-                .with_context(|| format!("loading weights {}", path.display()))?;
-            nets.push((path.clone(), net));
+        for weights in &args.weights {
+            nets.push((weights.clone(), weights.load("tiny", &device)?));
         }
     }
     let tiny = NetConfig::tiny();
@@ -208,12 +199,11 @@ pub fn run(args: &Args) -> Result<()> {
     for method in &args.method {
         match method.as_str() {
             "net" => {
-                for (path, net) in std::mem::take(&mut nets) {
+                for (weights, net) in std::mem::take(&mut nets) {
                     let c = net.config.clone();
                     if (c.out_height, c.out_width, c.num_invdepth) != (height, width, ndepth) {
                         bail!(
-                            "{}: output {}x{} N={} differs from the evaluation grid {height}x{width} N={ndepth}",
-                            path.display(),
+                            "{weights}: output {}x{} N={} differs from the evaluation grid {height}x{width} N={ndepth}",
                             c.out_height,
                             c.out_width,
                             c.num_invdepth
@@ -228,11 +218,8 @@ pub fn run(args: &Args) -> Result<()> {
                     if args.backend.is_gpu() {
                         inference.sweep_on_device();
                     }
-                    let stem = path
-                        .file_stem()
-                        .map(|s| s.to_string_lossy().into_owned())
-                        .unwrap_or_default();
-                    let name = if weights.len() > 1 {
+                    let stem = weights.stem();
+                    let name = if args.weights.len() > 1 {
                         format!("net ({stem})")
                     } else {
                         "net".into()

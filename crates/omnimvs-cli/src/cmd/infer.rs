@@ -10,21 +10,13 @@ use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use omnimvs_data::ply::write_ply;
+use omnimvs_net::Backend;
 use omnimvs_net::infer::{FrameResult, Inference};
-use omnimvs_net::weights::{load_any, load_bytes};
-use omnimvs_net::{Backend, NetConfig, OmniMvsNet};
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
 use crate::args::{BACKEND_HELP, Frames, parse_backend};
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
-
-/// The bundled model (`models/omnimvs-tiny.*`), compiled into the binary.
-const BUNDLED_NAME: &str = "models/omnimvs-tiny.safetensors";
-const BUNDLED_CONFIG: &str = include_str!("../../../../models/omnimvs-tiny.json");
-const BUNDLED_WEIGHTS: &[u8] = include_bytes!("../../../../models/omnimvs-tiny.safetensors");
-
-/// `--weights` value that asks for a randomly initialised network.
-const RANDOM_WEIGHTS: &str = "random";
+use crate::weights::{BUNDLED, Weights};
 
 /// Estimate 360-degree inverse depth with the OmniMVS network. Writes per frame
 /// OUT/%05d.tiff (f32 inverse depth, 1/m), %05d_index.tiff (hypothesis index),
@@ -35,12 +27,12 @@ const RANDOM_WEIGHTS: &str = "random";
 pub struct Args {
     /// Dataset folder (or its config.yaml).
     pub dataset: PathBuf,
-    /// Weights: our .safetensors (with its .json beside it), a reference
-    /// PyTorch checkpoint (.pt/.pth with net_state_dict and CH), or `random`
-    /// for a randomly initialised --preset network (smoke tests, timing).
-    /// Default: the bundled `omnimvs-tiny` model (models/ in the repository).
-    #[arg(long)]
-    pub weights: Option<PathBuf>,
+    /// Weights: `bundled` (the `omnimvs-tiny` model compiled into the binary, the
+    /// default), our .safetensors (with its .json beside it), a reference PyTorch
+    /// checkpoint (.pt/.pth with net_state_dict and CH), or `random` for a randomly
+    /// initialised --preset network (smoke tests, timing).
+    #[arg(long, default_value = BUNDLED, value_parser = Weights::parse)]
+    pub weights: Weights,
     /// Architecture sizes for a PyTorch checkpoint or `--weights random`: paper or tiny.
     #[arg(long, default_value = "paper")]
     pub preset: String,
@@ -63,24 +55,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
     let ds = Dataset::open(&args.dataset)?;
-    let base = NetConfig::preset(&args.preset)?;
-    let net = match &args.weights {
-        Some(path) if path.as_os_str() == RANDOM_WEIGHTS => {
-            eprintln!(
-                "warning: randomly initialised `{}` network, its outputs are meaningless",
-                args.preset
-            );
-            OmniMvsNet::new(&base, &device)?
-        }
-        Some(path) => load_any(path, &base, &device)
-            .with_context(|| format!("loading weights {}", path.display()))?,
-        None => load_bytes(
-            std::path::Path::new(BUNDLED_NAME),
-            BUNDLED_CONFIG,
-            BUNDLED_WEIGHTS,
-            &device,
-        )?,
-    };
+    let net = args.weights.load(&args.preset, &device)?;
     let config = net.config.clone();
     let net = net.fold_batch_norm();
     let (mut inference, status) = Inference::new(net, &ds, &LutCache::default_location(), device)?;

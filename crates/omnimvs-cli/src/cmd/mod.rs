@@ -7,6 +7,7 @@ pub mod infer;
 pub mod info;
 pub mod lut;
 pub mod pano;
+pub mod parity;
 pub mod sgm;
 pub mod synth;
 pub mod train;

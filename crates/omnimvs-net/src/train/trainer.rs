@@ -98,11 +98,9 @@ fn io_error(path: &Path, source: std::io::Error) -> NetError {
     }
 }
 
-/// Writes `text` to `path` through a temporary file and a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), NetError> {
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, bytes).map_err(|e| io_error(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| io_error(path, e))
+/// Writes `bytes` to `path` through a synced temporary file and a rename.
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), NetError> {
+    omnimvs_camera::fs::write_atomic(path, bytes).map_err(|e| io_error(path, e))
 }
 
 fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), NetError> {

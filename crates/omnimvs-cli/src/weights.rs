@@ -1,0 +1,94 @@
+//! Where a command's network comes from: the bundled model (compiled into the binary, so it
+//! works from any folder), a weights file, or a random initialisation.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use burn::tensor::Device;
+use omnimvs_net::weights::{load_any, load_bytes};
+use omnimvs_net::{NetConfig, OmniMvsNet};
+
+/// `--weights` value that names the bundled model (also the default).
+pub const BUNDLED: &str = "bundled";
+/// `--weights` value that asks for a randomly initialised network.
+pub const RANDOM: &str = "random";
+
+/// The bundled model (`models/omnimvs-tiny.*` in the repository).
+const BUNDLED_LABEL: &str = "models/omnimvs-tiny.safetensors";
+const BUNDLED_CONFIG: &str = include_str!("../../../models/omnimvs-tiny.json");
+const BUNDLED_BYTES: &[u8] = include_bytes!("../../../models/omnimvs-tiny.safetensors");
+
+/// A `--weights` value.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Weights {
+    /// The model bundled into the binary.
+    Bundled,
+    /// A randomly initialised network of the `--preset` sizes.
+    Random,
+    /// Our `.safetensors` (with its `.json`) or a reference PyTorch checkpoint.
+    File(PathBuf),
+}
+
+impl Weights {
+    /// Reads a `--weights` value: `bundled`, `random`, or a path.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        Ok(match text {
+            BUNDLED => Self::Bundled,
+            RANDOM => Self::Random,
+            path => Self::File(PathBuf::from(path)),
+        })
+    }
+
+    /// A short name for tables and file names: the file stem, `bundled` or `random`.
+    pub fn stem(&self) -> String {
+        match self {
+            Self::Bundled => BUNDLED.into(),
+            Self::Random => RANDOM.into(),
+            Self::File(path) => path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        }
+    }
+
+    /// Loads the network on `device`; `preset` sizes a PyTorch checkpoint or a random
+    /// network (our files carry their own sizes).
+    ///
+    /// # Errors
+    /// An unknown preset, or a file that cannot be read or does not match the network.
+    pub fn load(&self, preset: &str, device: &Device) -> Result<OmniMvsNet> {
+        let base = NetConfig::preset(preset)?;
+        Ok(match self {
+            Self::Bundled => load_bytes(
+                Path::new(BUNDLED_LABEL),
+                BUNDLED_CONFIG,
+                BUNDLED_BYTES,
+                device,
+            )?,
+            Self::Random => {
+                eprintln!(
+                    "warning: randomly initialised `{preset}` network, its outputs are meaningless"
+                );
+                OmniMvsNet::new(&base, device)?
+            }
+            Self::File(path) => load_any(path, &base, device)
+                .with_context(|| format!("loading weights {}", path.display()))?,
+        })
+    }
+}
+
+impl std::fmt::Display for Weights {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Bundled => write!(f, "{BUNDLED} ({BUNDLED_LABEL})"),
+            Self::Random => f.write_str(RANDOM),
+            Self::File(path) => write!(f, "{}", path.display()),
+        }
+    }
+}
+
+impl serde::Serialize for Weights {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
