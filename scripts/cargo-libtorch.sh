@@ -21,6 +21,13 @@ shift
 export VIRTUAL_ENV="$venv"
 export PATH="$venv/bin:$PATH"
 export LIBTORCH_USE_PYTORCH=1
+# tch 0.22 is written against torch 2.9.0 and refuses other versions unless told; its wrapper
+# also compiles against 2.11 (scripts/install-libtorch.sh explains when that is needed).
+torch_version="$("$venv/bin/python" -c 'import torch; print(torch.__version__.split("+")[0])')"
+if [ "$torch_version" != "2.9.0" ]; then
+    echo "building against torch $torch_version (tch's version check bypassed)" >&2
+    export LIBTORCH_BYPASS_VERSION_CHECK=1
+fi
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target/libtorch}"
 cd "$root"
 # `-p omnimvs-net` selects the library alone; everything else goes through the binary crate.

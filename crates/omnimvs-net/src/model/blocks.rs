@@ -26,23 +26,24 @@ fn batch_norm_affine(bn: &BatchNorm) -> (Tensor<1>, Tensor<1>) {
     (scale, shift)
 }
 
-/// Folds `scale`/`shift` into a weight whose output channels lie along `out_dim` and its bias.
-fn fold_weight<const D: usize>(
-    weight: Tensor<D>,
-    bias: Option<Tensor<1>>,
-    scale: Tensor<1>,
-    shift: Tensor<1>,
+/// Folds an inference-mode batch norm into a convolution's weight (output channels along
+/// `out_dim`) and bias: `w' = w * scale`, `b' = b * scale + shift`.
+fn fold_into<const D: usize>(
+    weight: &mut Param<Tensor<D>>,
+    bias: &mut Option<Param<Tensor<1>>>,
+    bn: &BatchNorm,
     out_dim: usize,
-) -> (Tensor<D>, Tensor<1>) {
-    let channels = scale.dims()[0];
+) {
+    let (scale, shift) = batch_norm_affine(bn);
     let mut shape = [1usize; D];
-    shape[out_dim] = channels;
-    let weight = weight * scale.clone().reshape(shape);
-    let bias = match bias {
-        Some(bias) => bias * scale + shift,
+    shape[out_dim] = scale.dims()[0];
+    let folded = weight.val() * scale.clone().reshape(shape);
+    let folded_bias = match bias.as_ref() {
+        Some(b) => b.val() * scale + shift,
         None => shift,
     };
-    (weight, bias)
+    *weight = Param::from_tensor(folded);
+    *bias = Some(Param::from_tensor(folded_bias));
 }
 
 /// 2D convolution, optional batch norm, optional ReLU.
@@ -93,11 +94,7 @@ impl ConvBn2d {
     /// Folds an inference-mode batch norm into the convolution.
     pub fn fold_batch_norm(mut self) -> Self {
         if let Some(bn) = self.bn.take() {
-            let (scale, shift) = batch_norm_affine(&bn);
-            let bias = self.conv.bias.as_ref().map(|b| b.val());
-            let (weight, bias) = fold_weight(self.conv.weight.val(), bias, scale, shift, 0);
-            self.conv.weight = Param::from_tensor(weight);
-            self.conv.bias = Some(Param::from_tensor(bias));
+            fold_into(&mut self.conv.weight, &mut self.conv.bias, &bn, 0);
         }
         self
     }
@@ -152,11 +149,7 @@ impl ConvBn3d {
     /// Folds an inference-mode batch norm into the convolution.
     pub fn fold_batch_norm(mut self) -> Self {
         if let Some(bn) = self.bn.take() {
-            let (scale, shift) = batch_norm_affine(&bn);
-            let bias = self.conv.bias.as_ref().map(|b| b.val());
-            let (weight, bias) = fold_weight(self.conv.weight.val(), bias, scale, shift, 0);
-            self.conv.weight = Param::from_tensor(weight);
-            self.conv.bias = Some(Param::from_tensor(bias));
+            fold_into(&mut self.conv.weight, &mut self.conv.bias, &bn, 0);
         }
         self
     }
@@ -210,11 +203,7 @@ impl DeconvBn3d {
     /// `[C_in, C_out, k, k, k]`.
     pub fn fold_batch_norm(mut self) -> Self {
         if let Some(bn) = self.bn.take() {
-            let (scale, shift) = batch_norm_affine(&bn);
-            let bias = self.conv.bias.as_ref().map(|b| b.val());
-            let (weight, bias) = fold_weight(self.conv.weight.val(), bias, scale, shift, 1);
-            self.conv.weight = Param::from_tensor(weight);
-            self.conv.bias = Some(Param::from_tensor(bias));
+            fold_into(&mut self.conv.weight, &mut self.conv.bias, &bn, 1);
         }
         self
     }
