@@ -77,6 +77,27 @@ logged() {
     "$@" 2>&1 | tee "$out/$name.log"
 }
 
+# Runs a command while sampling the GPU's used memory every 100 ms (the same measure for every
+# backend and PyTorch, CUDA context included); prints the peak. No-op without nvidia-smi.
+with_gpu_memory() {
+    local name="$1"
+    shift
+    if ! command -v nvidia-smi >/dev/null; then
+        "$@"
+        return
+    fi
+    nvidia-smi --query-gpu=memory.used --format=csv,noheader,nounits -lms 100 \
+        >"$out/$name-gpu-memory.csv" 2>/dev/null &
+    local sampler=$!
+    local status=0
+    "$@" || status=$?
+    kill "$sampler" 2>/dev/null || true
+    wait "$sampler" 2>/dev/null || true
+    echo "peak GPU memory used (nvidia-smi, whole device): $(sort -n "$out/$name-gpu-memory.csv" | tail -1) MiB" \
+        | tee -a "$out/$name.log"
+    return "$status"
+}
+
 # A file-name-safe form of a backend name (libtorch-cuda:0 -> libtorch-cuda-0).
 safe() { echo "${1//:/-}"; }
 
@@ -113,11 +134,13 @@ parity)
 bench)
     for b in $backends; do
         s="$(safe "$b")"
-        logged "bench-$preset-$s" omnimvs_for "$b" bench --preset "$preset" --backend "$b" \
-            --repeats "$repeats" --train-steps "$train_steps" --json "$out/bench-$preset-$s.json"
+        with_gpu_memory "bench-$preset-$s" logged "bench-$preset-$s" omnimvs_for "$b" bench \
+            --preset "$preset" --backend "$b" --repeats "$repeats" --train-steps "$train_steps" \
+            --json "$out/bench-$preset-$s.json"
     done
-    logged "bench-$preset-pytorch-$torch_device" "$python" "$root/scripts/net_parity/bench_torch.py" \
-        "$preset" "$repeats" --device "$torch_device" --train-steps "$train_steps"
+    with_gpu_memory "bench-$preset-pytorch-$torch_device" logged "bench-$preset-pytorch-$torch_device" \
+        "$python" "$root/scripts/net_parity/bench_torch.py" "$preset" "$repeats" \
+        --device "$torch_device" --train-steps "$train_steps"
     ;;
 train)
     [ -d "$data" ] || { echo "run the data stage first" >&2; exit 1; }
