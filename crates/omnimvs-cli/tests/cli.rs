@@ -207,6 +207,10 @@ fn backends_missing_from_the_build_are_explained() {
         let o = omnimvs(&["bench", "--backend", "wgpu"]);
         assert!(!o.status.success());
         assert!(stderr(&o).contains("--features wgpu"), "{}", stderr(&o));
+        let data = samples().join("itbt_sample");
+        let o = omnimvs(&["parity", data.to_str().unwrap(), "--backends", "cpu,wgpu"]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("--features wgpu"), "{}", stderr(&o));
     }
 }
 
