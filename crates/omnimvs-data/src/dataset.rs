@@ -1,9 +1,12 @@
 use std::path::{Path, PathBuf};
 
+use omnimvs_camera::nalgebra::Rotation3;
 use omnimvs_camera::{Rig, ValidityMask, parse_config_rig};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 
-use crate::gt::{GroundTruth, InvDepthMap, ground_truth_index, read_inv_depth};
+use crate::gt::{
+    GroundTruth, InvDepthMap, ground_truth_index, read_inv_depth, sample_ground_truth,
+};
 use crate::image_io::read_gray_sized;
 use crate::{DataError, DatasetConfig, format_printf};
 
@@ -210,7 +213,6 @@ impl Dataset {
             let cropped = map.crop_rows_centered(height)?;
             return Ok(Some(ground_truth_index(&cropped, hyps)));
         }
-        let full = ground_truth_index(&map, hyps);
         let phi_deg = 180.0 * height as f64 / width as f64;
         if phi_deg > map.phi_deg() + 1e-9 {
             return Err(DataError::mismatch(
@@ -219,24 +221,12 @@ impl Dataset {
                 format!("±{} degrees", map.phi_deg()),
             ));
         }
-        let src = EquirectGrid::new(map.height, map.width, map.phi_deg())?;
-        let dst = EquirectGrid::new(height, width, phi_deg)?;
-        let mut index = Vec::with_capacity(dst.len());
-        let mut valid = Vec::with_capacity(dst.len());
-        for row in 0..height {
-            for col in 0..width {
-                let (r, c) = src.position_of(&dst.ray(row as f64, col as f64));
-                let r = (r.round().max(0.0) as usize).min(map.height - 1);
-                let c = (c.round() as usize) % map.width;
-                index.push(full.index[r * map.width + c]);
-                valid.push(full.valid[r * map.width + c]);
-            }
-        }
-        Ok(Some(GroundTruth {
-            width,
-            height,
-            index,
-            valid,
-        }))
+        let grid = EquirectGrid::new(height, width, phi_deg)?;
+        Ok(Some(sample_ground_truth(
+            &map,
+            hyps,
+            &grid,
+            &Rotation3::identity(),
+        )?))
     }
 }

@@ -4,7 +4,8 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use omnimvs_sweep::InvDepthHypotheses;
+use omnimvs_camera::nalgebra::Rotation3;
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use tiff::decoder::{Decoder, DecodingResult};
 use tiff::encoder::{Compression, DeflateLevel, TiffEncoder, colortype};
 
@@ -236,6 +237,42 @@ pub fn ground_truth_index(map: &InvDepthMap, hyps: &InvDepthHypotheses) -> Groun
     }
 }
 
+/// Ground truth on the rays of `grid`, turned by `source_from_grid` (identity for the map's
+/// own frame, a rig rotation for augmented training samples): the indices and the validity
+/// of [`ground_truth_index`], computed at the map's own resolution (the reference's rule),
+/// sampled at the nearest pixel along `source_from_grid * ray`. Rays outside the map's
+/// latitudes are invalid. Evaluation (`infer`, `sgm`, `eval`) and training use this one
+/// sampling, so their metrics agree.
+pub fn sample_ground_truth(
+    map: &InvDepthMap,
+    hyps: &InvDepthHypotheses,
+    grid: &EquirectGrid,
+    source_from_grid: &Rotation3<f64>,
+) -> Result<GroundTruth, DataError> {
+    let source = EquirectGrid::new(map.height, map.width, map.phi_deg())?;
+    let full = ground_truth_index(map, hyps);
+    let mut index = Vec::with_capacity(grid.len());
+    let mut valid = Vec::with_capacity(grid.len());
+    for ray in grid.rays() {
+        let (row, col) = source.position_of(&(source_from_grid * ray));
+        let row = row.round();
+        if !(row >= 0.0 && row <= (map.height - 1) as f64) {
+            index.push(0.0);
+            valid.push(false);
+            continue;
+        }
+        let at = row as usize * map.width + (col.round() as usize) % map.width;
+        index.push(full.index[at]);
+        valid.push(full.valid[at]);
+    }
+    Ok(GroundTruth {
+        width: grid.width,
+        height: grid.height,
+        index,
+        valid,
+    })
+}
+
 /// One pass of a 5-wide max (dilate) or min (erode) along rows or columns,
 /// treating pixels outside the image as `false` (scipy's `border_value=0`).
 fn pass(src: &[bool], w: usize, h: usize, horizontal: bool, dilate: bool) -> Vec<bool> {
@@ -307,6 +344,50 @@ mod tests {
         assert!(!gt.valid[15 * w + 10], "noise hole is invalid");
         assert!(gt.valid[15 * w + 11]);
         assert!((gt.index[15 * w + 11] - 0.5 / (2.0 / 191.0)).abs() < 1e-3);
+    }
+
+    #[test]
+    fn sampling_applies_the_rule_at_full_resolution() {
+        let hyps = InvDepthHypotheses::new(64, 0.5).unwrap();
+        let (w, h) = (640, 320);
+        let source = EquirectGrid::new(h, w, 90.0).unwrap();
+        let grid = EquirectGrid::new(32, 128, 45.0).unwrap();
+        let hit = |r: f64, c: f64| {
+            let (row, col) = source.position_of(&grid.ray(r, c));
+            (row.round() as usize, col.round() as usize % w)
+        };
+        let mut data = vec![0.5f32; w * h];
+        // A 12x12 patch of sky: wider than the 5x5 closing, so sky (valid) at full
+        // resolution, though a single pixel once sampled at the coarse grid.
+        let (pr, pc) = hit(10.0, 30.0);
+        for r in pr - 6..pr + 6 {
+            for c in pc - 6..pc + 6 {
+                data[r * w + c] = 0.0;
+            }
+        }
+        // One noisy zero: a hole, invalid.
+        let (nr, nc) = hit(20.0, 90.0);
+        data[nr * w + nc] = 0.0;
+        let map = InvDepthMap {
+            width: w,
+            height: h,
+            data,
+        };
+        let gt = sample_ground_truth(&map, &hyps, &grid, &Rotation3::identity()).unwrap();
+        assert_eq!((gt.height, gt.width), (32, 128));
+        assert!(gt.valid[10 * 128 + 30], "the sky patch stays valid");
+        assert_eq!(gt.index[10 * 128 + 30], 0.0);
+        assert!(!gt.valid[20 * 128 + 90], "the noise hole is invalid");
+        assert!(gt.valid[20 * 128 + 91]);
+        // A grid taller than the map: rows outside its latitudes are invalid.
+        let tall = EquirectGrid::new(64, 128, 90.0).unwrap();
+        let narrow = InvDepthMap {
+            width: w,
+            height: 160,
+            data: vec![0.5; w * 160],
+        };
+        let gt = sample_ground_truth(&narrow, &hyps, &tall, &Rotation3::identity()).unwrap();
+        assert!(!gt.valid[0] && gt.valid[32 * 128]);
     }
 
     #[test]

@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use nalgebra::Rotation3;
 use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::GroundTruth;
@@ -14,7 +13,6 @@ use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use omnimvs_net::NetConfig;
 use omnimvs_net::infer::Inference;
-use omnimvs_net::train::resample_ground_truth;
 use omnimvs_stereo::{SgmParams, SphericalStereo};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LutCache};
 use serde::Serialize;
@@ -133,15 +131,21 @@ pub fn run(args: &Args) -> Result<()> {
     let grid = EquirectGrid::new(height, width, phi_deg)?;
     let hyps: InvDepthHypotheses = ds.hypotheses(ndepth)?;
     let masks = ds.masks()?;
+    // The same ground truth as `infer` and `sgm` (and training): the reference's invalid rule
+    // at full resolution, sampled at the grid's rays.
+    let square_phi_deg = 180.0 * height as f64 / width as f64;
+    if (phi_deg - square_phi_deg).abs() > 1e-9 {
+        bail!(
+            "the evaluation grid {height}x{width} covers ±{phi_deg} degrees; expected square \
+             pixels (±{square_phi_deg} degrees), as the ground truth is sampled"
+        );
+    }
     let mut gts = Vec::new();
     for &f in &frames {
-        let map = ds.read_gt(f)?.context("ground truth vanished")?;
-        gts.push(resample_ground_truth(
-            &map,
-            &grid,
-            &Rotation3::identity(),
-            &hyps,
-        )?);
+        gts.push(
+            ds.ground_truth(f, height, width, &hyps)?
+                .context("ground truth vanished")?,
+        );
     }
     if let Some(out) = &args.out {
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;

@@ -8,7 +8,9 @@
 
 use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use omnimvs_camera::Rig;
-use omnimvs_data::gt::{GroundTruth, InvDepthMap, ground_truth_index};
+#[cfg(doc)]
+use omnimvs_data::gt::ground_truth_index;
+use omnimvs_data::gt::{GroundTruth, InvDepthMap, sample_ground_truth};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LookupTable, SphereSet};
 
 use super::rng::SplitMix64;
@@ -90,46 +92,27 @@ pub fn rotated_grids(
     )
 }
 
-/// Ground truth on the output `grid` of the rig frame rotated by `new_rig_from_rig`: each
-/// output ray `d` takes the nearest sample of `map` (an equirectangular inverse-depth map of
-/// the original frame, any size, `+-180 height / width` degrees) along `R^T d`; then the
-/// reference invalid rule of [`ground_truth_index`]. Rays that leave `map`'s latitude range
-/// are invalid.
+/// Ground truth on the output `grid` of the rig frame rotated by `new_rig_from_rig`: the
+/// reference invalid rule of [`ground_truth_index`] applied to `map` (an equirectangular
+/// inverse-depth map of the original frame, any size, `+-180 height / width` degrees) at its
+/// own resolution, then each output ray `d` takes the nearest sample along `R^T d`
+/// ([`sample_ground_truth`], the sampling evaluation uses too). Rays that leave `map`'s
+/// latitude range are invalid.
 ///
 /// # Errors
-/// [`NetError::Sweep`] for a degenerate map size.
+/// [`NetError::Data`] for a degenerate map size.
 pub fn resample_ground_truth(
     map: &InvDepthMap,
     grid: &EquirectGrid,
     new_rig_from_rig: &Rotation3<f64>,
     hypotheses: &InvDepthHypotheses,
 ) -> Result<GroundTruth, NetError> {
-    let source = EquirectGrid::new(map.height, map.width, map.phi_deg())?;
-    let rig_from_new = new_rig_from_rig.inverse();
-    let mut outside = Vec::with_capacity(grid.len());
-    let mut data = Vec::with_capacity(grid.len());
-    for ray in grid.rays() {
-        let (row, col) = source.position_of(&(rig_from_new * ray));
-        let row = row.round();
-        if !(row >= 0.0 && row <= (map.height - 1) as f64) {
-            outside.push(true);
-            data.push(0.0);
-            continue;
-        }
-        let col = (col.round() as usize) % map.width;
-        outside.push(false);
-        data.push(map.data[row as usize * map.width + col]);
-    }
-    let resampled = InvDepthMap {
-        width: grid.width,
-        height: grid.height,
-        data,
-    };
-    let mut gt = ground_truth_index(&resampled, hypotheses);
-    for (valid, outside) in gt.valid.iter_mut().zip(outside) {
-        *valid &= !outside;
-    }
-    Ok(gt)
+    Ok(sample_ground_truth(
+        map,
+        hypotheses,
+        grid,
+        &new_rig_from_rig.inverse(),
+    )?)
 }
 
 #[cfg(test)]
