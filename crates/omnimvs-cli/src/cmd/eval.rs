@@ -24,7 +24,8 @@ use crate::weights::{BUNDLED, Weights};
 /// E = |n_hat - n*| / N * 100 over valid pixels; the percentages of E > 1, 3, 5, the mean
 /// (MAE) and root mean square (RMS), averaged over frames. Every method runs at the same
 /// output grid and N (the network's, or --size/--ndepth); the ground truth (320x640,
-/// +-90 deg) is sampled at that grid's rays. Prints a Markdown table and writes
+/// +-90 deg), masked by the reference's invalid rule at full resolution, is sampled at that
+/// grid's rays, as in `infer`, `sgm` and training. Prints a Markdown table and writes
 /// OUT/eval.json and OUT/eval.md; with --pictures also colour-mapped inverse-depth PNGs of
 /// the first frame.
 #[derive(Debug, clap::Args)]
