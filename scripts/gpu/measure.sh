@@ -5,8 +5,9 @@
 #
 #   scripts/gpu/measure.sh env       # driver, GPU, PyTorch, Vulkan devices
 #   scripts/gpu/measure.sh data      # a synthetic dataset with exact ground truth (full size)
-#   scripts/gpu/measure.sh parity    # bundled model and a random paper-size network: every
-#                                    # backend against cpu (max index difference < 1e-3)
+#   scripts/gpu/measure.sh parity    # bundled model and a random paper-size network (its cost
+#                                    # sharpened x100): every backend against cpu (max index
+#                                    # difference < 1e-3)
 #   scripts/gpu/measure.sh bench     # paper-preset forward per stage and train step, each
 #                                    # backend, then PyTorch on the same GPU
 #   scripts/gpu/measure.sh train     # a few hundred paper-preset training steps
@@ -127,7 +128,7 @@ parity)
         logged "parity-bundled-$s" omnimvs_for "$b" parity "$data" --frame 1 --backends "cpu,$b" \
             --json "$out/parity-bundled-$s.json"
         logged "parity-random-$preset-$s" omnimvs_for "$b" parity "$data" --frame 1 \
-            --backends "cpu,$b" --weights random --preset "$preset" \
+            --backends "cpu,$b" --weights random --preset "$preset" --cost-scale 100 \
             --json "$out/parity-random-$preset-$s.json"
     done
     ;;

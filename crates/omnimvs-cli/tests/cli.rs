@@ -258,6 +258,27 @@ fn parity_compares_backends_on_a_real_frame() {
     // The bundled model gives a structured map on the real frame, not a flat one.
     assert!(v["reference_spread"].as_f64().unwrap() > 5.0, "{v}");
 
+    // A random network is nearly flat; --cost-scale sharpens it into a structured map.
+    let o = omnimvs(&[
+        "parity",
+        data.to_str().unwrap(),
+        "--backends",
+        "cpu",
+        "--weights",
+        "random",
+        "--preset",
+        "tiny",
+        "--cost-scale",
+        "300",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(v["reference_spread"].as_f64().unwrap() > 2.0, "{v}");
+    assert_eq!(v["cost_scale"], 300.0);
+
     // A tolerance no real difference can meet (a negative one) must fail the check.
     let o = omnimvs(&[
         "parity",

@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use burn::module::Module;
+use burn::module::{Module, Param};
 use burn::tensor::{Device, Tensor};
 
 use super::cost::CostCompute;
@@ -324,5 +324,18 @@ impl OmniMvsNet {
             cost_computes: self.cost_computes.fold_batch_norm(),
             config: self.config,
         }
+    }
+
+    /// Multiplies the final cost (3Ddeconv5's weights and bias) by `factor`, the inverse of a
+    /// softmax temperature. A randomly initialised network has nearly equal costs, so its
+    /// softargmin is almost flat and hides kernel differences; a sharpened one makes a
+    /// full-size parity check between backends sensitive (`omnimvs parity --cost-scale`).
+    pub fn scale_cost(mut self, factor: f32) -> Self {
+        let conv = &mut self.cost_computes.deconv5.conv;
+        conv.weight = Param::from_tensor(conv.weight.val().mul_scalar(factor));
+        if let Some(bias) = conv.bias.take() {
+            conv.bias = Some(Param::from_tensor(bias.val().mul_scalar(factor)));
+        }
+        self
     }
 }
