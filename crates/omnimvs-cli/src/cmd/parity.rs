@@ -80,16 +80,18 @@ pub fn run(args: &Args) -> Result<()> {
         .with_context(|| format!("frame {}", args.frame))?;
     // Random weights are drawn once, on the CPU, and every backend loads that file.
     let scratch = tempdir_for_random(&args.weights)?;
-    let weights = match &scratch {
-        Some(dir) => {
-            let net = Weights::Random.load(&args.preset, &Backend::Cpu.device()?)?;
-            let path = dir.join("random.safetensors");
-            omnimvs_net::weights::save(&net, &path)?;
-            Weights::File(path)
-        }
-        None => args.weights.clone(),
-    };
-    let result = compare(args, &ds, &images, &weights);
+    let result = (|| {
+        let weights = match &scratch {
+            Some(dir) => {
+                let net = Weights::Random.load(&args.preset, &Backend::Cpu.device()?)?;
+                let path = dir.join("random.safetensors");
+                omnimvs_net::weights::save(&net, &path)?;
+                Weights::File(path)
+            }
+            None => args.weights.clone(),
+        };
+        compare(args, &ds, &images, &weights)
+    })();
     if let Some(dir) = scratch {
         let _ = std::fs::remove_dir_all(dir);
     }
