@@ -137,6 +137,25 @@ fn bad_input_gives_clear_errors_and_non_zero_exit() {
             vec!["lut", itbt, "--out", "/nonexistent/dir/lt.hwd"],
             "/nonexistent/dir/lt.hwd",
         ),
+        (vec!["bench", "--sweep", "sideways"], "auto, host, device"),
+        (vec!["bench", "--preset", "huge"], "huge"),
+        (
+            vec!["parity", itbt, "--backends", "cpu", "--frame", "9"],
+            "frame 9",
+        ),
+        (
+            vec![
+                "infer",
+                itbt,
+                "--frames",
+                "1",
+                "--out",
+                out,
+                "--weights",
+                "/nonexistent/w.safetensors",
+            ],
+            "/nonexistent/w",
+        ),
     ];
     for (args, needle) in cases {
         let o = omnimvs(&args);

@@ -38,13 +38,23 @@ pub struct Args {
     /// convolutions.
     #[arg(long)]
     pub no_fold: bool,
-    /// Sweep on the host (`host`), on the device (`device`) or the backend's
-    /// best (`auto`: host on CPU backends, device on GPUs).
-    #[arg(long, default_value = "auto")]
-    pub sweep: String,
+    /// Where the sweep runs: the backend's best (host on CPU backends, device on GPUs).
+    #[arg(long, value_enum, default_value_t = SweepPlace::Auto)]
+    pub sweep: SweepPlace,
     /// Also write the measurements as JSON to this file.
     #[arg(long, value_parser = parse_output_file)]
     pub json: Option<PathBuf>,
+}
+
+/// Where the benchmark's sweep runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SweepPlace {
+    /// Host on CPU backends, device on GPUs.
+    Auto,
+    /// The host kernel that skips invalid samples (features go to host memory and back).
+    Host,
+    /// A gather on the device through the lookup table's taps.
+    Device,
 }
 
 #[derive(Serialize)]
@@ -60,11 +70,10 @@ pub fn run(args: &Args) -> Result<()> {
     let backend = args.backend;
     let device = backend.device()?;
     let config = NetConfig::preset(&args.preset)?;
-    let device_sweep = match args.sweep.as_str() {
-        "auto" => backend.is_gpu(),
-        "host" => false,
-        "device" => true,
-        other => anyhow::bail!("--sweep: expected host, device or auto, got `{other}`"),
+    let device_sweep = match args.sweep {
+        SweepPlace::Auto => backend.is_gpu(),
+        SweepPlace::Host => false,
+        SweepPlace::Device => true,
     };
     println!(
         "preset {} (CH {}, N {}, {}x{} output, {} cameras of {}x{}), backend {backend}, sweep on the {}",
