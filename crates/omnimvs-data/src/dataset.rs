@@ -189,43 +189,43 @@ impl Dataset {
         self.gt_path(frame).map(|p| read_inv_depth(&p)).transpose()
     }
 
-    /// The ground truth of `frame` as indices for an output of `height x
-    /// width` and `hyps`, masked as for evaluation. At the ground truth's own
-    /// width the middle rows are cropped, exactly as the reference does; at
-    /// another width (a smaller network grid, say) the indices and the
-    /// validity, computed at full resolution, are sampled (nearest pixel) at
-    /// the rays of the `height x width` grid, which covers `±180*height/width`
-    /// degrees like every equirectangular output here.
+    /// The ground truth of `frame` as indices on the rays of the output `grid`, for `hyps`,
+    /// masked as for evaluation. A grid at the ground truth's own width with square pixels
+    /// (`phi_deg = 180 height / width`) gets the middle rows cropped, exactly as the
+    /// reference does; any other grid (a smaller network grid, another latitude range)
+    /// samples the indices and the validity, computed at full resolution, at its rays
+    /// ([`sample_ground_truth`]).
     ///
     /// # Errors
-    /// An unreadable file, or an output grid outside the map's latitudes.
+    /// An unreadable file, or a grid that reaches beyond the map's latitudes.
     pub fn ground_truth(
         &self,
         frame: u32,
-        height: usize,
-        width: usize,
+        grid: &EquirectGrid,
         hyps: &InvDepthHypotheses,
     ) -> Result<Option<GroundTruth>, DataError> {
         let Some(map) = self.read_gt(frame)? else {
             return Ok(None);
         };
-        if map.width == width {
-            let cropped = map.crop_rows_centered(height)?;
-            return Ok(Some(ground_truth_index(&cropped, hyps)));
-        }
-        let phi_deg = 180.0 * height as f64 / width as f64;
-        if phi_deg > map.phi_deg() + 1e-9 {
+        if grid.phi_deg > map.phi_deg() + 1e-9 {
             return Err(DataError::mismatch(
                 format!("frame {frame} ground-truth latitude range"),
-                format!("at least ±{phi_deg} degrees (a {height}x{width} output)"),
+                format!(
+                    "at least ±{} degrees (a {}x{} output)",
+                    grid.phi_deg, grid.height, grid.width
+                ),
                 format!("±{} degrees", map.phi_deg()),
             ));
         }
-        let grid = EquirectGrid::new(height, width, phi_deg)?;
+        let square_phi_deg = 180.0 * grid.height as f64 / grid.width as f64;
+        if map.width == grid.width && (grid.phi_deg - square_phi_deg).abs() < 1e-9 {
+            let cropped = map.crop_rows_centered(grid.height)?;
+            return Ok(Some(ground_truth_index(&cropped, hyps)));
+        }
         Ok(Some(sample_ground_truth(
             &map,
             hyps,
-            &grid,
+            grid,
             &Rotation3::identity(),
         )?))
     }

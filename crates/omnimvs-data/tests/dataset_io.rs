@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use omnimvs_data::gt::{GT_WIDTH, InvDepthMap, read_inv_depth, write_inv_depth_tiff};
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::{DataError, Dataset, DatasetConfig, FrameRange, write_config_yaml};
+use omnimvs_sweep::EquirectGrid;
 
 fn samples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/omnimvs-samples")
@@ -225,15 +226,34 @@ fn dataset_ground_truth_is_cropped_and_indexed() {
     write_inv_depth_tiff(&dir.path().join("omnidepth_gt_640/00002.tiff"), &map).unwrap();
     assert!(ds.gt_path(1).is_none());
     let hyps = ds.hypotheses(192).unwrap();
-    let gt = ds.ground_truth(2, 160, 640, &hyps).unwrap().unwrap();
+    let grid = |h, w, phi_deg| EquirectGrid::new(h, w, phi_deg).unwrap();
+    let gt = ds
+        .ground_truth(2, &grid(160, 640, 45.0), &hyps)
+        .unwrap()
+        .unwrap();
     assert_eq!(gt.index.len(), 160 * 640);
     // Row 80 of the crop is row 160 of the full map: inside the band.
     let n = gt.index[80 * 640 + 5];
     assert!((f64::from(n) - hyps.index(0.5)).abs() < 1e-3);
     // A smaller grid samples the full-resolution ground truth at its rays.
-    let small = ds.ground_truth(2, 40, 160, &hyps).unwrap().unwrap();
+    let small = ds
+        .ground_truth(2, &grid(40, 160, 45.0), &hyps)
+        .unwrap()
+        .unwrap();
     assert_eq!(small.index.len(), 40 * 160);
     assert_eq!(small.index[20 * 160 + 3], gt.index[80 * 640 + 12]);
+    // Another latitude range at the map's own width is sampled at its rays, not cropped:
+    // row 0 of a +-30 degree grid lies at latitude -30, row 106 of the +-90 degree map.
+    let full = ds
+        .ground_truth(2, &grid(320, 640, 90.0), &hyps)
+        .unwrap()
+        .unwrap();
+    let narrow = ds
+        .ground_truth(2, &grid(160, 640, 30.0), &hyps)
+        .unwrap()
+        .unwrap();
+    assert_eq!(narrow.index[5], full.index[106 * 640 + 5]);
+    assert_ne!(narrow.index[5], gt.index[5]);
     // A grid wider in latitude than the map cannot be served.
     let map160 = InvDepthMap {
         width: 640,
@@ -241,5 +261,5 @@ fn dataset_ground_truth_is_cropped_and_indexed() {
         data: vec![0.5; 640 * 160],
     };
     write_inv_depth_tiff(&dir.path().join("omnidepth_gt_640/00003.tiff"), &map160).unwrap();
-    assert!(ds.ground_truth(3, 160, 320, &hyps).is_err());
+    assert!(ds.ground_truth(3, &grid(160, 320, 90.0), &hyps).is_err());
 }

@@ -20,9 +20,9 @@ use crate::weights::Weights;
 /// Run the pipeline end to end on a default that needs nothing but this
 /// repository: render a few frames of a synthetic `things` scene with exact
 /// ground truth for the published 4-camera rig, estimate 360-degree depth with
-/// the classical method (ZNCC + SGM) and with the bundled network; print the paper's metrics table; write pictures
-/// (inputs, panorama, ground truth, estimates, error maps) and a PLY point
-/// cloud. If the reference samples are beside the repository
+/// the classical method (ZNCC + SGM) and with the bundled network; print the
+/// paper's metrics table; write pictures (inputs, panorama, ground truth,
+/// estimates, error maps) and a PLY point cloud. If the reference samples are beside the repository
 /// (../shared/data/omnimvs-samples), the real itbt_sample frame 1 is
 /// processed as well.
 #[derive(Debug, clap::Args)]
@@ -92,7 +92,7 @@ pub fn run(args: &Args) -> Result<()> {
         let index = read_inv_depth(&sgm_dir.join(format!("{frame:05}_index.tiff")))?;
         let inv = read_inv_depth(&sgm_dir.join(format!("{frame:05}.tiff")))?;
         let gt = ds
-            .ground_truth(frame, grid.height, grid.width, &hyps)?
+            .ground_truth(frame, &grid, &hyps)?
             .context("the synthetic frame has no ground truth")?;
         frame_metrics_sgm.push(frame_metrics(&index.data, &gt, args.ndepth)?);
         let pano = compose_panorama(

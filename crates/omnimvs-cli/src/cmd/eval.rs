@@ -134,17 +134,10 @@ pub fn run(args: &Args) -> Result<()> {
     let masks = ds.masks()?;
     // The same ground truth as `infer` and `sgm` (and training): the reference's invalid rule
     // at full resolution, sampled at the grid's rays.
-    let square_phi_deg = 180.0 * height as f64 / width as f64;
-    if (phi_deg - square_phi_deg).abs() > 1e-9 {
-        bail!(
-            "the evaluation grid {height}x{width} covers ±{phi_deg} degrees; expected square \
-             pixels (±{square_phi_deg} degrees), as the ground truth is sampled"
-        );
-    }
     let mut gts = Vec::new();
     for &f in &frames {
         gts.push(
-            ds.ground_truth(f, height, width, &hyps)?
+            ds.ground_truth(f, &grid, &hyps)?
                 .context("ground truth vanished")?,
         );
     }

@@ -149,7 +149,7 @@ fn write_frame(
     write_png_u8(&out(".png"), w, h, 3, &depth_rgb)?;
 
     let ndepth = inference.net.config.num_invdepth;
-    let gt = ds.ground_truth(frame, h, w, &inference.hypotheses)?;
+    let gt = ds.ground_truth(frame, &inference.grid, &inference.hypotheses)?;
     let metrics = gt
         .as_ref()
         .map(|gt| frame_metrics(&result.index, gt, ndepth))

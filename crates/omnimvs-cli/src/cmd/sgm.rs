@@ -165,7 +165,7 @@ pub fn run(args: &Args) -> Result<()> {
             .map(|&c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
             .collect();
         write_png_u8(&path("_confidence.png"), w, h, 1, &gray)?;
-        let metrics = match ds.ground_truth(frame, h, w, &hyps) {
+        let metrics = match ds.ground_truth(frame, &grid, &hyps) {
             Ok(Some(gt)) => Some(frame_metrics(&out.index.index, &gt, args.ndepth)?),
             Ok(None) => None,
             Err(e) => {
