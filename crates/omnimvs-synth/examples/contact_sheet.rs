@@ -4,16 +4,19 @@
 //! ```text
 //! cargo run --release -p omnimvs-synth --example contact_sheet -- docs/images 2 3 1
 //! ```
-//! (output folder, `things` frame, `house` frame, samples per pixel; seed 0).
+//! (output folder, `things` frame, `house` frame, samples per pixel, and
+//! optionally `hard`, which writes `synth_things_hard.png` and
+//! `synth_house_hard.png` with the camera effects; seed 0).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use omnimvs_sweep::EquirectGrid;
+use omnimvs_synth::camera_effects::{CameraEffects, apply_all};
 use omnimvs_synth::contact::contact_sheet;
 use omnimvs_synth::dataset::{GT_HEIGHT, GT_PHI_DEG, GT_WIDTH, render_scene};
 use omnimvs_synth::rig::{preset_rig, rig_radius_m};
-use omnimvs_synth::{GenParams, SceneKind, generate};
+use omnimvs_synth::{Difficulty, GenParams, SceneKind, generate};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -23,7 +26,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let spp: u32 = args.get(3).map_or(Ok(1), |s| s.parse())?;
     std::fs::create_dir_all(&out)?;
     let source = preset_rig()?;
-    let params = GenParams::new(source.min_depth_m, rig_radius_m(&source.rig));
+    let mut params = GenParams::new(source.min_depth_m, rig_radius_m(&source.rig));
+    params.difficulty = args
+        .get(4)
+        .map_or(Ok(Difficulty::Standard), |s| s.parse())?;
     let grid = EquirectGrid::new(GT_HEIGHT, GT_WIDTH, GT_PHI_DEG)?;
     for (kind, frame) in [
         (SceneKind::Things, things_frame),
@@ -31,7 +37,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ] {
         let t0 = Instant::now();
         let scene = generate(kind, 0, frame, &params)?;
-        let (images, inv_depth) = render_scene(&scene, &[], &source.rig, spp, &grid)?;
+        let (mut images, inv_depth) = render_scene(&scene, &[], &source.rig, spp, &grid)?;
+        if params.difficulty.is_hard() {
+            let effects = CameraEffects::draw(0, frame, source.rig.cameras.len());
+            apply_all(&effects, &source.rig.cameras, &mut images)?;
+        }
         let elapsed = t0.elapsed();
         let views: Vec<(&[u8], usize, usize)> = images
             .iter()
@@ -52,7 +62,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             GT_HEIGHT,
             1.0 / source.min_depth_m,
         );
-        let path = out.join(format!("synth_{}.png", kind.name()));
+        let suffix = if params.difficulty.is_hard() {
+            "_hard"
+        } else {
+            ""
+        };
+        let path = out.join(format!("synth_{}{suffix}.png", kind.name()));
         omnimvs_data::image_io::write_png_u8(&path, sheet.width, sheet.height, 3, &sheet.data)?;
         println!(
             "{}: frame {frame}, {} objects, {}, {spp} spp, rendered in {:.2} s -> {}",

@@ -4,17 +4,19 @@
 //! the wall time on 2 free cores is about CPU / 2 (rows render in parallel).
 //!
 //! ```text
-//! cargo run --release -p omnimvs-synth --example frame_timing -- 3 1,2,4
+//! cargo run --release -p omnimvs-synth --example frame_timing -- 3 1,2,4 standard,hard
 //! ```
-//! (frames per setting, samples per pixel list). Linux only (reads
+//! (frames per setting, samples per pixel list, difficulties; `hard` frames
+//! include the camera effects on the images). Linux only (reads
 //! `/proc/self/stat` for the CPU time).
 
 use std::time::Instant;
 
 use omnimvs_sweep::EquirectGrid;
+use omnimvs_synth::camera_effects::{CameraEffects, apply_all};
 use omnimvs_synth::dataset::{GT_HEIGHT, GT_PHI_DEG, GT_WIDTH, render_scene};
 use omnimvs_synth::rig::{preset_rig, rig_radius_m};
-use omnimvs_synth::{GenParams, SceneKind, generate};
+use omnimvs_synth::{Difficulty, GenParams, SceneKind, generate};
 
 /// User + system CPU seconds of this process so far.
 fn cpu_seconds() -> f64 {
@@ -36,25 +38,40 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .split(',')
         .map(str::parse)
         .collect::<Result<_, _>>()?;
+    let difficulties: Vec<Difficulty> = args
+        .get(2)
+        .map_or("standard", String::as_str)
+        .split(',')
+        .map(str::parse)
+        .collect::<Result<_, _>>()?;
     let source = preset_rig()?;
-    let params = GenParams::new(source.min_depth_m, rig_radius_m(&source.rig));
     let grid = EquirectGrid::new(GT_HEIGHT, GT_WIDTH, GT_PHI_DEG)?;
     println!("threads: {}", rayon::current_num_threads());
-    println!("kind    spp  wall s/frame  cpu s/frame  cpu/2 (2-core estimate)");
-    for kind in [SceneKind::Things, SceneKind::House] {
-        for &spp in &spps {
-            let (t0, c0) = (Instant::now(), cpu_seconds());
-            for frame in 1..=frames {
-                let scene = generate(kind, 0, frame, &params)?;
-                std::hint::black_box(render_scene(&scene, &[], &source.rig, spp, &grid)?);
+    println!("kind    difficulty  spp  wall s/frame  cpu s/frame  cpu/2 (2-core estimate)");
+    for &difficulty in &difficulties {
+        let mut params = GenParams::new(source.min_depth_m, rig_radius_m(&source.rig));
+        params.difficulty = difficulty;
+        for kind in [SceneKind::Things, SceneKind::House] {
+            for &spp in &spps {
+                let (t0, c0) = (Instant::now(), cpu_seconds());
+                for frame in 1..=frames {
+                    let scene = generate(kind, 0, frame, &params)?;
+                    let (mut images, gt) = render_scene(&scene, &[], &source.rig, spp, &grid)?;
+                    if difficulty.is_hard() {
+                        let effects = CameraEffects::draw(0, frame, source.rig.cameras.len());
+                        apply_all(&effects, &source.rig.cameras, &mut images)?;
+                    }
+                    std::hint::black_box((images, gt));
+                }
+                let wall = t0.elapsed().as_secs_f64() / f64::from(frames);
+                let cpu = (cpu_seconds() - c0) / f64::from(frames);
+                println!(
+                    "{:7} {:10}  {spp:3}  {wall:12.3}  {cpu:11.3}  {:.3}",
+                    kind.name(),
+                    difficulty.name(),
+                    cpu / 2.0
+                );
             }
-            let wall = t0.elapsed().as_secs_f64() / f64::from(frames);
-            let cpu = (cpu_seconds() - c0) / f64::from(frames);
-            println!(
-                "{:7} {spp:3}  {wall:12.3}  {cpu:11.3}  {:.3}",
-                kind.name(),
-                cpu / 2.0
-            );
         }
     }
     Ok(())

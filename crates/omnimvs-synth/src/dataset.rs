@@ -20,10 +20,13 @@ use omnimvs_sweep::EquirectGrid;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::camera_effects::{CameraEffects, apply_all};
 use crate::mesh::{TriMesh, load_mesh};
 use crate::rig::{RigSource, rig_radius_m};
 use crate::scene::{SceneKind, SceneSpec, generator_name};
-use crate::{GenParams, SynthError, Tracer, generate, render_fisheye, render_inverse_depth};
+use crate::{
+    Difficulty, GenParams, SynthError, Tracer, generate, render_fisheye, render_inverse_depth,
+};
 
 /// Ground-truth grid of the published datasets: 320 x 640, +-90 degrees.
 pub const GT_HEIGHT: usize = 320;
@@ -51,6 +54,36 @@ pub struct SynthSettings {
     /// Image size of every camera, `[height, width]`.
     pub image_size: Vec<[u32; 2]>,
     pub min_depth_m: f64,
+    /// Scene and camera difficulty; a `synth.json` written before this
+    /// option existed reads as `standard`.
+    #[serde(default)]
+    pub difficulty: Difficulty,
+}
+
+/// What a dataset is made of, besides the rig and the frames: the choices of
+/// `omnimvs synth`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthOptions {
+    pub kind: SceneKind,
+    pub seed: u64,
+    /// Samples per pixel of the fisheye images (1 to 4096).
+    pub spp: u32,
+    /// User mesh files (OBJ/PLY) for `things` scenes.
+    pub meshes: Vec<String>,
+    pub difficulty: Difficulty,
+}
+
+impl SynthOptions {
+    /// `kind` and `seed`, 1 sample per pixel, no user mesh, `standard`.
+    pub fn new(kind: SceneKind, seed: u64) -> Self {
+        Self {
+            kind,
+            seed,
+            spp: 1,
+            meshes: Vec::new(),
+            difficulty: Difficulty::Standard,
+        }
+    }
 }
 
 /// Which part of the frames a machine renders: frames `k` (0-based position
@@ -181,14 +214,10 @@ fn io<'a>(path: &'a Path, action: &'static str) -> impl FnOnce(std::io::Error) -
 }
 
 impl DatasetWriter {
-    /// Prepares `out`: creates the folders, writes `config.yaml` (the rig,
-    /// min depth and the whole frame range) and `synth.json`, or checks that
-    /// an existing `synth.json` has the same settings (resume).
+    /// [`Self::create_with`] at the `standard` difficulty.
     ///
     /// # Errors
-    /// [`SynthError`] naming the folder or file: not creatable or writable,
-    /// a user mesh that does not load, settings that differ from those of
-    /// the dataset already there.
+    /// As [`Self::create_with`].
     pub fn create(
         out: &Path,
         rig: &RigSource,
@@ -198,6 +227,35 @@ impl DatasetWriter {
         meshes: &[String],
         frames: &FrameRange,
     ) -> Result<Self, SynthError> {
+        let options = SynthOptions {
+            spp,
+            meshes: meshes.to_vec(),
+            ..SynthOptions::new(kind, seed)
+        };
+        Self::create_with(out, rig, &options, frames)
+    }
+
+    /// Prepares `out`: creates the folders, writes `config.yaml` (the rig,
+    /// min depth and the whole frame range) and `synth.json`, or checks that
+    /// an existing `synth.json` has the same settings (resume).
+    ///
+    /// # Errors
+    /// [`SynthError`] naming the folder or file: not creatable or writable,
+    /// a user mesh that does not load, settings that differ from those of
+    /// the dataset already there.
+    pub fn create_with(
+        out: &Path,
+        rig: &RigSource,
+        options: &SynthOptions,
+        frames: &FrameRange,
+    ) -> Result<Self, SynthError> {
+        let SynthOptions {
+            kind,
+            seed,
+            spp,
+            ref meshes,
+            difficulty,
+        } = *options;
         if kind == SceneKind::Custom {
             return Err(SynthError::invalid("--kind", "expected things or house"));
         }
@@ -213,6 +271,7 @@ impl DatasetWriter {
             .collect::<Result<Vec<_>, _>>()?;
         let mut params = GenParams::new(rig.min_depth_m, rig_radius_m(&rig.rig));
         params.meshes = meshes.to_vec();
+        params.difficulty = difficulty;
         let settings = SynthSettings {
             generator: generator_name(),
             kind,
@@ -227,6 +286,7 @@ impl DatasetWriter {
                 .map(|c| [c.model.height(), c.model.width()])
                 .collect(),
             min_depth_m: rig.min_depth_m,
+            difficulty,
         };
         std::fs::create_dir_all(out).map_err(io(out, "cannot create the output folder"))?;
         for dir in rig
@@ -307,20 +367,29 @@ impl DatasetWriter {
         self.frame_paths(frame).all().all(|p| p.is_file())
     }
 
-    /// Generates and renders one frame in memory.
+    /// Generates and renders one frame in memory. At the `hard` difficulty
+    /// the images then go through the frame's real-camera effects (recorded
+    /// in the scene); the ground truth never does.
     ///
     /// # Errors
     /// [`SynthError`] if the scene cannot be built.
     pub fn render_frame(&self, frame: u32) -> Result<Frame, SynthError> {
-        let scene = generate(self.settings.kind, self.settings.seed, frame, &self.params)?;
-        render_scene(
+        let mut scene = generate(self.settings.kind, self.settings.seed, frame, &self.params)?;
+        if self.settings.difficulty.is_hard() {
+            scene.camera_effects =
+                CameraEffects::draw(self.settings.seed, frame, self.rig.cameras.len());
+        }
+        let (mut images, inv_depth) = render_scene(
             &scene,
             &self.meshes,
             &self.rig,
             self.settings.spp,
             &self.grid,
-        )
-        .map(|(images, inv_depth)| Frame {
+        )?;
+        if !scene.camera_effects.is_empty() {
+            apply_all(&scene.camera_effects, &self.rig.cameras, &mut images)?;
+        }
+        Ok(Frame {
             scene,
             images,
             inv_depth,
@@ -387,6 +456,13 @@ fn describe_difference(old: &SynthSettings, new: &SynthSettings) -> String {
     }
     if old.seed != new.seed {
         d.push(format!("seed {} there, {} now", old.seed, new.seed));
+    }
+    if old.difficulty != new.difficulty {
+        d.push(format!(
+            "difficulty {} there, {} now",
+            old.difficulty.name(),
+            new.difficulty.name()
+        ));
     }
     if old.spp != new.spp {
         d.push(format!("spp {} there, {} now", old.spp, new.spp));

@@ -5,7 +5,7 @@ use nalgebra::{Matrix3, Point3, Vector3};
 
 use crate::rng::Rng;
 use crate::scene::{LightSpec, Placement, SceneKind, SceneSpec, SkySpec};
-use crate::{SynthError, house, things};
+use crate::{Difficulty, SynthError, house, things};
 
 /// Parameters of the scene generators.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,6 +19,8 @@ pub struct GenParams {
     pub num_objects: usize,
     /// User mesh files (OBJ/PLY) that `things` scenes may use.
     pub meshes: Vec<String>,
+    /// How hard the scenes are (textures, shapes, lighting).
+    pub difficulty: Difficulty,
 }
 
 impl GenParams {
@@ -29,6 +31,7 @@ impl GenParams {
             rig_radius_m,
             num_objects: 64,
             meshes: Vec::new(),
+            difficulty: Difficulty::Standard,
         }
     }
 
@@ -120,6 +123,7 @@ pub fn random_light(
             directional: true,
             ambient,
             diffuse,
+            range_m: None,
         };
     }
     let position = match room {
@@ -138,5 +142,55 @@ pub fn random_light(
         directional: false,
         ambient,
         diffuse,
+        range_m: None,
     }
+}
+
+/// The lights of a `hard` scene: darker (little ambient light) and uneven:
+/// the main light ([`random_light`]'s position) and 1-3 more point lights,
+/// every point light with a strong falloff (range 1-6 m). In a room
+/// (`(placement, half extents)`) the extra lights are anywhere inside it;
+/// under a sky the sun stays and 0-2 point lights hang among the objects,
+/// `near_m..far_m` from the rig.
+pub fn random_hard_lights(
+    rng: &mut Rng,
+    sky: Option<&SkySpec>,
+    room: Option<(&Placement, Vector3<f64>)>,
+    near_m: f64,
+    far_m: f64,
+) -> (LightSpec, Vec<LightSpec>) {
+    let mut main = random_light(rng, sky, room);
+    main.ambient = rng.range(0.02, 0.12) as f32;
+    main.diffuse = rng.range(0.7, 1.4) as f32;
+    if !main.directional {
+        main.range_m = Some(rng.log_range(1.5, 6.0));
+    }
+    let count = if sky.is_some() {
+        rng.below(3)
+    } else {
+        1 + rng.below(3)
+    };
+    let extra = (0..count)
+        .map(|_| {
+            let position = match room {
+                Some((placement, half)) => {
+                    let local = Vector3::new(
+                        rng.range(-0.9, 0.9) * half.x,
+                        rng.range(-0.9, 0.9) * half.y,
+                        rng.range(-0.9, 0.9) * half.z,
+                    );
+                    placement.isometry() * Point3::from(local)
+                }
+                None => Point3::from(rng.marsaglia() * rng.range(near_m, far_m.max(near_m))),
+            };
+            LightSpec {
+                position_m: position.coords.into(),
+                directional: false,
+                ambient: 0.0,
+                diffuse: rng.range(0.3, 1.2) as f32,
+                range_m: Some(rng.log_range(1.0, 5.0)),
+            }
+        })
+        .collect();
+    (main, extra)
 }

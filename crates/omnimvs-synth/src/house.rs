@@ -562,6 +562,12 @@ pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
         directional: false,
         ambient: rng.range(0.35, 0.5) as f32,
         diffuse: rng.range(0.45, 0.65) as f32,
+        range_m: None,
+    };
+    let (light, extra_lights) = if params.difficulty.is_hard() {
+        hard_lights(&mut rng, light, &xs, &zs, height)
+    } else {
+        (light, Vec::new())
     };
     SceneSpec {
         generator: generator_name(),
@@ -573,5 +579,46 @@ pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
         sky: Some(sky),
         light,
         meshes: Vec::new(),
+        extra_lights,
+        camera_effects: Vec::new(),
     }
+}
+
+/// The lights of a `hard` house: the ceiling light of the rig's room dimmer
+/// in ambient and falling off with distance, and 1-2 more ceiling lights in
+/// random rooms, so that rooms and corners differ in brightness.
+fn hard_lights(
+    rng: &mut Rng,
+    mut main: LightSpec,
+    xs: &[f64],
+    zs: &[f64],
+    height: f64,
+) -> (LightSpec, Vec<LightSpec>) {
+    main.ambient = rng.range(0.1, 0.25) as f32;
+    main.diffuse = rng.range(0.7, 1.1) as f32;
+    main.range_m = Some(rng.range(2.5, 6.0));
+    let count = 1 + rng.below(2);
+    let extra = (0..count)
+        .map(|_| {
+            let (i, j) = (
+                rng.below(xs.len().saturating_sub(1).max(1)),
+                rng.below(zs.len().saturating_sub(1).max(1)),
+            );
+            let at = |v: &[f64], k: usize, rng: &mut Rng| {
+                let (a, b) = (
+                    v.get(k).copied().unwrap_or(0.0),
+                    v.get(k + 1).copied().unwrap_or(0.0),
+                );
+                rng.range(a.min(b) + 0.3, (a.max(b) - 0.3).max(a.min(b) + 0.3))
+            };
+            LightSpec {
+                position_m: [at(xs, i, rng), -height + 0.3, at(zs, j, rng)],
+                directional: false,
+                ambient: 0.0,
+                diffuse: rng.range(0.4, 0.9) as f32,
+                range_m: Some(rng.range(2.0, 5.0)),
+            }
+        })
+        .collect();
+    (main, extra)
 }

@@ -12,8 +12,10 @@
 //! rig placed in it by [`SceneSpec::world_from_rig`]. Distances in metres,
 //! inverse depths in 1/m.
 
+pub mod camera_effects;
 pub mod contact;
 pub mod dataset;
+mod difficulty;
 mod error;
 pub mod generate;
 pub mod house;
@@ -28,7 +30,11 @@ pub mod texture;
 pub mod things;
 mod tracer;
 
-pub use dataset::{DatasetWriter, Frame, FrameEvent, Shard, SynthSettings, parse_frames};
+pub use camera_effects::CameraEffects;
+pub use dataset::{
+    DatasetWriter, Frame, FrameEvent, Shard, SynthOptions, SynthSettings, parse_frames,
+};
+pub use difficulty::Difficulty;
 pub use error::SynthError;
 pub use generate::{GenParams, generate};
 pub use render::{render_fisheye, render_fisheye_into, render_inverse_depth};

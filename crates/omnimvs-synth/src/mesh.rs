@@ -236,6 +236,119 @@ pub fn extrusion(seed: u64, corners: u32, layers: u32, twist: f32, taper: f32) -
     m
 }
 
+/// An axis-aligned box from `lo` to `hi` (12 triangles), added to `m`.
+fn add_box(m: &mut TriMesh, lo: Vec3A, hi: Vec3A) {
+    let first = m.positions.len() as u32;
+    for k in 0..8u32 {
+        m.push(Vec3A::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        ));
+    }
+    // Two triangles per face, corners by their bit patterns (x = 1, y = 2, z = 4).
+    for [a, b, c, d] in [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ] {
+        m.tri(first + a, first + c, first + b);
+        m.tri(first + a, first + d, first + c);
+    }
+}
+
+/// A thick-walled open pipe around the y axis: outer radius 1, inner radius
+/// `inner` (in `(0, 1)`), `y` in `[-1, 1]`, closed by two flat rings. Seen
+/// from an open end, a concave surface.
+pub fn tube(segments: u32, inner: f32) -> TriMesh {
+    let n = segments.max(3);
+    let inner = inner.clamp(0.05, 0.99);
+    let mut m = TriMesh::default();
+    // Rings: outer top, outer bottom, inner top, inner bottom.
+    for (r, y) in [(1.0, -1.0), (1.0, 1.0), (inner, -1.0), (inner, 1.0)] {
+        for i in 0..n {
+            let a = i as f32 / n as f32 * std::f32::consts::TAU;
+            m.push(Vec3A::new(r * a.cos(), y, r * a.sin()));
+        }
+    }
+    let (ot, ob, it, ib) = (0, n, 2 * n, 3 * n);
+    for i in 0..n {
+        let j = (i + 1) % n;
+        // Outward normals: the walls' quads are wound from p to q, flipped
+        // where that would face into the solid.
+        for (p, q, flip) in [
+            (ot, ob, true),
+            (it, ib, false),
+            (ot, it, false),
+            (ob, ib, true),
+        ] {
+            if flip {
+                m.tri(p + i, q + j, p + j);
+                m.tri(p + i, q + i, q + j);
+            } else {
+                m.tri(p + i, p + j, q + j);
+                m.tri(p + i, q + j, q + i);
+            }
+        }
+    }
+    m
+}
+
+/// A flat grid in the xz plane: a frame of bars (width `bar`, in unit-space
+/// units) around `cells_x x cells_z` square holes, thickness `2 * half_y`
+/// along y. One cell is a picture frame, several a plate with holes.
+pub fn grid(cells_x: u32, cells_z: u32, bar: f32, half_y: f32) -> TriMesh {
+    let (nx, nz) = (cells_x.clamp(1, 64), cells_z.clamp(1, 64));
+    let bar = bar.clamp(0.005, 0.5);
+    let half_y = half_y.clamp(0.002, 1.0);
+    let mut m = TriMesh::default();
+    let h = bar / 2.0;
+    for i in 0..=nx {
+        let x = -1.0 + h + (2.0 - bar) * i as f32 / nx as f32;
+        add_box(
+            &mut m,
+            Vec3A::new(x - h, -half_y, -1.0),
+            Vec3A::new(x + h, half_y, 1.0),
+        );
+    }
+    for k in 0..=nz {
+        let z = -1.0 + h + (2.0 - bar) * k as f32 / nz as f32;
+        add_box(
+            &mut m,
+            Vec3A::new(-1.0, -half_y, z - h),
+            Vec3A::new(1.0, half_y, z + h),
+        );
+    }
+    m
+}
+
+/// A 3D lattice ("jungle gym"): bars of width `bar` along x, y and z through
+/// the `(cells + 1)^2` grid points of each face direction of `[-1, 1]^3`.
+pub fn lattice(cells: u32, bar: f32) -> TriMesh {
+    let n = cells.clamp(1, 16);
+    let bar = bar.clamp(0.005, 0.5);
+    let h = bar / 2.0;
+    let at = |i: u32| -1.0 + h + (2.0 - bar) * i as f32 / n as f32;
+    let mut m = TriMesh::default();
+    for axis in 0..3 {
+        for i in 0..=n {
+            for k in 0..=n {
+                let (a, b) = (at(i), at(k));
+                let mut lo = [a - h, b - h, -1.0];
+                let mut hi = [a + h, b + h, 1.0];
+                // Put the long side on `axis`.
+                lo.rotate_right(axis);
+                hi.rotate_right(axis);
+                add_box(&mut m, Vec3A::from_array(lo), Vec3A::from_array(hi));
+            }
+        }
+    }
+    m
+}
+
 /// Loads a user mesh (`.obj` or `.ply`, ASCII or binary little-endian),
 /// triangulated and normalised into the unit ball.
 ///
@@ -323,6 +436,34 @@ mod tests {
                 a.dot(b.cross(c)) / 6.0
             })
             .sum()
+    }
+
+    #[test]
+    fn thin_and_holed_shapes_stay_in_the_unit_cube_and_are_closed() {
+        let inside = |m: &TriMesh| {
+            m.positions
+                .iter()
+                .all(|p| p.abs().max_element() <= 1.0 + 1e-6)
+        };
+        let t = tube(64, 0.8);
+        let want = 2.0 * std::f32::consts::PI * (1.0 - 0.64);
+        assert!(inside(&t));
+        assert!((volume(&t) - want).abs() / want < 0.01, "{}", volume(&t));
+        let mut b = TriMesh::default();
+        add_box(
+            &mut b,
+            Vec3A::new(-1.0, -0.5, 0.0),
+            Vec3A::new(1.0, 0.5, 0.25),
+        );
+        assert!((volume(&b) - 0.5).abs() < 1e-6, "{}", volume(&b));
+        let g = grid(3, 2, 0.1, 0.05);
+        assert!(inside(&g));
+        assert_eq!(g.triangles.len(), (4 + 3) * 12);
+        let l = lattice(2, 0.08);
+        assert!(inside(&l));
+        assert_eq!(l.triangles.len(), 3 * 9 * 12);
+        // Every bar of the lattice is positive volume: no inverted box.
+        assert!(volume(&l) > 0.0);
     }
 
     #[test]

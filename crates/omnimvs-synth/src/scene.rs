@@ -144,6 +144,24 @@ pub enum ShapeSpec {
     },
     /// One rectangle: `[-1, 1]^2` in the object's xz plane (a floor, a wall).
     Rect,
+    /// A thick-walled open pipe around y, inner radius `inner` (outer 1).
+    Tube {
+        segments: u32,
+        inner: f32,
+    },
+    /// A flat frame in the xz plane around `cells_x x cells_z` square holes:
+    /// bars of width `bar`, thickness `2 * half_y` (unit-space units).
+    Grid {
+        cells_x: u32,
+        cells_z: u32,
+        bar: f32,
+        half_y: f32,
+    },
+    /// Bars of width `bar` along x, y and z through a `cells^3` grid.
+    Lattice {
+        cells: u32,
+        bar: f32,
+    },
 }
 
 /// One object of a scene.
@@ -185,6 +203,11 @@ pub struct LightSpec {
     pub directional: bool,
     pub ambient: f32,
     pub diffuse: f32,
+    /// A point light's falloff distance, metres: its diffuse term is scaled
+    /// by `1 / (1 + (distance / range_m)^2)`. `None`: no falloff (and a
+    /// directional light never falls off).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range_m: Option<f64>,
 }
 
 /// Everything needed to render one frame.
@@ -204,6 +227,15 @@ pub struct SceneSpec {
     pub light: LightSpec,
     /// User mesh files referenced by [`ShapeSpec::UserMesh`].
     pub meshes: Vec<String>,
+    /// More lights, added to [`Self::light`] (their `ambient` too).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub extra_lights: Vec<LightSpec>,
+    /// Real-camera effects applied to the rendered 8-bit images, one per
+    /// camera in rig order (`hard` datasets); empty: ideal cameras. The
+    /// [`crate::Tracer`] renders the ideal images;
+    /// [`crate::camera_effects::apply_all`] turns them into the dataset's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub camera_effects: Vec<crate::camera_effects::CameraEffects>,
 }
 
 /// Name and version written into every scene.
@@ -227,8 +259,11 @@ impl SceneSpec {
                 directional: false,
                 ambient: 0.35,
                 diffuse: 0.65,
+                range_m: None,
             },
             meshes: Vec::new(),
+            extra_lights: Vec::new(),
+            camera_effects: Vec::new(),
         }
     }
 }

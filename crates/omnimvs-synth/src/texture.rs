@@ -132,6 +132,69 @@ impl TextureSpec {
             detail_seed: rng.seed_i32(),
         }
     }
+
+    /// A random texture in the proportions of photographs (the `hard`
+    /// difficulty), where stereo matching is hard: about 30% flat or nearly
+    /// so (contrast under 0.06, faint detail), 20% repetitive (sharp periodic
+    /// stripes or checkers without detail, so that shifted copies match),
+    /// the rest as [`Self::random`]; independently, 30% are dark (reflectance
+    /// scaled to 5-30%).
+    pub fn random_hard(rng: &mut Rng, texture_richness: f64) -> Self {
+        let roll = rng.f64();
+        let dark = rng.chance(0.3);
+        let dimming = rng.range(0.05, 0.3) as f32;
+        let mut t = if roll < 0.3 {
+            let mid = rng.range(0.2, 0.85) as f32;
+            let contrast = rng.range(0.0, 0.06) as f32;
+            let pattern = if rng.chance(0.5) {
+                Pattern::Flat
+            } else {
+                Pattern::Noise {
+                    freq: rng.log_range(0.2, 2.0) as f32,
+                    octaves: 2,
+                    seed: rng.seed_i32(),
+                }
+            };
+            Self {
+                pattern,
+                lo: (mid - contrast / 2.0).max(0.0),
+                hi: (mid + contrast / 2.0).min(1.0),
+                detail: rng.range(0.0, 0.015) as f32,
+                detail_freq: rng.log_range(4.0, 24.0) as f32,
+                detail_seed: rng.seed_i32(),
+            }
+        } else if roll < 0.5 {
+            let freq = rng.log_range(2.0, 10.0) as f32;
+            let pattern = if rng.chance(0.5) {
+                Pattern::Stripes {
+                    freq,
+                    axis: random_axis(rng),
+                    duty: rng.range(0.3, 0.7) as f32,
+                    soft: rng.range(0.0, 0.1) as f32,
+                }
+            } else {
+                Pattern::Checker { freq }
+            };
+            let mid = rng.range(0.3, 0.7) as f32;
+            let contrast = (rng.range(0.3, 0.8) * texture_richness) as f32;
+            Self {
+                pattern,
+                lo: (mid - contrast / 2.0).max(0.02),
+                hi: (mid + contrast / 2.0).min(0.98),
+                detail: 0.0,
+                detail_freq: 1.0,
+                detail_seed: 0,
+            }
+        } else {
+            Self::random(rng, texture_richness)
+        };
+        if dark {
+            t.lo *= dimming;
+            t.hi *= dimming;
+            t.detail *= dimming;
+        }
+        t
+    }
 }
 
 fn random_axis(rng: &mut Rng) -> [f32; 3] {
@@ -345,6 +408,36 @@ mod tests {
                 assert!((0.0..=1.0).contains(&r), "{spec:?} gave {r}");
             }
         }
+    }
+
+    #[test]
+    fn hard_textures_are_often_flat_repetitive_or_dark() {
+        let mut rng = Rng::new(4);
+        let n = 2000;
+        let (mut flat, mut repetitive, mut dark) = (0, 0, 0);
+        for _ in 0..n {
+            let t = TextureSpec::random_hard(&mut rng, 1.0);
+            assert!(0.0 <= t.lo && t.lo <= t.hi && t.hi <= 1.0, "{t:?}");
+            if t.hi - t.lo < 0.061 && t.detail < 0.016 {
+                flat += 1;
+            }
+            if t.detail == 0.0
+                && matches!(t.pattern, Pattern::Stripes { .. } | Pattern::Checker { .. })
+            {
+                repetitive += 1;
+            }
+            if t.hi < 0.3 {
+                dark += 1;
+            }
+        }
+        let share = |k: i32| f64::from(k) / f64::from(n);
+        assert!((0.28..0.42).contains(&share(flat)), "flat {}", share(flat));
+        assert!(
+            (0.18..0.25).contains(&share(repetitive)),
+            "repetitive {}",
+            share(repetitive)
+        );
+        assert!((0.25..0.45).contains(&share(dark)), "dark {}", share(dark));
     }
 
     #[test]

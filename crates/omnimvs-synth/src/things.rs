@@ -3,7 +3,7 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use crate::generate::{GenParams, aabb_distance, random_light, random_sky};
+use crate::generate::{GenParams, aabb_distance, random_hard_lights, random_light, random_sky};
 use crate::rng::Rng;
 use crate::scene::{ObjectSpec, Placement, SceneKind, SceneSpec, ShapeSpec, generator_name};
 use crate::texture::TextureSpec;
@@ -45,6 +45,14 @@ impl Room {
 /// Generates the `things` scene of `(seed, frame)`.
 pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
     let mut rng = Rng::for_frame(seed, "things", frame);
+    let hard = params.difficulty.is_hard();
+    let texture = |rng: &mut Rng| {
+        if hard {
+            TextureSpec::random_hard(rng, 1.0)
+        } else {
+            TextureSpec::random(rng, 1.0)
+        }
+    };
     let clearance = params.clearance_m();
     let mut objects = Vec::with_capacity(params.num_objects + 1);
 
@@ -67,7 +75,7 @@ pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
             rng.range(0.0, std::f64::consts::TAU),
         );
         let placement = Placement::new(&yaw, yaw * centre, half.into());
-        let texture = TextureSpec::random(&mut rng, 1.0);
+        let texture = texture(&mut rng);
         objects.push(ObjectSpec {
             shape: ShapeSpec::Box,
             placement,
@@ -95,7 +103,11 @@ pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
         let mut dist = 1.0 / inv;
         let radius = dist * rng.log_range(ANGULAR_RADIUS.0, ANGULAR_RADIUS.1).tan();
         let rotation = rng.rotation();
-        let shape = random_shape(&mut rng, params.meshes.len());
+        let (shape, thin_aspect) = if hard {
+            random_shape_hard(&mut rng, params.meshes.len())
+        } else {
+            (random_shape(&mut rng, params.meshes.len()), None)
+        };
         let mut aspect = [
             rng.range(0.35, 1.0),
             rng.range(0.35, 1.0),
@@ -106,8 +118,11 @@ pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
         if matches!(shape, ShapeSpec::Sphere) && rng.chance(0.5) {
             aspect = [1.0; 3];
         }
+        if let Some(a) = thin_aspect {
+            aspect = a;
+        }
         let scale = aspect.map(|a| a * radius);
-        let texture = TextureSpec::random(&mut rng, 1.0);
+        let texture = texture(&mut rng);
         let texture_scale_m = radius * rng.range(0.3, 1.5);
         // Keep the bounding box beyond the clearance: push outwards.
         let mut placement = Placement::new(&rotation, dir * dist, scale);
@@ -127,11 +142,12 @@ pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
         });
     }
 
-    let light = random_light(
-        &mut rng,
-        sky.as_ref(),
-        room.as_ref().map(|r| (&r.placement, r.half)),
-    );
+    let room_box = room.as_ref().map(|r| (&r.placement, r.half));
+    let (light, extra_lights) = if hard {
+        random_hard_lights(&mut rng, sky.as_ref(), room_box, clearance, 15.0)
+    } else {
+        (random_light(&mut rng, sky.as_ref(), room_box), Vec::new())
+    };
     SceneSpec {
         generator: generator_name(),
         kind: SceneKind::Things,
@@ -142,6 +158,8 @@ pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
         sky,
         light,
         meshes: params.meshes.clone(),
+        extra_lights,
+        camera_effects: Vec::new(),
     }
 }
 
@@ -175,4 +193,73 @@ fn random_shape(rng: &mut Rng, num_user_meshes: usize) -> ShapeSpec {
             taper: rng.range(0.3, 1.3) as f32,
         },
     }
+}
+
+/// A shape of a `hard` scene, and the aspect (unit-space scale per axis,
+/// largest 1) that makes it thin, when it must be: 35% the shapes of
+/// [`random_shape`], the rest thin or concave like many ShapeNet models:
+/// rods, plates, rings, frames and plates with holes, lattices, tubes.
+fn random_shape_hard(rng: &mut Rng, num_user_meshes: usize) -> (ShapeSpec, Option<[f64; 3]>) {
+    let roll = rng.f64();
+    if roll < 0.35 {
+        return (random_shape(rng, num_user_meshes), None);
+    }
+    if roll < 0.47 {
+        // A rod: a thin cylinder or square bar.
+        let w = rng.log_range(0.015, 0.08);
+        let shape = if rng.chance(0.5) {
+            ShapeSpec::Cylinder { segments: 16 }
+        } else {
+            ShapeSpec::Box
+        };
+        return (shape, Some([w, 1.0, w * rng.range(0.7, 1.0)]));
+    }
+    if roll < 0.59 {
+        // A plate or board.
+        return (
+            ShapeSpec::Box,
+            Some([1.0, rng.log_range(0.01, 0.05), rng.range(0.3, 1.0)]),
+        );
+    }
+    if roll < 0.69 {
+        // A ring.
+        return (
+            ShapeSpec::Torus {
+                minor: rng.log_range(0.03, 0.15) as f32,
+                major_segments: 48,
+                minor_segments: 8,
+            },
+            Some([1.0, 1.0, rng.range(0.6, 1.0)]),
+        );
+    }
+    if roll < 0.81 {
+        // A frame or a plate with holes.
+        let cells = 1 + rng.below(4) as u32;
+        return (
+            ShapeSpec::Grid {
+                cells_x: cells,
+                cells_z: (cells + rng.below(3) as u32).saturating_sub(1).max(1),
+                bar: rng.log_range(0.04, 0.2) as f32,
+                half_y: rng.log_range(0.01, 0.06) as f32,
+            },
+            Some([1.0, 1.0, rng.range(0.5, 1.0)]),
+        );
+    }
+    if roll < 0.89 {
+        return (
+            ShapeSpec::Lattice {
+                cells: 1 + rng.below(3) as u32,
+                bar: rng.log_range(0.03, 0.1) as f32,
+            },
+            None,
+        );
+    }
+    // A pipe or bucket: seen from an end, concave.
+    (
+        ShapeSpec::Tube {
+            segments: 32,
+            inner: rng.range(0.75, 0.95) as f32,
+        },
+        Some([1.0, rng.range(0.4, 1.0), 1.0]),
+    )
 }

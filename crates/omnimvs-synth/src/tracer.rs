@@ -37,6 +37,25 @@ struct Light {
     directional: bool,
     ambient: f32,
     diffuse: f32,
+    /// `1 / range_m^2` of a point light with falloff, else `None`.
+    inv_range_sq: Option<f32>,
+}
+
+impl Light {
+    /// The diffuse term at `p` with normal `n` (facing the viewer).
+    #[inline]
+    fn diffuse_at(&self, p: Vec3A, n: Vec3A) -> f32 {
+        if self.directional {
+            return self.diffuse * n.dot(self.v).max(0.0);
+        }
+        let to_light = self.v - p;
+        let l = to_light.normalize_or_zero();
+        let lit = self.diffuse * n.dot(l).max(0.0);
+        match self.inv_range_sq {
+            Some(k) => lit / (1.0 + to_light.length_squared() * k),
+            None => lit,
+        }
+    }
 }
 
 struct Sky {
@@ -51,6 +70,8 @@ pub struct Tracer {
     bvh: Option<CwBvh>,
     surfaces: Vec<Surface>,
     light: Light,
+    /// [`SceneSpec::extra_lights`].
+    extra_lights: Vec<Light>,
     sky: Option<Sky>,
     /// Rotation from the rig frame to the scene frame (for the sky).
     world_from_rig_rot: Mat3A,
@@ -137,6 +158,11 @@ impl Tracer {
         };
         let rot_rig_from_world = rig_from_world.rotation.to_rotation_matrix();
         let light = make_light(&spec.light, &rig_from_world);
+        let extra_lights = spec
+            .extra_lights
+            .iter()
+            .map(|l| make_light(l, &rig_from_world))
+            .collect();
         let sky = spec.sky.as_ref().map(|s| {
             let mut noise = FastNoiseLite::with_seed(s.cloud_seed);
             noise.set_noise_type(Some(NoiseType::OpenSimplex2));
@@ -154,6 +180,7 @@ impl Tracer {
             bvh,
             surfaces,
             light,
+            extra_lights,
             sky,
             world_from_rig_rot: m3(rot_rig_from_world.inverse().matrix()),
         })
@@ -210,12 +237,11 @@ impl Tracer {
         let albedo = surface
             .texture
             .reflectance(surface.tex_from_rig.transform_point3a(p));
-        let l = if self.light.directional {
-            self.light.v
-        } else {
-            (self.light.v - p).normalize_or_zero()
-        };
-        (albedo * (self.light.ambient + self.light.diffuse * n.dot(l).max(0.0))).clamp(0.0, 1.0)
+        let mut shade = self.light.ambient + self.light.diffuse_at(p, n);
+        for extra in &self.extra_lights {
+            shade += extra.ambient + extra.diffuse_at(p, n);
+        }
+        (albedo * shade).clamp(0.0, 1.0)
     }
 
     fn sky_radiance(&self, d_rig: Vec3A) -> f32 {
@@ -256,6 +282,10 @@ fn make_light(spec: &LightSpec, rig_from_world: &nalgebra::Isometry3<f64>) -> Li
         directional: spec.directional,
         ambient: spec.ambient,
         diffuse: spec.diffuse,
+        inv_range_sq: match spec.range_m {
+            Some(r) if !spec.directional && r > 0.0 => Some((1.0 / (r * r)) as f32),
+            _ => None,
+        },
     }
 }
 
@@ -348,6 +378,14 @@ fn add_shape(
             *twist,
             *taper,
         ),
+        ShapeSpec::Tube { segments, inner } => mesh::tube((*segments).clamp(3, 1024), *inner),
+        ShapeSpec::Grid {
+            cells_x,
+            cells_z,
+            bar,
+            half_y,
+        } => mesh::grid(*cells_x, *cells_z, *bar, *half_y),
+        ShapeSpec::Lattice { cells, bar } => mesh::lattice(*cells, *bar),
         ShapeSpec::UserMesh { index } => {
             let m = meshes.get(*index).ok_or_else(|| {
                 SynthError::invalid(
