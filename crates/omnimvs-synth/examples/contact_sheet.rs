@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use omnimvs_sweep::EquirectGrid;
-use omnimvs_synth::camera_effects::{CameraEffects, apply_all};
+use omnimvs_synth::camera_effects::{CameraEffects, apply_all, auto_expose};
 use omnimvs_synth::contact::contact_sheet;
 use omnimvs_synth::dataset::{GT_HEIGHT, GT_PHI_DEG, GT_WIDTH, render_scene};
 use omnimvs_synth::rig::{preset_rig, rig_radius_m};
@@ -39,7 +39,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let scene = generate(kind, 0, frame, &params)?;
         let (mut images, inv_depth) = render_scene(&scene, &[], &source.rig, spp, &grid)?;
         if params.difficulty.is_hard() {
-            let effects = CameraEffects::draw(0, frame, source.rig.cameras.len());
+            let mut effects = CameraEffects::draw(0, frame, source.rig.cameras.len());
+            auto_expose(&mut effects, &images);
             apply_all(&effects, &source.rig.cameras, &mut images)?;
         }
         let elapsed = t0.elapsed();

@@ -13,7 +13,7 @@
 use std::time::Instant;
 
 use omnimvs_sweep::EquirectGrid;
-use omnimvs_synth::camera_effects::{CameraEffects, apply_all};
+use omnimvs_synth::camera_effects::{CameraEffects, apply_all, auto_expose};
 use omnimvs_synth::dataset::{GT_HEIGHT, GT_PHI_DEG, GT_WIDTH, render_scene};
 use omnimvs_synth::rig::{preset_rig, rig_radius_m};
 use omnimvs_synth::{Difficulty, GenParams, SceneKind, generate};
@@ -58,7 +58,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let scene = generate(kind, 0, frame, &params)?;
                     let (mut images, gt) = render_scene(&scene, &[], &source.rig, spp, &grid)?;
                     if difficulty.is_hard() {
-                        let effects = CameraEffects::draw(0, frame, source.rig.cameras.len());
+                        let mut effects = CameraEffects::draw(0, frame, source.rig.cameras.len());
+                        auto_expose(&mut effects, &images);
                         apply_all(&effects, &source.rig.cameras, &mut images)?;
                     }
                     std::hint::black_box((images, gt));

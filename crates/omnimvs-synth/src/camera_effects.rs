@@ -53,9 +53,10 @@ impl CameraEffects {
     }
 
     /// The effects of every camera of a rig in frame `frame` of the dataset
-    /// of `seed`: one exposure for the frame (auto-exposure), a gain, gamma,
-    /// vignetting, blur and noise per camera. A stream of its own, so the
-    /// scene of the frame does not depend on it.
+    /// of `seed`: one exposure bias for the frame (0.7-1.4, on top of
+    /// [`auto_expose`]), a gain, gamma, vignetting, blur and noise per
+    /// camera. A stream of its own, so the scene of the frame does not
+    /// depend on it.
     pub fn draw(seed: u64, frame: u32, num_cameras: usize) -> Vec<Self> {
         let mut rng = Rng::for_frame(seed, "camera-effects", frame);
         let exposure = rng.log_range(0.7, 1.4);
@@ -131,6 +132,30 @@ impl CameraEffects {
             }
         });
         Ok(())
+    }
+}
+
+/// Mean gray level a frame is exposed for by [`auto_expose`].
+pub const AUTO_EXPOSURE_LEVEL: f64 = 90.0;
+
+/// Auto-exposure, as a real rig's cameras do it: scales every camera's gain
+/// by one factor (within `[0.5, 6]`) that brings the mean of the ideal
+/// images' lit pixels (value > 0) to [`AUTO_EXPOSURE_LEVEL`] gray levels, so
+/// that a dark scene is amplified (with its quantisation and noise) and a
+/// bright one is not washed out. Deterministic: a function of the images.
+pub fn auto_expose(effects: &mut [CameraEffects], images: &[Vec<u8>]) {
+    let (sum, count) = images
+        .iter()
+        .flatten()
+        .filter(|&&v| v > 0)
+        .fold((0u64, 0u64), |(s, n), &v| (s + u64::from(v), n + 1));
+    if count == 0 {
+        return;
+    }
+    let mean = sum as f64 / count as f64;
+    let factor = (AUTO_EXPOSURE_LEVEL / mean).clamp(0.5, 6.0) as f32;
+    for e in effects {
+        e.gain *= factor;
     }
 }
 
@@ -234,6 +259,19 @@ mod tests {
         assert!(b.iter().all(|v| (v - 0.5).abs() < 1e-5));
         let mut wrong = vec![0u8; 10];
         assert!(CameraEffects::identity().apply(cam, &mut wrong).is_err());
+    }
+
+    #[test]
+    fn auto_exposure_brings_a_dark_frame_up_within_limits() {
+        let mut e = vec![CameraEffects::identity(); 2];
+        auto_expose(&mut e, &[vec![0, 30, 30], vec![30, 0, 30]]);
+        assert!((e[0].gain - 3.0).abs() < 1e-6 && e[0].gain == e[1].gain);
+        let mut e = vec![CameraEffects::identity()];
+        auto_expose(&mut e, &[vec![1, 1, 0]]);
+        assert_eq!(e[0].gain, 6.0);
+        let mut e = vec![CameraEffects::identity()];
+        auto_expose(&mut e, &[vec![0, 0]]);
+        assert_eq!(e[0].gain, 1.0);
     }
 
     #[test]

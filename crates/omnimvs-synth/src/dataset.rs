@@ -20,7 +20,7 @@ use omnimvs_sweep::EquirectGrid;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::camera_effects::{CameraEffects, apply_all};
+use crate::camera_effects::{CameraEffects, apply_all, auto_expose};
 use crate::mesh::{TriMesh, load_mesh};
 use crate::rig::{RigSource, rig_radius_m};
 use crate::scene::{SceneKind, SceneSpec, generator_name};
@@ -387,6 +387,7 @@ impl DatasetWriter {
             &self.grid,
         )?;
         if !scene.camera_effects.is_empty() {
+            auto_expose(&mut scene.camera_effects, &images);
             apply_all(&scene.camera_effects, &self.rig.cameras, &mut images)?;
         }
         Ok(Frame {

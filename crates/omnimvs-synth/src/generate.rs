@@ -148,7 +148,8 @@ pub fn random_light(
 
 /// The lights of a `hard` scene: darker (little ambient light) and uneven:
 /// the main light ([`random_light`]'s position) and 1-3 more point lights,
-/// every point light with a strong falloff (range 1-6 m). In a room
+/// every point light with a strong falloff (range 0.2-1.2 times the room's
+/// mean half extent, or 5 m under a sky). In a room
 /// (`(placement, half extents)`) the extra lights are anywhere inside it;
 /// under a sky the sun stays and 0-2 point lights hang among the objects,
 /// `near_m..far_m` from the rig.
@@ -159,11 +160,14 @@ pub fn random_hard_lights(
     near_m: f64,
     far_m: f64,
 ) -> (LightSpec, Vec<LightSpec>) {
+    // Falloff distances follow the room's size, so a large room is dim far
+    // from its lights rather than black.
+    let size_m = room.map_or(5.0, |(_, half)| half.mean());
     let mut main = random_light(rng, sky, room);
-    main.ambient = rng.range(0.02, 0.12) as f32;
+    main.ambient = rng.range(0.06, 0.2) as f32;
     main.diffuse = rng.range(0.7, 1.4) as f32;
     if !main.directional {
-        main.range_m = Some(rng.log_range(1.5, 6.0));
+        main.range_m = Some(size_m * rng.log_range(0.4, 1.2));
     }
     let count = if sky.is_some() {
         rng.below(3)
@@ -188,7 +192,7 @@ pub fn random_hard_lights(
                 directional: false,
                 ambient: 0.0,
                 diffuse: rng.range(0.3, 1.2) as f32,
-                range_m: Some(rng.log_range(1.0, 5.0)),
+                range_m: Some(size_m * rng.log_range(0.2, 1.0)),
             }
         })
         .collect();
