@@ -41,6 +41,42 @@ fn synth_writes_a_dataset_and_resumes() {
 }
 
 #[test]
+fn synth_hard_is_recorded_and_a_resume_with_another_difficulty_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("hard");
+    let out_s = out.to_str().unwrap();
+    let args = [
+        "synth",
+        "--kind",
+        "house",
+        "--frames",
+        "1",
+        "--out",
+        out_s,
+        "--size",
+        "48x50",
+        "--difficulty",
+        "hard",
+    ];
+    let o = omnimvs(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let settings = std::fs::read_to_string(out.join("synth.json")).unwrap();
+    assert!(settings.contains("\"difficulty\": \"hard\""), "{settings}");
+    let o = omnimvs(&args[..args.len() - 2]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("difficulty hard there, standard now"),
+        "{err}"
+    );
+    let o = omnimvs(&[&args[..args.len() - 1], &["extreme"]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("standard") && err.contains("hard"),
+        "{err}"
+    );
+}
+
+#[test]
 fn synth_rejects_bad_input_clearly() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o");

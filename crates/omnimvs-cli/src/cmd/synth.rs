@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::FrameRange;
 use omnimvs_synth::rig::{load_rig, resize_rig};
-use omnimvs_synth::{DatasetWriter, FrameEvent, SceneKind, Shard};
+use omnimvs_synth::{DatasetWriter, Difficulty, FrameEvent, SceneKind, Shard, SynthOptions};
 
 use crate::args::{Frames, Size};
 
@@ -18,10 +18,11 @@ use crate::args::{Frames, Size};
 /// Frames already complete in OUT are skipped, so an interrupted run resumes.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Scene kind: `things` (random objects in a room or under a sky) or
-    /// `house` (furnished rooms).
-    #[arg(long)]
-    pub kind: String,
+    /// `--kind` and `--difficulty` (grouped so that callers building these
+    /// arguments in code, like `demo`, write `kind: "things".into()` and get
+    /// the `standard` difficulty).
+    #[command(flatten)]
+    pub kind: SceneArgs,
     /// The rig: `sunny` (the published rig) or a reference config.yaml
     /// (its `config.omnimvs_sweep_min_depth` is the minimum depth).
     #[arg(long, default_value = "sunny")]
@@ -51,8 +52,50 @@ pub struct Args {
     pub meshes: Vec<PathBuf>,
 }
 
+/// What scenes a dataset holds: their kind and how hard they are.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SceneArgs {
+    /// Scene kind: `things` (random objects in a room or under a sky) or
+    /// `house` (furnished rooms).
+    #[arg(long)]
+    pub kind: String,
+    /// `standard`: rich textures, mostly convex shapes, even light, ideal
+    /// cameras (the datasets made before this option). `hard`: flat,
+    /// repetitive and dark textures, thin and concave shapes, several
+    /// falling-off lights, and per-camera gain, gamma, vignetting, blur and
+    /// noise on the images (ground truth unchanged). Recorded in synth.json.
+    #[arg(long, value_enum, default_value_t = DifficultyArg::Standard)]
+    pub difficulty: DifficultyArg,
+}
+
+impl From<&str> for SceneArgs {
+    /// A kind at the `standard` difficulty.
+    fn from(kind: &str) -> Self {
+        Self {
+            kind: kind.to_string(),
+            difficulty: DifficultyArg::Standard,
+        }
+    }
+}
+
+/// `--difficulty` (the library's [`Difficulty`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum DifficultyArg {
+    Standard,
+    Hard,
+}
+
+impl From<DifficultyArg> for Difficulty {
+    fn from(d: DifficultyArg) -> Self {
+        match d {
+            DifficultyArg::Standard => Self::Standard,
+            DifficultyArg::Hard => Self::Hard,
+        }
+    }
+}
+
 pub fn run(args: &Args) -> Result<()> {
-    let kind: SceneKind = args.kind.parse()?;
+    let kind: SceneKind = args.kind.kind.parse()?;
     let mut source = load_rig(&args.rig).with_context(|| format!("--rig {}", args.rig))?;
     if let Some(size) = args.size {
         let (h, w) = (u32::try_from(size.height)?, u32::try_from(size.width)?);
@@ -73,9 +116,13 @@ pub fn run(args: &Args) -> Result<()> {
         .iter()
         .map(|p| p.to_string_lossy().into_owned())
         .collect();
-    let writer = DatasetWriter::create(
-        &args.out, &source, kind, args.seed, args.spp, &meshes, &range,
-    )?;
+    let options = SynthOptions {
+        spp: args.spp,
+        meshes,
+        difficulty: args.kind.difficulty.into(),
+        ..SynthOptions::new(kind, args.seed)
+    };
+    let writer = DatasetWriter::create_with(&args.out, &source, &options, &range)?;
 
     let bar = ProgressBar::new(frames.len() as u64);
     bar.set_style(ProgressStyle::with_template(
