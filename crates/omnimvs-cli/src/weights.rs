@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use burn::tensor::Device;
-use omnimvs_net::weights::{load_any, load_bytes};
+use omnimvs_net::weights::{AnyNet, load_any, load_bytes, load_family};
+use omnimvs_net::{CascadeNet, Family};
 use omnimvs_net::{NetConfig, OmniMvsNet};
 
 /// `--weights` value that names the bundled model (also the default).
@@ -73,6 +74,29 @@ impl Weights {
             }
             Self::File(path) => load_any(path, &base, device)
                 .with_context(|| format!("loading weights {}", path.display()))?,
+        })
+    }
+}
+
+impl Weights {
+    /// Loads a network of either family on `device`: our files say which, a PyTorch
+    /// checkpoint is the paper's network, and `preset` sizes a PyTorch checkpoint or a random
+    /// network (`cascade` gives a random cascade).
+    ///
+    /// # Errors
+    /// An unknown preset, or a file that cannot be read or does not match the network.
+    pub fn load_family(&self, preset: &str, device: &Device) -> Result<AnyNet> {
+        let base = NetConfig::preset(preset)?;
+        Ok(match self {
+            Self::File(path) => load_family(path, &base, device)
+                .with_context(|| format!("loading weights {}", path.display()))?,
+            Self::Random if base.family == Family::Cascade => {
+                eprintln!(
+                    "warning: randomly initialised `{preset}` network, its outputs are meaningless"
+                );
+                AnyNet::Cascade(CascadeNet::new(&base, device)?)
+            }
+            Self::Bundled | Self::Random => AnyNet::OmniMvs(self.load(preset, device)?),
         })
     }
 }

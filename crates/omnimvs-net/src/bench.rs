@@ -302,6 +302,7 @@ pub fn bench_train_step(
             index: (0..cells).map(|i| (i % 97) as f32 / 96.0 * n_max).collect(),
             valid: vec![true; cells],
         },
+        stage_gt: Vec::new(),
     };
     let order = learner.net.identity_order();
     let mut report = TrainStepReport {

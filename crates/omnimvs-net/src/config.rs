@@ -33,6 +33,57 @@ impl Layout {
     }
 }
 
+/// Which network family a configuration builds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Family {
+    /// The paper's network ([`crate::OmniMvsNet`]): one full-resolution cost volume over
+    /// `N / 2` spheres, 3D encoder-decoder, softargmin over `N`.
+    #[default]
+    OmniMvs,
+    /// The coarse-to-fine network ([`crate::cascade::CascadeNet`]): a small cost volume at a
+    /// quarter of the output resolution, then per-pixel hypotheses around the coarse estimate
+    /// at half and full resolution.
+    Cascade,
+}
+
+/// Sizes of the [`Family::Cascade`] network (ignored by the paper's network).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CascadeParams {
+    /// Feature channels at strides 2, 4 and 8 of the input image.
+    pub feature_channels: [usize; 3],
+    /// Groups of the group-wise correlation at strides 2, 4 and 8.
+    pub groups: [usize; 3],
+    /// Spheres of the coarse cost volume, evenly spaced in index over `0..=N-1`.
+    pub coarse_spheres: usize,
+    /// Channels of the coarse 2D encoder-decoder (full, half and quarter resolution).
+    pub coarse_channels: [usize; 3],
+    /// Per-pixel hypotheses of the half- and full-resolution stages.
+    pub stage_hypotheses: [usize; 2],
+    /// Spacing of those hypotheses, in index units of `N`.
+    pub stage_intervals: [f64; 2],
+    /// Channels of the 2D convolutions of the half- and full-resolution stages.
+    pub stage_channels: [usize; 2],
+    /// Weights of the coarse, half- and full-resolution losses.
+    pub loss_weights: [f64; 3],
+}
+
+impl Default for CascadeParams {
+    fn default() -> Self {
+        Self {
+            feature_channels: [8, 16, 16],
+            groups: [4, 4, 8],
+            coarse_spheres: 32,
+            coarse_channels: [48, 64, 96],
+            stage_hypotheses: [8, 5],
+            stage_intervals: [2.0, 1.0],
+            stage_channels: [32, 16],
+            loss_weights: [0.5, 1.0, 2.0],
+        }
+    }
+}
+
 /// Sizes of the network. Every field is serialised next to the weights it produced.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -55,6 +106,10 @@ pub struct NetConfig {
     pub input_width: usize,
     /// Unary feature layout.
     pub layout: Layout,
+    /// Network family (absent in older files: the paper's network).
+    pub family: Family,
+    /// Sizes of the cascade network (only for [`Family::Cascade`]).
+    pub cascade: CascadeParams,
 }
 
 impl Default for NetConfig {
@@ -77,6 +132,19 @@ impl NetConfig {
             input_height: 768,
             input_width: 800,
             layout: Layout::Published,
+            family: Family::OmniMvs,
+            cascade: CascadeParams::default(),
+        }
+    }
+
+    /// The coarse-to-fine network at the paper's output: `160 x 640` over +-45 degrees,
+    /// `N = 192`, four cameras with `768 x 800` inputs; a 32-sphere cost volume at `40 x 160`,
+    /// then 8 hypotheses per pixel at `80 x 320` and 5 at `160 x 640`.
+    pub fn cascade() -> Self {
+        Self {
+            family: Family::Cascade,
+            channels: 8,
+            ..Self::paper()
         }
     }
 
@@ -93,10 +161,12 @@ impl NetConfig {
             input_height: 192,
             input_width: 200,
             layout: Layout::Published,
+            family: Family::OmniMvs,
+            cascade: CascadeParams::default(),
         }
     }
 
-    /// A preset by name: `paper` or `tiny`.
+    /// A preset by name: `paper`, `tiny` or `cascade`.
     ///
     /// # Errors
     /// [`NetError::UnknownPreset`] for any other name.
@@ -104,6 +174,7 @@ impl NetConfig {
         match name {
             "paper" => Ok(Self::paper()),
             "tiny" => Ok(Self::tiny()),
+            "cascade" => Ok(Self::cascade()),
             other => Err(NetError::UnknownPreset(other.to_string())),
         }
     }
@@ -160,6 +231,9 @@ impl NetConfig {
                 format!("must be in (0, 90], got {}", self.phi_deg),
             ));
         }
+        if self.family == Family::Cascade {
+            return self.validate_cascade();
+        }
         let multiple = 2 << ENCODER_LEVELS;
         for (field, value) in [
             ("num_invdepth", self.num_invdepth),
@@ -180,6 +254,77 @@ impl NetConfig {
         }
         Ok(())
     }
+
+    /// The output grid sizes `[rows, cols]` of the cascade's coarse, half- and
+    /// full-resolution stages.
+    pub fn cascade_sizes(&self) -> [[usize; 2]; 3] {
+        let [h, w] = [self.out_height, self.out_width];
+        [[h / 4, w / 4], [h / 2, w / 2], [h, w]]
+    }
+
+    /// Feature-map sizes `[rows, cols]` at strides 2, 4 and 8 of the input (each a 3x3 or 5x5
+    /// stride-2 convolution with "same" padding).
+    pub fn cascade_feature_sizes(&self) -> [[usize; 2]; 3] {
+        let half = |[r, c]: [usize; 2]| [(r - 1) / 2 + 1, (c - 1) / 2 + 1];
+        let s2 = half([self.input_height, self.input_width]);
+        let s4 = half(s2);
+        [s2, s4, half(s4)]
+    }
+
+    fn validate_cascade(&self) -> Result<(), NetError> {
+        let invalid =
+            |field: &'static str, message: String| NetError::InvalidConfig { field, message };
+        let p = &self.cascade;
+        for (field, value) in [
+            ("out_height", self.out_height),
+            ("out_width", self.out_width),
+        ] {
+            if value == 0 || value % 16 != 0 {
+                return Err(invalid(
+                    field,
+                    format!(
+                        "{value} must be a positive multiple of 16 (the coarse stage runs at a \
+                         quarter of the output and its encoder halves that twice)"
+                    ),
+                ));
+            }
+        }
+        if p.coarse_spheres < 2 || p.coarse_spheres > self.num_invdepth {
+            return Err(invalid(
+                "cascade.coarse_spheres",
+                format!(
+                    "{} must be at least 2 and at most num_invdepth = {}",
+                    p.coarse_spheres, self.num_invdepth
+                ),
+            ));
+        }
+        for (level, (&ch, &g)) in p.feature_channels.iter().zip(&p.groups).enumerate() {
+            if ch == 0 || g == 0 || ch % g != 0 {
+                return Err(invalid(
+                    "cascade.groups",
+                    format!(
+                        "level {level}: {g} groups must divide {ch} feature channels (both > 0)"
+                    ),
+                ));
+            }
+        }
+        if p.coarse_channels.contains(&0)
+            || p.stage_channels.contains(&0)
+            || p.stage_hypotheses.iter().any(|&k| k < 2)
+        {
+            return Err(invalid(
+                "cascade",
+                "channels must be positive and every stage needs at least 2 hypotheses".into(),
+            ));
+        }
+        if p.stage_intervals.iter().any(|&d| !(d > 0.0)) {
+            return Err(invalid(
+                "cascade.stage_intervals",
+                format!("must be positive, got {:?}", p.stage_intervals),
+            ));
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -192,6 +337,38 @@ mod tests {
         NetConfig::tiny().validate().unwrap();
         assert_eq!(NetConfig::paper().feature_size(), [384, 400]);
         assert_eq!(NetConfig::tiny().feature_size(), [96, 100]);
+        let cascade = NetConfig::cascade();
+        cascade.validate().unwrap();
+        assert_eq!(cascade.cascade_sizes(), [[40, 160], [80, 320], [160, 640]]);
+        assert_eq!(
+            cascade.cascade_feature_sizes(),
+            [[384, 400], [192, 200], [96, 100]]
+        );
+    }
+
+    #[test]
+    fn cascade_rejects_sizes_it_cannot_use() {
+        let config = NetConfig {
+            out_height: 40,
+            ..NetConfig::cascade()
+        };
+        let err = config.validate().unwrap_err().to_string();
+        assert!(err.contains("out_height"), "{err}");
+        let mut config = NetConfig::cascade();
+        config.cascade.coarse_spheres = 1;
+        assert!(config.validate().is_err());
+        let mut config = NetConfig::cascade();
+        config.cascade.groups[1] = 5;
+        assert!(
+            config
+                .validate()
+                .unwrap_err()
+                .to_string()
+                .contains("groups")
+        );
+        // Files written before the family existed are the paper's network.
+        let old: NetConfig = serde_json::from_str("{\"channels\": 8}").unwrap();
+        assert_eq!(old.family, Family::OmniMvs);
     }
 
     #[test]

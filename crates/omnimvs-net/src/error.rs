@@ -14,7 +14,7 @@ pub enum NetError {
         message: String,
     },
     /// A preset name that does not exist.
-    #[error("unknown network preset `{0}` (expected `paper` or `tiny`)")]
+    #[error("unknown network preset `{0}` (expected `paper`, `tiny` or `cascade`)")]
     UnknownPreset(String),
     /// An input tensor or lookup table has the wrong size.
     #[error("shape mismatch for {what}: expected {expected:?}, got {actual:?}")]

@@ -12,7 +12,7 @@ use omnimvs_sweep::{
 pub use crate::backend::device_from_name;
 use crate::config::NetConfig;
 use crate::error::NetError;
-use crate::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
+use crate::model::{OmniMvsNet, SweepInput, SweepTaps};
 use crate::taps::SweepGrid;
 
 /// Downscale factor above which the input is low-pass filtered before resampling.
@@ -51,8 +51,8 @@ pub struct FrameResult {
     pub inv_depth: Vec<f32>,
     /// Entropy of the per-pixel distribution (nats).
     pub entropy: Vec<f32>,
-    /// Stage timings of the forward pass.
-    pub timings: StageTimings,
+    /// Wall time of the forward pass, seconds.
+    pub seconds: f64,
 }
 
 impl Inference {
@@ -161,7 +161,7 @@ impl Inference {
             index,
             inv_depth,
             entropy,
-            timings,
+            seconds: timings.total,
         })
     }
 }

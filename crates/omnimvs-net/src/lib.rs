@@ -7,17 +7,21 @@
 //!
 //! - [`config`]: sizes, layouts (ICCV paper / published weights) and presets.
 //! - [`model`]: the burn modules, named like the reference PyTorch state dict.
+//! - [`cascade`]: the coarse-to-fine network for CPUs at the paper's output grid.
 //! - [`taps`]: bilinear taps of a lookup table and the host warp kernel.
 //! - [`weights`]: our safetensors files and the import of reference PyTorch checkpoints.
-//! - [`infer`]: running a network on a dataset's frames.
+//! - [`infer`]: running the paper's network on a dataset's frames.
+//! - [`estimator`]: either family on a dataset's frames, one result type.
 //! - [`backend`]: run-time choice of the compute backend (`cpu`, `libtorch`, `wgpu`, ...).
 //! - [`bench`]: per-stage forward timings.
 //! - [`train`]: end-to-end training (loss, SGD, augmentation, loader, checkpoints).
 
 pub mod backend;
 pub mod bench;
+pub mod cascade;
 pub mod config;
 pub mod error;
+pub mod estimator;
 pub mod infer;
 pub mod model;
 pub mod taps;
@@ -25,7 +29,9 @@ pub mod train;
 pub mod weights;
 
 pub use backend::Backend;
-pub use config::{Layout, NetConfig};
+pub use cascade::CascadeNet;
+pub use config::{CascadeParams, Family, Layout, NetConfig};
 pub use error::NetError;
+pub use estimator::NetEstimator;
 pub use model::{NetOutput, OmniMvsNet, SweepInput, SweepTaps};
 pub use taps::SweepGrid;

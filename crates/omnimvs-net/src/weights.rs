@@ -3,12 +3,14 @@
 
 use std::path::{Path, PathBuf};
 
+use burn::module::Module;
 use burn::store::pytorch_reader::PytorchReader;
 use burn::store::{ApplyResult, ModuleSnapshot, PytorchStore, SafetensorsStore};
 use burn::tensor::Device;
 use serde::Deserialize;
 
-use crate::config::{Layout, NetConfig};
+use crate::cascade::CascadeNet;
+use crate::config::{Family, Layout, NetConfig};
 use crate::error::NetError;
 use crate::model::OmniMvsNet;
 
@@ -72,23 +74,65 @@ fn check_applied(path: &Path, result: &ApplyResult) -> Result<(), NetError> {
 /// # Errors
 /// [`NetError::Io`] or [`NetError::Weights`] when a file cannot be written.
 pub fn save(net: &OmniMvsNet, path: &Path) -> Result<(), NetError> {
+    save_module(net, &net.config, path)
+}
+
+/// Writes the parameters of any of our networks to `path` (safetensors) and `config` to
+/// [`config_path`]`(path)` (atomically).
+///
+/// # Errors
+/// [`NetError::Io`] or [`NetError::Weights`] when a file cannot be written.
+pub fn save_module<M: Module>(net: &M, config: &NetConfig, path: &Path) -> Result<(), NetError> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|source| NetError::Io {
             path: dir.to_path_buf(),
             source,
         })?;
     }
-    let json = serde_json::to_string_pretty(&net.config).map_err(|source| NetError::Json {
-        path: config_path(path),
+    let json_path = config_path(path);
+    let json = serde_json::to_string_pretty(config).map_err(|source| NetError::Json {
+        path: json_path.clone(),
         source,
     })?;
-    std::fs::write(config_path(path), json + "\n").map_err(|source| NetError::Io {
-        path: config_path(path),
-        source,
+    omnimvs_camera::fs::write_atomic(&json_path, (json + "\n").as_bytes()).map_err(|source| {
+        NetError::Io {
+            path: json_path.clone(),
+            source,
+        }
     })?;
     let mut store = SafetensorsStore::from_file(path).overwrite(true);
     net.save_into(&mut store)
         .map_err(|e| weights_error(path, e.to_string()))
+}
+
+/// Applies the safetensors file `path` to `net`, every parameter required.
+fn apply_file<M: Module>(mut net: M, path: &Path) -> Result<M, NetError> {
+    if !path.exists() {
+        return Err(weights_error(path, "no such weight file"));
+    }
+    let mut store = SafetensorsStore::from_file(path);
+    let result = net
+        .load_from(&mut store)
+        .map_err(|e| weights_error(path, e.to_string()))?;
+    check_applied(path, &result)?;
+    Ok(net)
+}
+
+/// Applies in-memory safetensors bytes to `net` (`name` labels errors).
+fn apply_bytes<M: Module>(mut net: M, name: &Path, safetensors: &[u8]) -> Result<M, NetError> {
+    let mut store = SafetensorsStore::from_bytes(Some(safetensors.to_vec()));
+    let result = net
+        .load_from(&mut store)
+        .map_err(|e| weights_error(name, e.to_string()))?;
+    check_applied(name, &result)?;
+    Ok(net)
+}
+
+fn parse_config(name: &Path, config_json: &str) -> Result<NetConfig, NetError> {
+    serde_json::from_str(config_json).map_err(|source| NetError::Json {
+        path: config_path(name),
+        source,
+    })
 }
 
 /// Reads a configuration JSON file.
@@ -112,16 +156,16 @@ pub fn read_config(path: &Path) -> Result<NetConfig, NetError> {
 /// [`NetError`] when a file is missing, unreadable or does not fit the configuration.
 pub fn load(path: &Path, device: &Device) -> Result<OmniMvsNet, NetError> {
     let config = read_config(&config_path(path))?;
-    let mut net = OmniMvsNet::new(&config, device)?;
-    if !path.exists() {
-        return Err(weights_error(path, "no such weight file"));
-    }
-    let mut store = SafetensorsStore::from_file(path);
-    let result = net
-        .load_from(&mut store)
-        .map_err(|e| weights_error(path, e.to_string()))?;
-    check_applied(path, &result)?;
-    Ok(net)
+    apply_file(OmniMvsNet::new(&config, device)?, path)
+}
+
+/// Loads a cascade network saved by [`save_module`].
+///
+/// # Errors
+/// [`NetError`] when a file is missing, unreadable or not a cascade network.
+pub fn load_cascade(path: &Path, device: &Device) -> Result<CascadeNet, NetError> {
+    let config = read_config(&config_path(path))?;
+    apply_file(CascadeNet::new(&config, device)?, path)
 }
 
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes
@@ -135,17 +179,69 @@ pub fn load_bytes(
     safetensors: &[u8],
     device: &Device,
 ) -> Result<OmniMvsNet, NetError> {
-    let config: NetConfig = serde_json::from_str(config_json).map_err(|source| NetError::Json {
-        path: config_path(name),
-        source,
-    })?;
-    let mut net = OmniMvsNet::new(&config, device)?;
-    let mut store = SafetensorsStore::from_bytes(Some(safetensors.to_vec()));
-    let result = net
-        .load_from(&mut store)
-        .map_err(|e| weights_error(name, e.to_string()))?;
-    check_applied(name, &result)?;
-    Ok(net)
+    let config = parse_config(name, config_json)?;
+    apply_bytes(OmniMvsNet::new(&config, device)?, name, safetensors)
+}
+
+/// A network of either family, as weight files hold them.
+#[derive(Debug)]
+pub enum AnyNet {
+    /// The paper's network.
+    OmniMvs(OmniMvsNet),
+    /// The coarse-to-fine network.
+    Cascade(CascadeNet),
+}
+
+impl AnyNet {
+    /// The network's configuration.
+    pub fn config(&self) -> &NetConfig {
+        match self {
+            AnyNet::OmniMvs(net) => &net.config,
+            AnyNet::Cascade(net) => &net.config,
+        }
+    }
+}
+
+/// Loads in-memory files of either family (the configuration's `family` decides).
+///
+/// # Errors
+/// See [`load_bytes`].
+pub fn load_any_bytes(
+    name: &Path,
+    config_json: &str,
+    safetensors: &[u8],
+    device: &Device,
+) -> Result<AnyNet, NetError> {
+    let config = parse_config(name, config_json)?;
+    Ok(match config.family {
+        Family::OmniMvs => AnyNet::OmniMvs(apply_bytes(
+            OmniMvsNet::new(&config, device)?,
+            name,
+            safetensors,
+        )?),
+        Family::Cascade => AnyNet::Cascade(apply_bytes(
+            CascadeNet::new(&config, device)?,
+            name,
+            safetensors,
+        )?),
+    })
+}
+
+/// Loads weights of either family and either format: a reference `.pt` checkpoint (the
+/// paper's network, sizes from `base`) or our safetensors file (family and sizes from its
+/// JSON).
+///
+/// # Errors
+/// See [`load_any`] and [`load_cascade`].
+pub fn load_family(path: &Path, base: &NetConfig, device: &Device) -> Result<AnyNet, NetError> {
+    let is_pytorch = matches!(
+        path.extension().and_then(|e| e.to_str()),
+        Some("pt" | "pth" | "tar")
+    );
+    if !is_pytorch && read_config(&config_path(path))?.family == Family::Cascade {
+        return Ok(AnyNet::Cascade(load_cascade(path, device)?));
+    }
+    Ok(AnyNet::OmniMvs(load_any(path, base, device)?))
 }
 
 /// What a reference checkpoint says about the network it holds.

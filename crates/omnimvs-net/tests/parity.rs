@@ -47,6 +47,7 @@ fn meta() -> Meta {
             input_width: get("input_width"),
             phi_deg: 45.0,
             layout: Layout::Published,
+            ..NetConfig::paper()
         },
     }
 }

@@ -20,6 +20,7 @@ fn micro_config() -> NetConfig {
         input_height: 24,
         input_width: 32,
         layout: Layout::Iccv,
+        ..NetConfig::tiny()
     }
 }
 
@@ -51,6 +52,7 @@ fn micro_sample(net: &NetConfig) -> Sample {
             index,
             valid,
         },
+        stage_gt: Vec::new(),
     }
 }
 

@@ -24,6 +24,6 @@ pub use cache::{CacheStatus, LutCache};
 pub use error::SweepError;
 pub use grid::EquirectGrid;
 pub use hypotheses::InvDepthHypotheses;
-pub use lut::{INVALID_PIXEL, LookupTable, SphereSet, hwd_file_name};
+pub use lut::{INVALID_PIXEL, LookupTable, SphereSet, hwd_file_name, normalized_position};
 pub use panorama::{InvDepthSource, Panorama, compose_panorama, warp_camera_to_panorama};
 pub use warp::{BilinearTap, GrayImage, sample_bilinear, warp_camera_onto_spheres};

@@ -1,8 +1,8 @@
 use std::io::Read;
 use std::path::Path;
 
-use omnimvs_camera::Rig;
 use omnimvs_camera::nalgebra::Vector3;
+use omnimvs_camera::{Camera, Rig};
 use rayon::prelude::*;
 
 use crate::{EquirectGrid, InvDepthHypotheses, SweepError};
@@ -65,6 +65,26 @@ fn normalise(px: f64, size: u32) -> f32 {
     (px / (f64::from(size) - 1.0) * 2.0 - 1.0) as f32
 }
 
+/// The table entry of a point `p_cam` in the frame of `camera`, whose image is
+/// `size = (width, height)`: its fisheye pixel normalised for
+/// `grid_sample(align_corners=True)` as `[x, y]`, with [`INVALID_PIXEL`] for a
+/// coordinate that is negative or has no projection. Only the direction of
+/// `p_cam` matters. The network's per-pixel sampler uses it too, so that its
+/// positions equal the table's on the spheres they share.
+pub fn normalized_position(camera: &Camera, size: (u32, u32), p_cam: &Vector3<f64>) -> [f32; 2] {
+    let (mut col, mut row) = match camera.model.project(p_cam) {
+        Some(px) => (px.col, px.row),
+        None => (-1.0, -1.0),
+    };
+    if col < 0.0 {
+        col = INVALID_PIXEL;
+    }
+    if row < 0.0 {
+        row = INVALID_PIXEL;
+    }
+    [normalise(col, size.0), normalise(row, size.1)]
+}
+
 impl LookupTable {
     /// Builds the table for `rig`, in parallel over (camera, sphere) planes.
     ///
@@ -107,18 +127,7 @@ impl LookupTable {
             let t_cam = cams_from_rig[cam_idx].translation.vector;
             for (ray_cam, dst) in rays_in_cam[cam_idx].iter().zip(out.chunks_exact_mut(2)) {
                 let p_cam = ray_cam * depth_m + t_cam;
-                let (mut col, mut row) = match camera.model.project(&p_cam) {
-                    Some(px) => (px.col, px.row),
-                    None => (-1.0, -1.0),
-                };
-                if col < 0.0 {
-                    col = INVALID_PIXEL;
-                }
-                if row < 0.0 {
-                    row = INVALID_PIXEL;
-                }
-                dst[0] = normalise(col, w);
-                dst[1] = normalise(row, h);
+                dst.copy_from_slice(&normalized_position(camera, (w, h), &p_cam));
             }
         });
         Ok(Self {

@@ -11,8 +11,7 @@ use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
-use omnimvs_net::NetConfig;
-use omnimvs_net::infer::Inference;
+use omnimvs_net::{NetConfig, NetEstimator};
 use omnimvs_stereo::{SgmParams, SphericalStereo};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LutCache};
 use serde::Serialize;
@@ -111,16 +110,16 @@ pub fn run(args: &Args) -> Result<()> {
     let mut nets = Vec::new();
     if args.method.iter().any(|m| m == "net") {
         for weights in &args.weights {
-            nets.push((weights.clone(), weights.load("tiny", &device)?));
+            nets.push((weights.clone(), weights.load_family("tiny", &device)?));
         }
     }
     let tiny = NetConfig::tiny();
     let (height, width, ndepth, phi_deg) = match nets.first() {
         Some((_, net)) => (
-            net.config.out_height,
-            net.config.out_width,
-            net.config.num_invdepth,
-            net.config.phi_deg,
+            net.config().out_height,
+            net.config().out_width,
+            net.config().num_invdepth,
+            net.config().phi_deg,
         ),
         None => (
             args.size.map_or(tiny.out_height, |s| s.height),
@@ -198,7 +197,7 @@ pub fn run(args: &Args) -> Result<()> {
         match method.as_str() {
             "net" => {
                 for (weights, net) in std::mem::take(&mut nets) {
-                    let c = net.config.clone();
+                    let c = net.config().clone();
                     if (c.out_height, c.out_width, c.num_invdepth) != (height, width, ndepth) {
                         bail!(
                             "{weights}: output {}x{} N={} differs from the evaluation grid {height}x{width} N={ndepth}",
@@ -207,15 +206,13 @@ pub fn run(args: &Args) -> Result<()> {
                             c.num_invdepth
                         );
                     }
-                    let (mut inference, _) = Inference::new(
-                        net.fold_batch_norm(),
+                    let (inference, _) = NetEstimator::new(
+                        net,
                         &ds,
                         &LutCache::default_location(),
                         device.clone(),
+                        args.backend.is_gpu(),
                     )?;
-                    if args.backend.is_gpu() {
-                        inference.sweep_on_device();
-                    }
                     let stem = weights.stem();
                     let name = if args.weights.len() > 1 {
                         format!("net ({stem})")

@@ -11,7 +11,8 @@ use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use omnimvs_data::ply::write_ply;
 use omnimvs_net::Backend;
-use omnimvs_net::infer::{FrameResult, Inference};
+use omnimvs_net::NetEstimator;
+use omnimvs_net::infer::FrameResult;
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
 use crate::args::{BACKEND_HELP, Frames, parse_backend};
@@ -33,7 +34,8 @@ pub struct Args {
     /// initialised --preset network (smoke tests, timing).
     #[arg(long, default_value = BUNDLED, value_parser = Weights::parse)]
     pub weights: Weights,
-    /// Architecture sizes for a PyTorch checkpoint or `--weights random`: paper or tiny.
+    /// Architecture sizes for a PyTorch checkpoint or `--weights random`: paper, tiny or
+    /// cascade.
     #[arg(long, default_value = "paper")]
     pub preset: String,
     /// Frames, A..B (inclusive) or a single frame.
@@ -55,21 +57,27 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
     let ds = Dataset::open(&args.dataset)?;
-    let net = args.weights.load(&args.preset, &device)?;
-    let config = net.config.clone();
-    let net = net.fold_batch_norm();
-    let (mut inference, status) = Inference::new(net, &ds, &LutCache::default_location(), device)?;
+    let net = args.weights.load_family(&args.preset, &device)?;
+    let config = net.config().clone();
+    let (mut inference, status) = NetEstimator::new(
+        net,
+        &ds,
+        &LutCache::default_location(),
+        device,
+        args.backend.is_gpu(),
+    )?;
     match status {
-        CacheStatus::Hit(p) => eprintln!("lookup table from cache {}", p.display()),
-        CacheStatus::Built(p) => eprintln!("lookup table built and cached in {}", p.display()),
-        CacheStatus::BuiltNotSaved(why) => eprintln!("lookup table built (not cached: {why})"),
-    }
-    if args.backend.is_gpu() {
-        inference.sweep_on_device();
+        Some(CacheStatus::Hit(p)) => eprintln!("lookup table from cache {}", p.display()),
+        Some(CacheStatus::Built(p)) => {
+            eprintln!("lookup table built and cached in {}", p.display())
+        }
+        Some(CacheStatus::BuiltNotSaved(why)) => {
+            eprintln!("lookup table built (not cached: {why})")
+        }
+        None => {}
     }
     if let Some(order) = &args.order {
-        inference.net.check_order(order)?;
-        inference.order = order.clone();
+        inference.set_order(order)?;
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
@@ -77,7 +85,7 @@ pub fn run(args: &Args) -> Result<()> {
         "dataset": args.dataset,
         "weights": args.weights,
         "network": config,
-        "order": inference.order,
+        "order": inference.order(),
         "backend": args.backend.to_string(),
     });
     std::fs::write(
@@ -106,7 +114,7 @@ pub fn run(args: &Args) -> Result<()> {
             bar.set_message(format!("frame {frame}: MAE {:.3}", m.mae));
             metrics.push((frame, m));
         } else {
-            bar.set_message(format!("frame {frame}: {:.2} s", result.timings.total));
+            bar.set_message(format!("frame {frame}: {:.2} s", result.seconds));
         }
         bar.inc(1);
     }
@@ -134,7 +142,7 @@ pub fn run(args: &Args) -> Result<()> {
 fn write_frame(
     args: &Args,
     ds: &Dataset,
-    inference: &Inference,
+    inference: &NetEstimator,
     frame: u32,
     images: &[GrayImage],
     result: &FrameResult,
@@ -144,12 +152,12 @@ fn write_frame(
     write_f32_tiff(&out(".tiff"), w, h, &result.inv_depth)?;
     write_f32_tiff(&out("_index.tiff"), w, h, &result.index)?;
     write_f32_tiff(&out("_entropy.tiff"), w, h, &result.entropy)?;
-    let max_inv = inference.hypotheses.max_inv_depth();
+    let max_inv = inference.hypotheses().max_inv_depth();
     let depth_rgb = colorize(&result.inv_depth, 0.0, max_inv, Colormap::Turbo, None);
     write_png_u8(&out(".png"), w, h, 3, &depth_rgb)?;
 
-    let ndepth = inference.net.config.num_invdepth;
-    let gt = ds.ground_truth(frame, &inference.grid, &inference.hypotheses)?;
+    let ndepth = inference.config().num_invdepth;
+    let gt = ds.ground_truth(frame, inference.grid(), inference.hypotheses())?;
     let metrics = gt
         .as_ref()
         .map(|gt| frame_metrics(&result.index, gt, ndepth))
@@ -157,9 +165,9 @@ fn write_frame(
 
     let pano = compose_panorama(
         &ds.rig,
-        &inference.grid,
+        inference.grid(),
         images,
-        Some(&inference.masks),
+        Some(inference.masks()),
         InvDepthSource::Map(&result.inv_depth),
     )?;
     let entropy_rgb = colorize(
@@ -188,7 +196,7 @@ fn write_frame(
     )?;
 
     if args.ply {
-        let points = point_cloud(&inference.grid, &result.inv_depth, &pano.image.data);
+        let points = point_cloud(inference.grid(), &result.inv_depth, &pano.image.data);
         write_ply(&out(".ply"), &points)?;
     }
     Ok(metrics)

@@ -4,9 +4,11 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use burn::tensor::Device;
 use indicatif::{ProgressBar, ProgressStyle};
-use omnimvs_net::NetConfig;
-use omnimvs_net::train::{EpochRecord, StepInfo, TrainConfig, Trainer};
+use omnimvs_net::train::trainer::read_run_config;
+use omnimvs_net::train::{EpochRecord, Optimizer, StepInfo, TrainConfig, Trainable, Trainer};
+use omnimvs_net::{CascadeNet, Family, NetConfig, OmniMvsNet};
 
 use crate::args::{BACKEND_HELP, Frames, parse_backend};
 
@@ -25,9 +27,13 @@ pub struct Args {
     /// Dataset folders with ground truth, comma-separated.
     #[arg(long, value_delimiter = ',', required_unless_present = "resume")]
     pub data: Vec<PathBuf>,
-    /// Network sizes: tiny or paper.
+    /// Network: tiny or paper (the paper's network), or cascade (the coarse-to-fine
+    /// network at the paper's output grid).
     #[arg(long, default_value = "tiny")]
     pub preset: String,
+    /// Optimiser: sgd (the paper's, with --momentum) or adam (--momentum is its beta 1).
+    #[arg(long, value_enum, default_value = "sgd")]
+    pub optimizer: OptimizerArg,
     /// Run folder (new). With --resume, the run folder to continue.
     #[arg(long, required_unless_present = "resume")]
     pub out: Option<PathBuf>,
@@ -51,7 +57,7 @@ pub struct Args {
     /// Epochs at --lr-low (default: a third of the epochs).
     #[arg(long)]
     pub low_lr_epochs: Option<usize>,
-    /// SGD momentum.
+    /// SGD momentum (Adam's beta 1).
     #[arg(long, default_value_t = 0.9)]
     pub momentum: f64,
     /// Seed of the initial weights, shuffling and augmentation.
@@ -99,10 +105,36 @@ fn print_epoch(r: &EpochRecord) {
     );
 }
 
+/// `--optimizer` values.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum OptimizerArg {
+    /// SGD with momentum.
+    Sgd,
+    /// Adam.
+    Adam,
+}
+
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
+    let family = match &args.resume {
+        Some(dir) => {
+            read_run_config(dir)
+                .with_context(|| format!("resuming {}", dir.display()))?
+                .net
+                .family
+        }
+        None => NetConfig::preset(&args.preset)?.family,
+    };
+    match family {
+        Family::OmniMvs => train::<OmniMvsNet>(args, &device),
+        Family::Cascade => train::<CascadeNet>(args, &device),
+    }
+}
+
+fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
+    let device = device.clone();
     let mut trainer = match &args.resume {
-        Some(dir) => Trainer::resume(dir, args.epochs, &device)
+        Some(dir) => Trainer::<M>::resume(dir, args.epochs, &device)
             .with_context(|| format!("resuming {}", dir.display()))?,
         None => {
             let Some(out) = &args.out else {
@@ -120,6 +152,10 @@ pub fn run(args: &Args) -> Result<()> {
                 lr: args.lr,
                 lr_low: args.lr_low,
                 low_lr_epochs: args.low_lr_epochs,
+                optimizer: match args.optimizer {
+                    OptimizerArg::Sgd => Optimizer::Sgd,
+                    OptimizerArg::Adam => Optimizer::Adam,
+                },
                 momentum: args.momentum,
                 seed: args.seed,
                 rotations: args.rotations,
@@ -130,7 +166,7 @@ pub fn run(args: &Args) -> Result<()> {
                 init: args.init.clone(),
                 ..TrainConfig::default()
             };
-            Trainer::create(config, out, &device)
+            Trainer::<M>::create(config, out, &device)
                 .with_context(|| format!("starting a run in {}", out.display()))?
         }
     };

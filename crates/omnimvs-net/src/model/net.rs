@@ -104,6 +104,16 @@ impl OmniMvsNet {
     /// # Errors
     /// [`NetError::InvalidConfig`] when `config` fails [`NetConfig::validate`].
     pub fn new(config: &NetConfig, device: &Device) -> Result<Self, NetError> {
+        if config.family != crate::config::Family::OmniMvs {
+            return Err(NetError::InvalidConfig {
+                field: "family",
+                message: format!(
+                    "expected the paper's network (`omni_mvs`), got {:?}: build it with \
+                     CascadeNet::new",
+                    config.family
+                ),
+            });
+        }
         config.validate()?;
         Ok(Self {
             feature_layers: FeatureLayers::new(

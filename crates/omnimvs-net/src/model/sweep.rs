@@ -8,7 +8,7 @@ use burn::tensor::{Device, Int, Tensor, TensorData};
 
 use super::blocks::ConvBn2d;
 use crate::error::NetError;
-use crate::taps::{SweepGrid, grid_taps, warp_features};
+use crate::taps::{SweepGrid, Taps, grid_taps, warp_features};
 
 /// One camera's bilinear taps as device tensors, for a given feature-map size.
 ///
@@ -34,6 +34,18 @@ impl SweepTaps {
     /// Precomputes the taps of `grid` for feature maps of `src_size = [rows, cols]`.
     pub fn new(grid: &SweepGrid, src_size: [usize; 2], device: &Device) -> Self {
         let taps = grid_taps(grid, src_size[0], src_size[1]);
+        Self::from_taps(&taps, grid, src_size, device)
+    }
+
+    /// The taps `taps` of `grid` (from [`grid_taps`]) for feature maps of `src_size`, as
+    /// device tensors.
+    pub fn from_taps(
+        taps: &[Taps],
+        grid: &SweepGrid,
+        src_size: [usize; 2],
+        device: &Device,
+    ) -> Self {
+        debug_assert_eq!(taps.len(), grid.num_spheres * grid.samples_per_sphere());
         let n = taps.len();
         let indices = std::array::from_fn(|k| {
             let data: Vec<i64> = taps.iter().map(|t| i64::from(t.index[k])).collect();

@@ -4,19 +4,18 @@
 
 use std::path::{Path, PathBuf};
 
-use burn::module::Module;
 use burn::optim::decay::WeightDecayConfig;
 use burn::optim::momentum::MomentumConfig;
-use burn::optim::{GradientsParams, ModuleOptimizer, SgdConfig};
+use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer, SgdConfig};
 use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_data::gt::GroundTruth;
 
-use super::config::TrainConfig;
+use super::config::{Optimizer, TrainConfig};
 use super::sample::Sample;
+use super::trainable::Trainable;
 use crate::error::NetError;
 use crate::model::{OmniMvsNet, SweepTaps};
-use crate::weights;
 
 /// File of the model inside a checkpoint folder.
 pub const MODEL_FILE: &str = "model.bpk";
@@ -50,84 +49,124 @@ fn ckpt_error(path: &Path, message: impl std::fmt::Display) -> NetError {
     }
 }
 
-/// The network being trained (on an autodiff device) and its SGD-with-momentum optimiser.
-pub struct Learner {
+/// The network being trained (on an autodiff device) and its optimiser.
+pub struct Learner<M = OmniMvsNet> {
     /// The network.
-    pub net: OmniMvsNet,
-    /// The optimiser and its momentum buffers.
+    pub net: M,
+    /// The optimiser and its momentum (or moment) buffers.
     pub optim: ModuleOptimizer,
     /// The autodiff device.
     pub device: Device,
-    sgd: SgdConfig,
+    optimizer: Optimizer,
+    optimizer_config: OptimizerSettings,
+}
+
+/// The settings [`Learner::load_checkpoint`] needs to rebuild the optimiser.
+#[derive(Clone, Copy, Debug)]
+struct OptimizerSettings {
+    momentum: f64,
+    weight_decay: f64,
+}
+
+fn init_optimizer(kind: Optimizer, s: OptimizerSettings) -> ModuleOptimizer {
+    let decay = (s.weight_decay > 0.0).then(|| WeightDecayConfig {
+        penalty: s.weight_decay as f32,
+    });
+    match kind {
+        Optimizer::Sgd => {
+            let mut sgd = SgdConfig::new().with_momentum(Some(MomentumConfig {
+                momentum: s.momentum,
+                dampening: 0.0,
+                nesterov: false,
+            }));
+            if let Some(decay) = decay {
+                sgd = sgd.with_weight_decay(Some(decay));
+            }
+            sgd.init()
+        }
+        Optimizer::Adam => AdamConfig::new()
+            .with_beta_1(s.momentum as f32)
+            .with_weight_decay(decay)
+            .init(),
+    }
 }
 
 impl Learner {
-    /// A learner for `config` on `device` (autodiff is added): the network starts from
-    /// `config.init` when given, else from random weights seeded with `config.seed`.
+    /// A learner of the paper's network for `config` on `device` (autodiff is added): the
+    /// network starts from `config.init` when given, else from random weights seeded with
+    /// `config.seed`.
     ///
     /// # Errors
     /// [`NetError`] for an invalid configuration or unreadable initial weights.
     pub fn new(config: &TrainConfig, device: &Device) -> Result<Self, NetError> {
+        Self::for_model(config, device)
+    }
+
+    /// Sweep taps of one camera set on the training device.
+    pub fn taps(&self, grids: &[crate::taps::SweepGrid]) -> Vec<SweepTaps> {
+        SweepTaps::for_grids(grids, self.net.config.feature_size(), &self.device)
+    }
+}
+
+impl<M: Trainable> Learner<M> {
+    /// A learner of any [`Trainable`] family for `config` on `device` (autodiff is added).
+    ///
+    /// # Errors
+    /// [`NetError`] for an invalid configuration or unreadable initial weights.
+    pub fn for_model(config: &TrainConfig, device: &Device) -> Result<Self, NetError> {
         config.validate()?;
         let device = device.clone().autodiff();
         device.seed(config.seed);
-        let net = match &config.init {
-            Some(path) => weights::load_any(path, &config.net, &device)?,
-            None => OmniMvsNet::new(&config.net, &device)?,
-        };
-        if net.config.out_height != config.net.out_height
-            || net.config.out_width != config.net.out_width
-            || net.config.num_invdepth != config.net.num_invdepth
+        let net = M::build(&config.net, config.init.as_deref(), &device)?;
+        let built = net.config();
+        if built.out_height != config.net.out_height
+            || built.out_width != config.net.out_width
+            || built.num_invdepth != config.net.num_invdepth
         {
             return Err(NetError::InvalidConfig {
                 field: "init",
                 message: format!(
                     "the weights' output {}x{} N={} differs from the run's {}x{} N={}",
-                    net.config.out_height,
-                    net.config.out_width,
-                    net.config.num_invdepth,
+                    built.out_height,
+                    built.out_width,
+                    built.num_invdepth,
                     config.net.out_height,
                     config.net.out_width,
                     config.net.num_invdepth
                 ),
             });
         }
-        let mut sgd = SgdConfig::new().with_momentum(Some(MomentumConfig {
+        let settings = OptimizerSettings {
             momentum: config.momentum,
-            dampening: 0.0,
-            nesterov: false,
-        }));
-        if config.weight_decay > 0.0 {
-            sgd = sgd.with_weight_decay(Some(WeightDecayConfig {
-                penalty: config.weight_decay as f32,
-            }));
-        }
+            weight_decay: config.weight_decay,
+        };
         Ok(Self {
             net,
-            optim: sgd.init(),
+            optim: init_optimizer(config.optimizer, settings),
             device,
-            sgd,
+            optimizer: config.optimizer,
+            optimizer_config: settings,
         })
     }
 
-    /// The sample's images as `[1, 1, H_I, W_I]` tensors on the training device.
-    pub fn image_tensors(&self, sample: &Sample) -> Vec<Tensor<4>> {
-        let c = &self.net.config;
+    /// The sample's images as `[1, 1, H_I, W_I]` tensors on `device`.
+    pub fn image_tensors_on(&self, sample: &Sample, device: &Device) -> Vec<Tensor<4>> {
+        let c = self.net.config();
         sample
             .images
             .iter()
             .map(|image| {
                 Tensor::from_data(
                     TensorData::new(image.clone(), [1, 1, c.input_height, c.input_width]),
-                    &self.device,
+                    device,
                 )
             })
             .collect()
     }
 
-    /// Sweep taps of one camera set on the training device.
-    pub fn taps(&self, grids: &[crate::taps::SweepGrid]) -> Vec<SweepTaps> {
-        SweepTaps::for_grids(grids, self.net.config.feature_size(), &self.device)
+    /// The sample's images on the training device.
+    pub fn image_tensors(&self, sample: &Sample) -> Vec<Tensor<4>> {
+        self.image_tensors_on(sample, &self.device)
     }
 
     /// Loss of `sample` with the current weights, without updating them.
@@ -137,29 +176,26 @@ impl Learner {
     pub fn loss(
         &self,
         sample: &Sample,
-        taps: &[SweepTaps],
+        geometry: &M::Geometry,
         order: &[usize],
     ) -> Result<Tensor<1>, NetError> {
         let images = self.image_tensors(sample);
-        let out = self.net.forward(&images, taps, order)?; // index [1, H, W]
-        let (target, mask) = target_data(&sample.gt);
-        let target = Tensor::<3>::from_data(target, &self.device);
-        let mask = Tensor::<3>::from_data(mask, &self.device);
-        Ok(masked_l1(out.index, target, mask))
+        self.net.loss(&images, geometry, order, sample)
     }
 
-    /// One SGD step on `sample` at learning rate `lr`; returns the loss before the step.
+    /// One optimiser step on `sample` at learning rate `lr`; returns the loss before the
+    /// step.
     ///
     /// # Errors
     /// [`NetError`] for inputs that do not fit the network.
     pub fn step(
         &mut self,
         sample: &Sample,
-        taps: &[SweepTaps],
+        geometry: &M::Geometry,
         order: &[usize],
         lr: f64,
     ) -> Result<f32, NetError> {
-        let loss = self.loss(sample, taps, order)?;
+        let loss = self.loss(sample, geometry, order)?;
         let value = loss.clone().into_scalar::<f32>();
         let grads = GradientsParams::from_grads(loss.backward(), &self.net);
         self.net = self.optim.step(lr, self.net.clone(), grads);
@@ -211,9 +247,7 @@ impl Learner {
             ));
         }
         let optim = dir.join(OPTIM_FILE);
-        self.optim = self
-            .sgd
-            .init()
+        self.optim = init_optimizer(self.optimizer, self.optimizer_config)
             .load(&optim)
             .map_err(|e| ckpt_error(&optim, e))?;
         Ok(())
@@ -221,7 +255,7 @@ impl Learner {
 
     /// The network without autodiff and in inference mode (batch norms use running
     /// statistics), for validation.
-    pub fn inference_net(&self) -> OmniMvsNet {
+    pub fn inference_net(&self) -> M {
         self.net.valid()
     }
 }

@@ -5,6 +5,7 @@
 //! - [`augment`]: the fixed set of small rig rotations and the ground truth rotated to match.
 //! - [`sample`]: reading one training sample (normalised inputs, ground-truth indices).
 //! - [`loader`]: a loader thread that prepares samples while the step runs.
+//! - [`trainable`]: what the trainer needs of a network family (the paper's, the cascade).
 //! - [`learner`]: the model, the optimiser, the masked L1 loss, one step, checkpoints.
 //! - [`trainer`]: epochs over datasets, validation, metrics log, curves, checkpoints.
 //! - [`plot`]: the PNG of the training and validation curves.
@@ -16,10 +17,12 @@ pub mod loader;
 pub mod plot;
 pub mod rng;
 pub mod sample;
+pub mod trainable;
 pub mod trainer;
 
 pub use augment::{RotationSet, resample_ground_truth};
-pub use config::TrainConfig;
+pub use config::{Optimizer, TrainConfig};
 pub use learner::{Learner, masked_l1};
 pub use sample::{Sample, SampleSource};
+pub use trainable::Trainable;
 pub use trainer::{EpochRecord, StepInfo, Trainer};

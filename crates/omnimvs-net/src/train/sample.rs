@@ -8,8 +8,8 @@ use omnimvs_data::Dataset;
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 
-use super::augment::{RotationSet, resample_ground_truth, rotated_grids};
-use crate::config::NetConfig;
+use super::augment::{RotationSet, resample_ground_truth, rotate_rig, rotated_grids};
+use crate::config::{Family, NetConfig};
 use crate::error::NetError;
 use crate::infer::{network_inputs, sweep_geometry};
 use crate::taps::SweepGrid;
@@ -28,6 +28,9 @@ pub struct Sample {
     pub images: Vec<Vec<f32>>,
     /// Ground truth on the output grid, rotated with the rig.
     pub gt: GroundTruth,
+    /// Ground truth on the grids of the network's earlier stages (the cascade's coarse and
+    /// half-resolution grids; empty for the paper's network), rotated likewise.
+    pub stage_gt: Vec<GroundTruth>,
 }
 
 /// A dataset prepared for training: its rig, masks, hypotheses and the sweep grids of every
@@ -43,8 +46,11 @@ pub struct SampleSource {
     pub grid: EquirectGrid,
     /// The rotations of the augmentation (identity first).
     pub rotations: RotationSet,
-    /// `grids[rotation][camera]`.
+    /// The paper's network's lookup tables, `grids[rotation][camera]` (empty for the
+    /// cascade, which projects on the fly).
     pub grids: Vec<Vec<SweepGrid>>,
+    /// Grids of the earlier stages whose ground truth a sample carries.
+    pub stage_grids: Vec<EquirectGrid>,
     /// Network input size `[rows, cols]`.
     pub input_size: [usize; 2],
 }
@@ -57,11 +63,24 @@ impl SampleSource {
     pub fn open(path: &Path, net: &NetConfig, rotations: RotationSet) -> Result<Self, NetError> {
         let dataset = Dataset::open(path)?;
         let (grid, hypotheses) = sweep_geometry(net, &dataset)?;
-        let grids = rotations
-            .rotations
-            .iter()
-            .map(|r| rotated_grids(&dataset.rig, r, &grid, &hypotheses))
-            .collect::<Result<Vec<_>, _>>()?;
+        let (grids, stage_grids) = match net.family {
+            Family::OmniMvs => (
+                rotations
+                    .rotations
+                    .iter()
+                    .map(|r| rotated_grids(&dataset.rig, r, &grid, &hypotheses))
+                    .collect::<Result<Vec<_>, _>>()?,
+                Vec::new(),
+            ),
+            Family::Cascade => {
+                let [coarse, mid, _] = net.cascade_sizes();
+                let stage_grids = [coarse, mid]
+                    .into_iter()
+                    .map(|[h, w]| EquirectGrid::new(h, w, net.phi_deg))
+                    .collect::<Result<Vec<_>, _>>()?;
+                (Vec::new(), stage_grids)
+            }
+        };
         let masks = dataset.masks()?;
         Ok(Self {
             dataset,
@@ -70,8 +89,14 @@ impl SampleSource {
             grid,
             rotations,
             grids,
+            stage_grids,
             input_size: [net.input_height, net.input_width],
         })
+    }
+
+    /// The rig seen in the frame of rotation `rotation`.
+    pub fn rotated_rig(&self, rotation: usize) -> omnimvs_camera::Rig {
+        rotate_rig(&self.dataset.rig, &self.rotations.rotations[rotation])
     }
 
     /// Frames of the dataset that have ground truth.
@@ -109,18 +134,20 @@ impl SampleSource {
                     expected: "a ground-truth file".into(),
                     found: "none".into(),
                 })?;
-        let gt = resample_ground_truth(
-            &map,
-            &self.grid,
-            &self.rotations.rotations[rotation],
-            &self.hypotheses,
-        )?;
+        let rotation_matrix = &self.rotations.rotations[rotation];
+        let gt = resample_ground_truth(&map, &self.grid, rotation_matrix, &self.hypotheses)?;
+        let stage_gt = self
+            .stage_grids
+            .iter()
+            .map(|grid| resample_ground_truth(&map, grid, rotation_matrix, &self.hypotheses))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Sample {
             source,
             frame,
             rotation,
             images,
             gt,
+            stage_gt,
         })
     }
 }

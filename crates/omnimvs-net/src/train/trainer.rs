@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::{Device, Tensor};
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use serde::{Deserialize, Serialize};
 
@@ -30,9 +30,9 @@ use super::loader::{Loader, PlanItem};
 use super::plot::plot_curves;
 use super::rng::SplitMix64;
 use super::sample::SampleSource;
+use super::trainable::Trainable;
 use crate::error::NetError;
-use crate::model::SweepTaps;
-use crate::weights;
+use crate::model::OmniMvsNet;
 
 /// Progress of one training step.
 #[derive(Clone, Copy, Debug)]
@@ -120,9 +120,13 @@ fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, NetError> {
 }
 
 /// Saves weights (safetensors + JSON) under `name` in `dir` atomically.
-fn export_weights(learner: &Learner, dir: &Path, name: &str) -> Result<(), NetError> {
+fn export_weights<M: Trainable>(
+    learner: &Learner<M>,
+    dir: &Path,
+    name: &str,
+) -> Result<(), NetError> {
     let tmp = dir.join(format!("{name}.partial.safetensors"));
-    weights::save(&learner.net, &tmp)?;
+    learner.net.save_weights(&tmp)?;
     for ext in ["json", "safetensors"] {
         let from = tmp.with_extension(ext);
         let to = dir.join(format!("{name}.{ext}"));
@@ -131,24 +135,37 @@ fn export_weights(learner: &Learner, dir: &Path, name: &str) -> Result<(), NetEr
     Ok(())
 }
 
-/// A training run on dataset folders.
-pub struct Trainer {
+/// A training run on dataset folders, of the paper's network or another [`Trainable`]
+/// family.
+pub struct Trainer<M: Trainable = OmniMvsNet> {
     /// The run's configuration.
     pub config: TrainConfig,
     /// The run folder.
     pub run_dir: PathBuf,
     /// Model and optimiser.
-    pub learner: Learner,
+    pub learner: Learner<M>,
     /// The datasets.
     pub sources: Arc<Vec<SampleSource>>,
     /// `(train, validation)` frames of every source.
     pub splits: Vec<(Vec<u32>, Vec<u32>)>,
     /// Progress of the run.
     pub state: RunState,
-    taps: HashMap<(usize, usize), Vec<SweepTaps>>,
+    /// Geometry of every `(source, rotation)` used so far, on the training device.
+    geometries: HashMap<(usize, usize), M::Geometry>,
+    /// Geometry of every source's identity rotation on the inference device.
+    val_geometries: HashMap<usize, M::Geometry>,
 }
 
-impl Trainer {
+/// Reads the configuration of the run in `run_dir` (to choose the network family before
+/// resuming it).
+///
+/// # Errors
+/// [`NetError`] when `train_config.json` cannot be read.
+pub fn read_run_config(run_dir: &Path) -> Result<TrainConfig, NetError> {
+    read_json(&run_dir.join("train_config.json"))
+}
+
+impl<M: Trainable> Trainer<M> {
     /// Starts a new run in `run_dir`, writing `train_config.json`.
     ///
     /// # Errors
@@ -222,7 +239,7 @@ impl Trainer {
                 message: "no training frame with ground truth in the datasets".into(),
             });
         }
-        let learner = Learner::new(&config, device)?;
+        let learner = Learner::for_model(&config, device)?;
         Ok(Self {
             config,
             run_dir: run_dir.to_path_buf(),
@@ -230,7 +247,8 @@ impl Trainer {
             sources: Arc::new(sources),
             splits,
             state: RunState::default(),
-            taps: HashMap::new(),
+            geometries: HashMap::new(),
+            val_geometries: HashMap::new(),
         })
     }
 
@@ -264,11 +282,16 @@ impl Trainer {
             .collect()
     }
 
-    fn taps_for(&mut self, source: usize, rotation: usize) -> &[SweepTaps] {
-        let (learner, sources) = (&self.learner, &self.sources);
-        self.taps
-            .entry((source, rotation))
-            .or_insert_with(|| learner.taps(&sources[source].grids[rotation]))
+    fn geometry_for(&mut self, source: usize, rotation: usize) -> Result<M::Geometry, NetError> {
+        if let Some(g) = self.geometries.get(&(source, rotation)) {
+            return Ok(g.clone());
+        }
+        let g = self
+            .learner
+            .net
+            .geometry(&self.sources[source], rotation, &self.learner.device)?;
+        self.geometries.insert((source, rotation), g.clone());
+        Ok(g)
     }
 
     /// Trains until `config.epochs`, validating and checkpointing after every epoch.
@@ -311,8 +334,8 @@ impl Trainer {
             wait += waited.elapsed().as_secs_f64();
             let sample = sample?;
             let order: Vec<usize> = (0..cams).map(|j| (j + item.shift) % cams).collect();
-            let taps = self.taps_for(item.source, item.rotation).to_vec();
-            let loss = self.learner.step(&sample, &taps, &order, lr)?;
+            let geometry = self.geometry_for(item.source, item.rotation)?;
+            let loss = self.learner.step(&sample, &geometry, &order, lr)?;
             loss_sum += f64::from(loss);
             on_step(&StepInfo {
                 epoch,
@@ -353,55 +376,57 @@ impl Trainer {
     }
 
     /// Mean loss and metrics on the validation frames (identity rotation and camera order,
-    /// inference mode).
+    /// inference mode), taken from the sources in turn up to `max_val_frames`.
     ///
     /// # Errors
     /// [`NetError`] when a frame cannot be read.
-    pub fn validate(&self) -> Result<(Option<f64>, Option<Metrics>), NetError> {
+    pub fn validate(&mut self) -> Result<(Option<f64>, Option<Metrics>), NetError> {
         let net = self.learner.inference_net();
         let device = self.learner.device.clone().without_autodiff();
-        let order = net.identity_order();
-        let c = net.config.clone();
+        let c = net.config().clone();
         let mut losses = Vec::new();
         let mut metrics = Vec::new();
-        let frames: Vec<(usize, u32)> = self
-            .splits
-            .iter()
-            .enumerate()
-            .flat_map(|(s, (_, val))| val.iter().map(move |&f| (s, f)))
+        // Round-robin over the sources, so that a frame limit still sees every dataset.
+        let longest = self.splits.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
+        let frames: Vec<(usize, u32)> = (0..longest)
+            .flat_map(|k| {
+                self.splits
+                    .iter()
+                    .enumerate()
+                    .filter_map(move |(s, (_, val))| val.get(k).map(|&f| (s, f)))
+            })
             .take(self.config.max_val_frames.unwrap_or(usize::MAX))
             .collect();
         for (s, frame) in frames {
             let source = &self.sources[s];
             let sample = source.load(s, frame, 0)?;
-            let images: Vec<Tensor<4>> = sample
-                .images
-                .iter()
-                .map(|image| {
-                    Tensor::from_data(
-                        TensorData::new(image.clone(), [1, 1, c.input_height, c.input_width]),
-                        &device,
-                    )
-                })
-                .collect();
-            let out = net.infer(&images, &source.grids[0], &order)?;
+            let images = self.learner.image_tensors_on(&sample, &device);
+            let geometry = match self.val_geometries.get(&s) {
+                Some(g) => g.clone(),
+                None => {
+                    let g = net.geometry(source, 0, &device)?;
+                    self.val_geometries.insert(s, g.clone());
+                    g
+                }
+            };
+            let index = net.predict(&images, &geometry, source)?;
             let (target, mask) = target_data(&sample.gt);
             let loss = super::learner::masked_l1(
-                out.index.clone(),
+                index.clone(),
                 Tensor::from_data(target, &device),
                 Tensor::from_data(mask, &device),
             )
             .into_scalar::<f32>();
             losses.push(f64::from(loss));
-            let index = out
-                .index
-                .into_data()
-                .try_into_vec_as::<f32>()
-                .map_err(|e| NetError::Shape {
-                    what: format!("index map ({e:?})"),
-                    expected: vec![],
-                    actual: vec![],
-                })?;
+            let index =
+                index
+                    .into_data()
+                    .try_into_vec_as::<f32>()
+                    .map_err(|e| NetError::Shape {
+                        what: format!("index map ({e:?})"),
+                        expected: vec![],
+                        actual: vec![],
+                    })?;
             metrics.push(frame_metrics(&index, &sample.gt, c.num_invdepth)?);
         }
         let loss = (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64);

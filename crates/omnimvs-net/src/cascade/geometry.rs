@@ -1,0 +1,301 @@
+//! The geometry of a cascade forward pass: the taps of each stage on the device, built from
+//! the per-pixel sampler of a rig, and the forward pass that moves from one stage to the next
+//! (each stage's estimate is read back to build the next stage's hypotheses, which carry no
+//! gradient, as in CasMVSNet).
+
+use std::time::Instant;
+
+use burn::tensor::{Device, Tensor, TensorData};
+use omnimvs_camera::Rig;
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+
+use super::model::{CascadeNet, StageOutput, hypothesis_tensor, read_values};
+use super::sampler::{PixelSampler, coarse_indices, hypotheses_around, resample_map};
+use crate::config::NetConfig;
+use crate::error::NetError;
+use crate::model::SweepTaps;
+use crate::taps::{SweepGrid, grid_taps};
+
+/// One stage's sampling positions on the device: every camera's taps, the hypotheses, and
+/// how many cameras (and camera pairs) see each sample.
+#[derive(Clone, Debug)]
+pub struct StageTaps {
+    /// Taps of every camera into its feature map.
+    pub cameras: Vec<SweepTaps>,
+    /// Hypothesis index (`N` units) of every sample `[1, K, H, W]`.
+    pub hypotheses: Tensor<4>,
+    /// Share of the cameras that see each sample (bilinear weight sum) `[1, 1, K, H, W]`.
+    pub visibility: Tensor<5>,
+    /// Number of camera pairs that see each sample `[1, 1, K, H, W]`.
+    pub pair_count: Tensor<5>,
+}
+
+impl StageTaps {
+    /// Taps of `grids` (one per camera, `K` "spheres" each) into feature maps of
+    /// `feature_size`, with the hypotheses `index` (`[K, H * W]`).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when there is no camera or the grids disagree in size.
+    pub fn new(
+        grids: &[SweepGrid],
+        index: Vec<f32>,
+        feature_size: [usize; 2],
+        device: &Device,
+    ) -> Result<Self, NetError> {
+        let Some(first) = grids.first() else {
+            return Err(NetError::Shape {
+                what: "cameras of a cascade stage".into(),
+                expected: vec![1],
+                actual: vec![0],
+            });
+        };
+        let (k, h, w) = (first.num_spheres, first.height, first.width);
+        let samples = k * h * w;
+        if index.len() != samples || grids.iter().any(|g| g.coords.len() != 2 * samples) {
+            return Err(NetError::Shape {
+                what: "cascade stage grids".into(),
+                expected: vec![k, h, w],
+                actual: vec![index.len()],
+            });
+        }
+        let mut count = vec![0f32; samples];
+        let mut count_sq = vec![0f32; samples];
+        let cameras = grids
+            .iter()
+            .map(|grid| {
+                let taps = grid_taps(grid, feature_size[0], feature_size[1]);
+                for ((c, c2), t) in count.iter_mut().zip(&mut count_sq).zip(&taps) {
+                    let seen: f32 = t.weight.iter().sum();
+                    *c += seen;
+                    *c2 += seen * seen;
+                }
+                SweepTaps::from_taps(&taps, grid, feature_size, device)
+            })
+            .collect();
+        let pairs: Vec<f32> = count
+            .iter()
+            .zip(&count_sq)
+            .map(|(c, c2)| (c * c - c2) / 2.0)
+            .collect();
+        let share = 1.0 / grids.len() as f32;
+        let visibility: Vec<f32> = count.iter().map(|c| c * share).collect();
+        let volume =
+            |data: Vec<f32>| Tensor::<5>::from_data(TensorData::new(data, [1, 1, k, h, w]), device);
+        Ok(Self {
+            cameras,
+            hypotheses: hypothesis_tensor(index, k, h, w, device),
+            visibility: volume(visibility),
+            pair_count: volume(pairs),
+        })
+    }
+
+    /// Number of hypotheses `K`.
+    pub fn num_hypotheses(&self) -> usize {
+        self.hypotheses.dims()[1]
+    }
+
+    /// Rows of the stage's grid.
+    pub fn height(&self) -> usize {
+        self.hypotheses.dims()[2]
+    }
+
+    /// Columns of the stage's grid.
+    pub fn width(&self) -> usize {
+        self.hypotheses.dims()[3]
+    }
+}
+
+/// Everything a cascade forward pass needs about one rig (one rotation of it, in training):
+/// the coarse stage's fixed taps and the per-pixel samplers of the two refinement grids.
+#[derive(Clone, Debug)]
+pub struct CascadeGeometry {
+    /// The coarse stage's taps (fixed spheres).
+    pub coarse: StageTaps,
+    /// Samplers of the coarse, half- and full-resolution grids.
+    pub samplers: [PixelSampler; 3],
+    /// The `N` hypotheses.
+    pub hypotheses: InvDepthHypotheses,
+    /// The network configuration it was built for.
+    pub config: NetConfig,
+    /// Device of the taps.
+    pub device: Device,
+}
+
+impl CascadeGeometry {
+    /// The geometry of `rig` for `config` (a cascade configuration) on `device`.
+    ///
+    /// # Errors
+    /// [`NetError`] for a rig whose camera count differs from the configuration's or an
+    /// invalid grid.
+    pub fn new(
+        rig: &Rig,
+        config: &NetConfig,
+        hypotheses: &InvDepthHypotheses,
+        device: &Device,
+    ) -> Result<Self, NetError> {
+        config.validate()?;
+        if rig.len() != config.num_cameras {
+            return Err(NetError::Shape {
+                what: "cameras of the rig".into(),
+                expected: vec![config.num_cameras],
+                actual: vec![rig.len()],
+            });
+        }
+        let grids = config
+            .cascade_sizes()
+            .map(|[h, w]| EquirectGrid::new(h, w, config.phi_deg));
+        let [g0, g1, g2] = grids;
+        let samplers = [g0?, g1?, g2?].map(|g| PixelSampler::new(rig, &g, hypotheses));
+        let spheres = coarse_indices(config.cascade.coarse_spheres, config.num_invdepth);
+        let coarse_grids = samplers[0].sphere_grids(&spheres)?;
+        let plane = samplers[0].grid().len();
+        let index: Vec<f32> = spheres
+            .iter()
+            .flat_map(|&n| std::iter::repeat_n(n as f32, plane))
+            .collect();
+        let feature_sizes = config.cascade_feature_sizes();
+        let coarse = StageTaps::new(&coarse_grids, index, feature_sizes[2], device)?;
+        Ok(Self {
+            coarse,
+            samplers,
+            hypotheses: *hypotheses,
+            config: config.clone(),
+            device: device.clone(),
+        })
+    }
+
+    /// The taps of refinement stage `stage` (1: half, 2: full resolution) around the previous
+    /// stage's index map `previous` (`N` units, on the previous stage's grid).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] for a map of another size.
+    pub fn refine_taps(&self, stage: usize, previous: &[f32]) -> Result<StageTaps, NetError> {
+        let from = self.samplers[stage - 1].grid();
+        if previous.len() != from.len() {
+            return Err(NetError::Shape {
+                what: "previous stage's index map".into(),
+                expected: vec![from.height, from.width],
+                actual: vec![previous.len()],
+            });
+        }
+        let sampler = &self.samplers[stage];
+        let center = resample_map(previous, from, sampler.grid());
+        let p = &self.config.cascade;
+        let k = p.stage_hypotheses[stage - 1];
+        let index = hypotheses_around(
+            &center,
+            k,
+            p.stage_intervals[stage - 1],
+            self.config.num_invdepth,
+        );
+        let grids = sampler.grids(&index, k)?;
+        // Stage 1 reads the stride-4 features, stage 2 the stride-2 ones.
+        let feature_size = self.config.cascade_feature_sizes()[2 - stage];
+        StageTaps::new(&grids, index, feature_size, &self.device)
+    }
+}
+
+/// Wall time of each stage of a cascade forward pass in seconds (measured only when asked,
+/// see [`CascadeNet::forward_timed`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CascadeTimings {
+    /// Feature pyramids of all cameras.
+    pub features: f64,
+    /// Coarse cost volume, regularisation and soft argmax.
+    pub coarse: f64,
+    /// Half-resolution hypotheses (host) and stage.
+    pub mid: f64,
+    /// Full-resolution hypotheses (host) and stage.
+    pub fine: f64,
+    /// Whole forward pass.
+    pub total: f64,
+}
+
+/// The three stages' results: coarse, half and full resolution.
+#[derive(Clone, Debug)]
+pub struct CascadeOutput {
+    /// Coarse, half- and full-resolution stages.
+    pub stages: [StageOutput; 3],
+}
+
+impl CascadeNet {
+    /// Forward pass over every camera's image `[B, 1, H_I, W_I]` (rig order), differentiable
+    /// with respect to the weights within each stage.
+    ///
+    /// # Errors
+    /// [`NetError`] for inputs that do not fit the network or the geometry.
+    pub fn forward(
+        &self,
+        images: &[Tensor<4>],
+        geometry: &CascadeGeometry,
+    ) -> Result<CascadeOutput, NetError> {
+        self.forward_timed(images, geometry, false)
+            .map(|(out, _)| out)
+    }
+
+    /// [`CascadeNet::forward`], with each stage's wall time when `timed` (which waits for the
+    /// device after every stage).
+    ///
+    /// # Errors
+    /// See [`CascadeNet::forward`].
+    pub fn forward_timed(
+        &self,
+        images: &[Tensor<4>],
+        geometry: &CascadeGeometry,
+        timed: bool,
+    ) -> Result<(CascadeOutput, CascadeTimings), NetError> {
+        if images.len() != self.config.num_cameras {
+            return Err(NetError::Shape {
+                what: "images per frame".into(),
+                expected: vec![self.config.num_cameras],
+                actual: vec![images.len()],
+            });
+        }
+        if let Some(image) = images.iter().find(|i| i.dims()[0] != 1) {
+            return Err(NetError::Shape {
+                what: "cascade input batch (per-pixel hypotheses are built per frame)".into(),
+                expected: vec![1],
+                actual: image.dims().to_vec(),
+            });
+        }
+        let start = Instant::now();
+        let mut last = start;
+        // Seconds since the previous lap, after the device finished (only when timed).
+        let mut lap = |device: &Device| -> f64 {
+            if !timed {
+                return 0.0;
+            }
+            let _ = device.sync();
+            let now = Instant::now();
+            let seconds = (now - last).as_secs_f64();
+            last = now;
+            seconds
+        };
+        let device = geometry.device.clone();
+        let mut timings = CascadeTimings::default();
+        let mut levels: [Vec<Tensor<4>>; 3] = Default::default();
+        for image in images {
+            for (level, f) in self.features.forward(image.clone()).into_iter().enumerate() {
+                levels[level].push(f);
+            }
+        }
+        timings.features = lap(&device);
+        let coarse = self.coarse_stage(&levels[2], &geometry.coarse)?;
+        timings.coarse = lap(&device);
+        let coarse_index = read_values(coarse.index.clone(), "coarse index")?;
+        let mid_taps = geometry.refine_taps(1, &coarse_index)?;
+        let mid = self.refine_stage(1, &levels[1], &mid_taps)?;
+        timings.mid = lap(&device);
+        let mid_index = read_values(mid.index.clone(), "half-resolution index")?;
+        let fine_taps = geometry.refine_taps(2, &mid_index)?;
+        let fine = self.refine_stage(0, &levels[0], &fine_taps)?;
+        timings.fine = lap(&device);
+        timings.total = start.elapsed().as_secs_f64();
+        Ok((
+            CascadeOutput {
+                stages: [coarse, mid, fine],
+            },
+            timings,
+        ))
+    }
+}

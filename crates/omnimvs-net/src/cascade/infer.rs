@@ -1,0 +1,120 @@
+//! The cascade on a dataset's frames: the rig's geometry once, then per frame the inputs
+//! (normalised over the valid pixels, resized to the network's input), the forward pass and
+//! the maps of the final stage.
+
+use burn::tensor::{Device, Tensor, TensorData};
+use omnimvs_camera::ValidityMask;
+use omnimvs_data::Dataset;
+use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+
+use super::geometry::{CascadeGeometry, CascadeTimings};
+use super::model::{CascadeNet, read_values};
+use crate::error::NetError;
+use crate::infer::{network_inputs, sweep_geometry};
+
+/// The cascade's results for one frame on its output grid.
+#[derive(Clone, Debug)]
+pub struct CascadeFrame {
+    /// Rows of the maps.
+    pub height: usize,
+    /// Columns of the maps.
+    pub width: usize,
+    /// Expected hypothesis index in `[0, N - 1]`.
+    pub index: Vec<f32>,
+    /// Inverse depth (1/m) of the index.
+    pub inv_depth: Vec<f32>,
+    /// Entropy of the final stage's distribution over its hypotheses (nats).
+    pub entropy: Vec<f32>,
+    /// Stage timings (zero unless asked for).
+    pub timings: CascadeTimings,
+}
+
+/// A cascade network ready to run on the frames of one rig.
+pub struct CascadeInference {
+    net: CascadeNet,
+    geometry: CascadeGeometry,
+    grid: EquirectGrid,
+    masks: Vec<ValidityMask>,
+    device: Device,
+}
+
+impl CascadeInference {
+    /// Prepares `net` for `dataset`'s rig on `device`.
+    ///
+    /// # Errors
+    /// [`NetError`] when the rig does not fit the network or the masks cannot be read.
+    pub fn new(net: CascadeNet, dataset: &Dataset, device: Device) -> Result<Self, NetError> {
+        let (grid, hypotheses) = sweep_geometry(&net.config, dataset)?;
+        let geometry = CascadeGeometry::new(&dataset.rig, &net.config, &hypotheses, &device)?;
+        Ok(Self {
+            net,
+            geometry,
+            grid,
+            masks: dataset.masks()?,
+            device,
+        })
+    }
+
+    /// The network.
+    pub fn net(&self) -> &CascadeNet {
+        &self.net
+    }
+
+    /// The output grid.
+    pub fn grid(&self) -> &EquirectGrid {
+        &self.grid
+    }
+
+    /// The `N` hypotheses of the dataset.
+    pub fn hypotheses(&self) -> &InvDepthHypotheses {
+        &self.geometry.hypotheses
+    }
+
+    /// Validity masks of the cameras at the dataset's image size.
+    pub fn masks(&self) -> &[ValidityMask] {
+        &self.masks
+    }
+
+    /// Runs the network on one frame's gray images (rig order); `timed` measures each stage
+    /// (waiting for the device after each).
+    ///
+    /// # Errors
+    /// [`NetError`] for a wrong number of images or a mask of another size.
+    pub fn run(&self, images: &[GrayImage], timed: bool) -> Result<CascadeFrame, NetError> {
+        let config = &self.net.config;
+        if images.len() != config.num_cameras {
+            return Err(NetError::Shape {
+                what: "images per frame".into(),
+                expected: vec![config.num_cameras],
+                actual: vec![images.len()],
+            });
+        }
+        let size = [config.input_height, config.input_width];
+        let inputs: Vec<Tensor<4>> = network_inputs(images, &self.masks, size)?
+            .into_iter()
+            .map(|data| {
+                Tensor::from_data(
+                    TensorData::new(data, [1, 1, size[0], size[1]]),
+                    &self.device,
+                )
+            })
+            .collect();
+        let (out, timings) = self.net.forward_timed(&inputs, &self.geometry, timed)?;
+        let [_, _, fine] = out.stages;
+        let entropy = read_values(fine.entropy(), "entropy map")?;
+        let index = read_values(fine.index, "index map")?;
+        let hypotheses = self.geometry.hypotheses;
+        let inv_depth = index
+            .iter()
+            .map(|&n| hypotheses.inv_depth(f64::from(n)) as f32)
+            .collect();
+        Ok(CascadeFrame {
+            height: self.grid.height,
+            width: self.grid.width,
+            index,
+            inv_depth,
+            entropy,
+            timings,
+        })
+    }
+}

@@ -1,0 +1,470 @@
+//! The coarse-to-fine network: features at three strides, a group-wise correlation cost
+//! volume over a few spheres at a quarter of the output resolution regularised by a small 2D
+//! encoder-decoder (hypotheses as channels), then two stages of per-pixel hypotheses around the previous estimate.
+
+use burn::module::Module;
+use burn::nn::conv::{Conv2d, Conv2dConfig, ConvTranspose2d, ConvTranspose2dConfig};
+use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d};
+use burn::tensor::activation::{relu, softmax};
+use burn::tensor::{Device, Tensor, TensorData};
+
+use super::geometry::StageTaps;
+use crate::config::{Family, NetConfig};
+use crate::error::NetError;
+use crate::model::blocks::ConvBn2d;
+use crate::model::softargmin::entropy;
+
+/// Gray input images: one channel.
+const INPUT_CHANNELS: usize = 1;
+
+/// Feature pyramid shared by all cameras: strides 2, 4 and 8 of the input, each ending in a
+/// linear 1x1 projection (signed features for the correlation).
+#[derive(Module, Debug)]
+pub struct CascadeFeatures {
+    /// 5x5 stride-2 stem.
+    pub conv0: ConvBn2d,
+    /// 3x3 at stride 2.
+    pub conv2: ConvBn2d,
+    /// Projection of the stride-2 features.
+    pub out2: ConvBn2d,
+    /// 3x3 stride-2 down to stride 4.
+    pub down4: ConvBn2d,
+    /// Residual pair at stride 4.
+    pub res4: Vec<ConvBn2d>,
+    /// Projection of the stride-4 features.
+    pub out4: ConvBn2d,
+    /// 3x3 stride-2 down to stride 8.
+    pub down8: ConvBn2d,
+    /// Two residual pairs at stride 8, the second dilated by 2.
+    pub res8: Vec<ConvBn2d>,
+    /// Projection of the stride-8 features.
+    pub out8: ConvBn2d,
+}
+
+impl CascadeFeatures {
+    fn new(channels: [usize; 3], device: &Device) -> Self {
+        let [c2, c4, c8] = channels;
+        let conv = |cin, cout, k, stride, pad, dil| {
+            ConvBn2d::new([cin, cout], k, stride, pad, dil, true, true, device)
+        };
+        let project = |c| ConvBn2d::new([c, c], 1, 1, 0, 1, false, false, device);
+        Self {
+            conv0: conv(INPUT_CHANNELS, c2, 5, 2, 2, 1),
+            conv2: conv(c2, c2, 3, 1, 1, 1),
+            out2: project(c2),
+            down4: conv(c2, c4, 3, 2, 1, 1),
+            res4: vec![conv(c4, c4, 3, 1, 1, 1), conv(c4, c4, 3, 1, 1, 1)],
+            out4: project(c4),
+            down8: conv(c4, c8, 3, 2, 1, 1),
+            res8: vec![
+                conv(c8, c8, 3, 1, 1, 1),
+                conv(c8, c8, 3, 1, 1, 1),
+                conv(c8, c8, 3, 1, 2, 2),
+                conv(c8, c8, 3, 1, 2, 2),
+            ],
+            out8: project(c8),
+        }
+    }
+
+    fn residual_pairs(blocks: &[ConvBn2d], mut x: Tensor<4>) -> Tensor<4> {
+        for pair in blocks.chunks_exact(2) {
+            let y = pair[0].forward(x.clone(), None);
+            x = pair[1].forward(y, Some(x));
+        }
+        x
+    }
+
+    /// `[B, 1, H_I, W_I]` -> features at strides 2, 4 and 8.
+    pub fn forward(&self, image: Tensor<4>) -> [Tensor<4>; 3] {
+        let x = self.conv0.forward(image, None); // [B, c2, H_I/2, W_I/2]
+        let x = self.conv2.forward(x, None); // [B, c2, H_I/2, W_I/2]
+        let f2 = self.out2.forward(x.clone(), None);
+        let x = self.down4.forward(x, None); // [B, c4, H_I/4, W_I/4]
+        let x = Self::residual_pairs(&self.res4, x);
+        let f4 = self.out4.forward(x.clone(), None);
+        let x = self.down8.forward(x, None); // [B, c8, H_I/8, W_I/8]
+        let x = Self::residual_pairs(&self.res8, x);
+        let f8 = self.out8.forward(x, None);
+        [f2, f4, f8]
+    }
+}
+
+/// 3x3 convolution on the panorama grid that wraps around in longitude (the columns are a
+/// circle) and is zero-padded in latitude; optional batch norm and ReLU. The cost
+/// regularisation works on 2D maps whose channels are (groups x hypotheses): on a CPU a 2D
+/// convolution with many channels runs near the GEMM peak, where a 3D convolution with a
+/// handful of channels over the same volume is memory-bound (measured 10x slower per FLOP
+/// with burn's flex backend, see the README).
+#[derive(Module, Debug)]
+pub struct PanoConv2d {
+    /// The convolution (no padding along columns: the input is padded circularly).
+    pub conv: Conv2d,
+    /// Batch norm.
+    pub bn: Option<BatchNorm>,
+    /// Whether a ReLU ends the block.
+    #[module(skip)]
+    pub relu: bool,
+}
+
+impl PanoConv2d {
+    fn new(channels: [usize; 2], stride: usize, bn_relu: bool, device: &Device) -> Self {
+        let conv = Conv2dConfig::new(channels, [3, 3])
+            .with_stride([stride, stride])
+            .with_padding(PaddingConfig2d::Explicit(1, 0, 1, 0))
+            .init(device);
+        Self {
+            conv,
+            bn: bn_relu.then(|| BatchNormConfig::new(channels[1]).init(device)),
+            relu: bn_relu,
+        }
+    }
+
+    /// `[B, C_in, H, W] -> [B, C_out, H', W']`.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        let [_, _, _, w] = x.dims();
+        let first = x.clone().narrow(3, 0, 1);
+        let last = x.clone().narrow(3, w - 1, 1);
+        let x = Tensor::cat(vec![last, x, first], 3); // [B, C, H, W + 2]
+        let x = self.conv.forward(x); // [B, C_out, H', W']
+        bn_relu(x, self.bn.as_ref(), self.relu)
+    }
+}
+
+fn bn_relu(x: Tensor<4>, bn: Option<&BatchNorm>, relu_after: bool) -> Tensor<4> {
+    let x = match bn {
+        Some(bn) => bn.forward(x),
+        None => x,
+    };
+    if relu_after { relu(x) } else { x }
+}
+
+/// Stride-2 transposed 3x3 convolution (doubles rows and columns), batch norm, the skip
+/// addition, ReLU.
+#[derive(Module, Debug)]
+pub struct Up2d {
+    /// The transposed convolution.
+    pub conv: ConvTranspose2d,
+    /// Batch norm.
+    pub bn: BatchNorm,
+}
+
+impl Up2d {
+    fn new(channels: [usize; 2], device: &Device) -> Self {
+        Self {
+            conv: ConvTranspose2dConfig::new(channels, [3, 3])
+                .with_stride([2, 2])
+                .with_padding([1, 1])
+                .with_padding_out([1, 1])
+                .init(device),
+            bn: BatchNormConfig::new(channels[1]).init(device),
+        }
+    }
+
+    /// `[B, C_in, H, W]` and a skip `[B, C_out, 2H, 2W]` -> `[B, C_out, 2H, 2W]`.
+    pub fn forward(&self, x: Tensor<4>, skip: Tensor<4>) -> Tensor<4> {
+        let x = self.bn.forward(self.conv.forward(x)); // [B, C_out, 2H, 2W]
+        relu(x + skip)
+    }
+}
+
+/// The coarse stage's 2D encoder-decoder over the cost volume (channels = groups x spheres):
+/// two stride-2 levels, skip additions, one score per sphere.
+#[derive(Module, Debug)]
+pub struct CoarseRegularizer {
+    /// Full-resolution convolutions.
+    pub c0: Vec<PanoConv2d>,
+    /// Half resolution.
+    pub c1: Vec<PanoConv2d>,
+    /// Quarter resolution.
+    pub c2: Vec<PanoConv2d>,
+    /// Quarter -> half.
+    pub up1: Up2d,
+    /// Half -> full.
+    pub up0: Up2d,
+    /// Final score per sphere.
+    pub out: PanoConv2d,
+}
+
+fn run(blocks: &[PanoConv2d], x: Tensor<4>) -> Tensor<4> {
+    blocks.iter().fold(x, |x, b| b.forward(x))
+}
+
+impl CoarseRegularizer {
+    fn new(cin: usize, spheres: usize, [a, b, c]: [usize; 3], device: &Device) -> Self {
+        let conv = |i, o, s| PanoConv2d::new([i, o], s, true, device);
+        Self {
+            c0: vec![conv(cin, a, 1), conv(a, a, 1)],
+            c1: vec![conv(a, b, 2), conv(b, b, 1)],
+            c2: vec![conv(b, c, 2), conv(c, c, 1)],
+            up1: Up2d::new([c, b], device),
+            up0: Up2d::new([b, a], device),
+            out: PanoConv2d::new([a, spheres], 1, false, device),
+        }
+    }
+
+    /// `[B, C, H, W]` -> scores `[B, D, H, W]`.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        let x0 = run(&self.c0, x); // [B, a, H, W]
+        let x1 = run(&self.c1, x0.clone()); // [B, b, H/2, W/2]
+        let x2 = run(&self.c2, x1.clone()); // [B, c, H/4, W/4]
+        let y1 = self.up1.forward(x2, x1); // [B, b, H/2, W/2]
+        let y0 = self.up0.forward(y1, x0); // [B, a, H, W]
+        self.out.forward(y0) // [B, D, H, W]
+    }
+}
+
+/// A refinement stage's 2D convolutions over its per-pixel hypotheses.
+#[derive(Module, Debug)]
+pub struct StageRegularizer {
+    /// Two 3x3 convolutions with batch norm and ReLU.
+    pub convs: Vec<PanoConv2d>,
+    /// Final score per hypothesis.
+    pub out: PanoConv2d,
+}
+
+impl StageRegularizer {
+    fn new(cin: usize, ch: usize, k: usize, device: &Device) -> Self {
+        Self {
+            convs: vec![
+                PanoConv2d::new([cin, ch], 1, true, device),
+                PanoConv2d::new([ch, ch], 1, true, device),
+            ],
+            out: PanoConv2d::new([ch, k], 1, false, device),
+        }
+    }
+
+    /// `[B, C, H, W]` -> scores `[B, K, H, W]`.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        self.out.forward(run(&self.convs, x)) // [B, K, H, W]
+    }
+}
+
+/// Folds a stage's volume `[B, G + 1, K, H, W]` into 2D channels `[B, (G + 1) K, H, W]`.
+fn fold_volume(volume: Tensor<5>) -> Tensor<4> {
+    let [b, c, k, h, w] = volume.dims();
+    volume.reshape([b, c * k, h, w])
+}
+
+/// One stage's result.
+#[derive(Clone, Debug)]
+pub struct StageOutput {
+    /// Per-pixel distribution over the stage's hypotheses `[B, K, H, W]`.
+    pub prob: Tensor<4>,
+    /// Expected hypothesis index in `N` units `[B, H, W]`.
+    pub index: Tensor<3>,
+}
+
+impl StageOutput {
+    /// Entropy of the per-pixel distribution `[B, H, W]` (nats).
+    pub fn entropy(&self) -> Tensor<3> {
+        entropy(self.prob.clone())
+    }
+}
+
+/// The cascade network. Build it with [`CascadeNet::new`] from a [`Family::Cascade`]
+/// configuration; run it with [`CascadeNet::forward`] over a
+/// [`super::CascadeGeometry`].
+#[derive(Module, Debug)]
+pub struct CascadeNet {
+    /// Feature pyramid shared by every camera.
+    pub features: CascadeFeatures,
+    /// Coarse cost volume regularisation.
+    pub coarse: CoarseRegularizer,
+    /// Half-resolution refinement.
+    pub mid: StageRegularizer,
+    /// Full-resolution refinement.
+    pub fine: StageRegularizer,
+    /// The sizes the network was built for.
+    #[module(skip)]
+    pub config: NetConfig,
+}
+
+impl CascadeNet {
+    /// Builds a randomly initialised network.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when `config` is not a valid cascade configuration.
+    pub fn new(config: &NetConfig, device: &Device) -> Result<Self, NetError> {
+        if config.family != Family::Cascade {
+            return Err(NetError::InvalidConfig {
+                field: "family",
+                message: format!("expected `cascade`, got {:?}", config.family),
+            });
+        }
+        config.validate()?;
+        let p = &config.cascade;
+        Ok(Self {
+            features: CascadeFeatures::new(p.feature_channels, device),
+            coarse: CoarseRegularizer::new(
+                (p.groups[2] + 1) * p.coarse_spheres,
+                p.coarse_spheres,
+                p.coarse_channels,
+                device,
+            ),
+            mid: StageRegularizer::new(
+                (p.groups[1] + 1) * p.stage_hypotheses[0],
+                p.stage_channels[0],
+                p.stage_hypotheses[0],
+                device,
+            ),
+            fine: StageRegularizer::new(
+                (p.groups[0] + 1) * p.stage_hypotheses[1],
+                p.stage_channels[1],
+                p.stage_hypotheses[1],
+                device,
+            ),
+            config: config.clone(),
+        })
+    }
+
+    /// Group-wise correlation of one stage: every camera's features `[1, C, rows, cols]`
+    /// sampled at the stage's positions, then the mean product over camera pairs that see a
+    /// sample, by groups of channels, and the share of cameras that see it:
+    /// `[1, groups + 1, K, H, W]`.
+    ///
+    /// The features are gathered channels-last (`[rows * cols, C]` rows picked by the taps),
+    /// so every tap reads `C` contiguous values; the camera-pair products come from two sums,
+    /// `((sum f)^2 - sum f^2) / 2`, linear in the number of cameras.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when there are no features, their number differs from the taps'
+    /// cameras, or the batch is not 1.
+    pub fn correlation(
+        features: &[Tensor<4>],
+        taps: &StageTaps,
+        groups: usize,
+    ) -> Result<Tensor<5>, NetError> {
+        let shape_error = |expected: Vec<usize>, actual: Vec<usize>| NetError::Shape {
+            what: "feature maps of a cascade stage".into(),
+            expected,
+            actual,
+        };
+        if features.is_empty() || features.len() != taps.cameras.len() {
+            return Err(shape_error(vec![taps.cameras.len()], vec![features.len()]));
+        }
+        let [k, h, w] = [taps.num_hypotheses(), taps.height(), taps.width()];
+        let mut sum: Option<Tensor<2>> = None;
+        let mut sum_sq: Option<Tensor<2>> = None;
+        let mut channels = 0;
+        for (feature, cam) in features.iter().zip(&taps.cameras) {
+            let [b, c, rows, cols] = feature.dims();
+            if b != 1 {
+                return Err(shape_error(vec![1, c, rows, cols], vec![b, c, rows, cols]));
+            }
+            channels = c;
+            let table = feature.clone().reshape([c, rows * cols]).swap_dims(0, 1); // [P, C]
+            let warped = gather_rows(table, cam); // [S, C]
+            let sq = warped.clone().powi_scalar(2);
+            sum = Some(match sum {
+                Some(s) => s + warped,
+                None => warped,
+            });
+            sum_sq = Some(match sum_sq {
+                Some(s) => s + sq,
+                None => sq,
+            });
+        }
+        let (Some(sum), Some(sum_sq)) = (sum, sum_sq) else {
+            return Err(shape_error(vec![1], vec![0]));
+        };
+        let samples = k * h * w;
+        let pairs = (sum.powi_scalar(2) - sum_sq).div_scalar(2.0); // [S, C]
+        let grouped = pairs
+            .reshape([samples, groups, channels / groups])
+            .mean_dim(2) // [S, G, 1]
+            .reshape([samples, groups])
+            / taps
+                .pair_count
+                .clone()
+                .reshape([samples, 1])
+                .clamp_min(1e-3); // [S, G]
+        let corr = grouped
+            .swap_dims(0, 1) // [G, S]
+            .reshape([1, groups, k, h, w]); // [1, G, K, H, W]
+        let seen = taps.visibility.clone(); // [1, 1, K, H, W]
+        Ok(Tensor::cat(vec![corr, seen], 1)) // [1, G+1, K, H, W]
+    }
+
+    /// Softmax of a stage's scores and the expected index over its hypotheses
+    /// `[1 or B, K, H, W]` (`N` units).
+    pub fn soft_argmax(scores: Tensor<4>, hypotheses: Tensor<4>) -> StageOutput {
+        let prob = softmax(scores, 1); // [B, K, H, W]
+        let index = (prob.clone() * hypotheses).sum_dim(1).squeeze_dim(1); // [B, H, W]
+        StageOutput { prob, index }
+    }
+
+    /// Coarse stage from the stride-8 features of every camera.
+    ///
+    /// # Errors
+    /// See [`CascadeNet::correlation`].
+    pub fn coarse_stage(
+        &self,
+        features: &[Tensor<4>],
+        taps: &StageTaps,
+    ) -> Result<StageOutput, NetError> {
+        let volume = Self::correlation(features, taps, self.config.cascade.groups[2])?;
+        let scores = self.coarse.forward(fold_volume(volume)); // [B, K, H, W]
+        Ok(Self::soft_argmax(scores, taps.hypotheses.clone()))
+    }
+
+    /// A refinement stage (`level` 1: half resolution from stride-4 features, 0: full
+    /// resolution from stride-2 features).
+    ///
+    /// # Errors
+    /// See [`CascadeNet::correlation`].
+    pub fn refine_stage(
+        &self,
+        level: usize,
+        features: &[Tensor<4>],
+        taps: &StageTaps,
+    ) -> Result<StageOutput, NetError> {
+        let groups = self.config.cascade.groups[level];
+        let volume = Self::correlation(features, taps, groups)?;
+        let regularizer = if level == 1 { &self.mid } else { &self.fine };
+        let scores = regularizer.forward(fold_volume(volume)); // [B, K, H, W]
+        Ok(Self::soft_argmax(scores, taps.hypotheses.clone()))
+    }
+}
+
+/// Bilinear sampling of a channels-last table `[P, C]` (`P = rows * cols` of a feature map)
+/// at one camera's taps: `[S, C]`, `S` the taps' samples. Differentiable with respect to the
+/// table (the gradient is a scatter-add).
+fn gather_rows(table: Tensor<2>, taps: &crate::model::SweepTaps) -> Tensor<2> {
+    let mut out: Option<Tensor<2>> = None;
+    for (index, weight) in taps.indices.iter().zip(&taps.weights) {
+        let samples = weight.dims()[1];
+        let tap = table.clone().select(0, index.clone()) // [S, C]
+            * weight.clone().reshape([samples, 1]); // [S, 1]
+        out = Some(match out {
+            Some(acc) => acc + tap,
+            None => tap,
+        });
+    }
+    let [_, c] = table.dims();
+    out.unwrap_or_else(|| Tensor::zeros([0, c], &table.device()))
+}
+
+/// Reads a `[B, H, W]` (or any) tensor's values.
+///
+/// # Errors
+/// [`NetError::Shape`] when the data cannot be read as `f32`.
+pub fn read_values<const D: usize>(t: Tensor<D>, what: &str) -> Result<Vec<f32>, NetError> {
+    t.into_data()
+        .try_into_vec_as::<f32>()
+        .map_err(|e| NetError::Shape {
+            what: format!("{what} ({e:?})"),
+            expected: vec![],
+            actual: vec![],
+        })
+}
+
+/// A `[1, K, H, W]` tensor of hypothesis indices from `[K, H * W]` values.
+pub fn hypothesis_tensor(
+    values: Vec<f32>,
+    k: usize,
+    h: usize,
+    w: usize,
+    device: &Device,
+) -> Tensor<4> {
+    Tensor::from_data(TensorData::new(values, [1, k, h, w]), device)
+}

@@ -1,0 +1,226 @@
+//! Per-pixel sweep positions: where each camera sees the point of an output ray at a
+//! per-pixel inverse depth.
+//!
+//! A lookup table holds fixed spheres only; the refinement stages of the cascade test a few
+//! hypotheses around each pixel's own estimate, so their positions are projected on the fly
+//! through the camera model. For a grid ray `r` (rig frame) and inverse depth `d`, the point
+//! `r / d` seen from a camera with `cam_from_rig = (R, t)` lies along `R r + d t`; only that
+//! direction matters to a central projection, so `d = 0` (infinity) needs no special case. The
+//! projection and the normalisation are [`omnimvs_sweep::normalized_position`], the very
+//! function that fills the lookup table, so positions agree with the table on every sphere
+//! the two share (tested).
+
+use omnimvs_camera::Rig;
+use omnimvs_camera::nalgebra::Vector3;
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, normalized_position};
+use rayon::prelude::*;
+
+use crate::error::NetError;
+use crate::taps::SweepGrid;
+
+/// One camera's rays of the grid in its own frame.
+#[derive(Clone, Debug)]
+struct CameraRays {
+    /// Index of the camera in the rig.
+    camera: usize,
+    /// Image size `(width, height)` the positions are normalised by.
+    size: (u32, u32),
+    /// `R r` for every grid pixel, row-major.
+    rays_in_cam: Vec<Vector3<f64>>,
+    /// `t` of `cam_from_rig`, metres.
+    t_cam: Vector3<f64>,
+}
+
+/// Projects the rays of one output grid, at per-pixel inverse depths, into every camera of a
+/// rig.
+#[derive(Clone, Debug)]
+pub struct PixelSampler {
+    rig: Rig,
+    grid: EquirectGrid,
+    hypotheses: InvDepthHypotheses,
+    cameras: Vec<CameraRays>,
+}
+
+impl PixelSampler {
+    /// Prepares the rays of `grid` in every camera of `rig`; hypothesis indices are read with
+    /// `hypotheses`.
+    pub fn new(rig: &Rig, grid: &EquirectGrid, hypotheses: &InvDepthHypotheses) -> Self {
+        let rays = grid.rays();
+        let cameras = rig
+            .cameras
+            .iter()
+            .enumerate()
+            .map(|(camera, cam)| {
+                let cam_from_rig = cam.rig_from_cam.inverse();
+                CameraRays {
+                    camera,
+                    size: (cam.model.width(), cam.model.height()),
+                    rays_in_cam: rays.iter().map(|r| cam_from_rig.rotation * r).collect(),
+                    t_cam: cam_from_rig.translation.vector,
+                }
+            })
+            .collect();
+        Self {
+            rig: rig.clone(),
+            grid: *grid,
+            hypotheses: *hypotheses,
+            cameras,
+        }
+    }
+
+    /// The output grid.
+    pub fn grid(&self) -> &EquirectGrid {
+        &self.grid
+    }
+
+    /// Number of cameras.
+    pub fn num_cameras(&self) -> usize {
+        self.cameras.len()
+    }
+
+    /// One sweep grid per camera for per-pixel hypotheses: `index` holds `K` planes of
+    /// fractional hypothesis indices (`N` units), `[K, rows, cols]` row-major; the grids have
+    /// `K` "spheres", one per plane.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when `index` is not `K` planes of the grid.
+    pub fn grids(&self, index: &[f32], k: usize) -> Result<Vec<SweepGrid>, NetError> {
+        let plane = self.grid.len();
+        if index.len() != k * plane {
+            return Err(NetError::Shape {
+                what: "per-pixel hypothesis indices".into(),
+                expected: vec![k, self.grid.height, self.grid.width],
+                actual: vec![index.len()],
+            });
+        }
+        let step = self.hypotheses.step();
+        let min = self.hypotheses.min_inv_depth();
+        self.cameras
+            .iter()
+            .map(|cam| {
+                let camera = &self.rig.cameras[cam.camera];
+                let mut coords = vec![0f32; 2 * index.len()];
+                coords
+                    .par_chunks_mut(2 * plane)
+                    .zip(index.par_chunks(plane))
+                    .for_each(|(out, plane_index)| {
+                        for (i, (dst, &n)) in out.chunks_exact_mut(2).zip(plane_index).enumerate() {
+                            let inv_depth = min + f64::from(n) * step;
+                            let p_cam = cam.rays_in_cam[i] + cam.t_cam * inv_depth;
+                            dst.copy_from_slice(&normalized_position(camera, cam.size, &p_cam));
+                        }
+                    });
+                SweepGrid::new(k, self.grid.height, self.grid.width, coords)
+            })
+            .collect()
+    }
+
+    /// One sweep grid per camera for spheres shared by every pixel at the fractional
+    /// hypothesis indices `spheres`.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] never for consistent inputs (see [`PixelSampler::grids`]).
+    pub fn sphere_grids(&self, spheres: &[f64]) -> Result<Vec<SweepGrid>, NetError> {
+        let plane = self.grid.len();
+        let index: Vec<f32> = spheres
+            .iter()
+            .flat_map(|&n| std::iter::repeat_n(n as f32, plane))
+            .collect();
+        self.grids(&index, spheres.len())
+    }
+}
+
+/// `count` hypothesis indices evenly spaced over `0..=N-1` (the coarse spheres).
+pub fn coarse_indices(count: usize, num_invdepth: usize) -> Vec<f64> {
+    let last = num_invdepth.saturating_sub(1) as f64;
+    let denom = count.saturating_sub(1).max(1) as f64;
+    (0..count).map(|k| k as f64 * last / denom).collect()
+}
+
+/// `k` per-pixel hypotheses spaced by `interval` around `center` (fractional indices,
+/// `[rows * cols]`), shifted as a block to stay inside `0..=N-1`: `[k, rows * cols]`.
+pub fn hypotheses_around(center: &[f32], k: usize, interval: f64, num_invdepth: usize) -> Vec<f32> {
+    let span = (k.saturating_sub(1)) as f64 * interval;
+    let last = num_invdepth.saturating_sub(1) as f64;
+    let mut out = vec![0f32; k * center.len()];
+    for (i, &c) in center.iter().enumerate() {
+        let start = (f64::from(c) - span / 2.0).clamp(0.0, (last - span).max(0.0));
+        for j in 0..k {
+            out[j * center.len() + i] = (start + j as f64 * interval).min(last) as f32;
+        }
+    }
+    out
+}
+
+/// Resamples a map on grid `from` at the rays of grid `to` (same latitude range): bilinear,
+/// wrapping around in longitude, clamped in latitude. Used to carry one stage's estimate to
+/// the next stage's grid.
+pub fn resample_map(map: &[f32], from: &EquirectGrid, to: &EquirectGrid) -> Vec<f32> {
+    debug_assert_eq!(map.len(), from.len());
+    let (hf, wf) = (from.height, from.width);
+    let row_scale = if to.height > 1 {
+        (hf as f64 - 1.0) / (to.height as f64 - 1.0)
+    } else {
+        0.0
+    };
+    let col_scale = wf as f64 / to.width as f64;
+    let mut out = Vec::with_capacity(to.len());
+    for row in 0..to.height {
+        let r = (row as f64 * row_scale).clamp(0.0, hf as f64 - 1.0);
+        let r0 = r.floor() as usize;
+        let r1 = (r0 + 1).min(hf - 1);
+        let fr = (r - r0 as f64) as f32;
+        for col in 0..to.width {
+            // Column centres: theta is linear in col / width on both grids.
+            let c = (col as f64 * col_scale).rem_euclid(wf as f64);
+            let c0 = c.floor() as usize % wf;
+            let c1 = (c0 + 1) % wf;
+            let fc = (c - c.floor()) as f32;
+            let at = |r: usize, c: usize| map[r * wf + c];
+            let top = at(r0, c0) * (1.0 - fc) + at(r0, c1) * fc;
+            let bottom = at(r1, c0) * (1.0 - fc) + at(r1, c1) * fc;
+            out.push(top * (1.0 - fr) + bottom * fr);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hypotheses_stay_inside_the_range() {
+        let h = hypotheses_around(&[0.5, 100.0, 190.0], 4, 2.0, 192);
+        // Plane j, pixel i at h[j * 3 + i].
+        assert_eq!([h[0], h[3], h[6], h[9]], [0.0, 2.0, 4.0, 6.0]);
+        assert_eq!([h[1], h[4], h[7], h[10]], [97.0, 99.0, 101.0, 103.0]);
+        assert_eq!([h[2], h[5], h[8], h[11]], [185.0, 187.0, 189.0, 191.0]);
+        let c = coarse_indices(48, 192);
+        assert_eq!(c.len(), 48);
+        assert_eq!(c[0], 0.0);
+        assert!((c[47] - 191.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn resampling_keeps_constants_and_wraps_columns() {
+        let from = EquirectGrid::new(4, 8, 45.0).unwrap();
+        let to = EquirectGrid::new(8, 16, 45.0).unwrap();
+        let constant = vec![3.5f32; from.len()];
+        assert!(
+            resample_map(&constant, &from, &to)
+                .iter()
+                .all(|&v| (v - 3.5).abs() < 1e-6)
+        );
+        // A map that is 1 in the last column only: the last target column lies halfway
+        // between the last and the first source column (wrap-around).
+        let mut map = vec![0f32; from.len()];
+        for r in 0..4 {
+            map[r * 8 + 7] = 1.0;
+        }
+        let out = resample_map(&map, &from, &to);
+        assert!((out[15] - 0.5).abs() < 1e-6, "{}", out[15]);
+        assert!((out[14] - 1.0).abs() < 1e-6, "{}", out[14]);
+        assert!(out[0].abs() < 1e-6);
+    }
+}

@@ -1,0 +1,134 @@
+//! One way to run a network of either family on a dataset's frames: the paper's network
+//! through its lookup tables ([`Inference`]), the cascade through its per-pixel sampler
+//! ([`CascadeInference`]), both answering with a [`FrameResult`] on their output grid.
+
+use burn::tensor::Device;
+use omnimvs_camera::ValidityMask;
+use omnimvs_data::Dataset;
+use omnimvs_sweep::{CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache};
+
+use crate::cascade::CascadeInference;
+use crate::config::NetConfig;
+use crate::error::NetError;
+use crate::infer::{FrameResult, Inference};
+use crate::weights::AnyNet;
+
+/// A network of either family, prepared for one rig.
+pub enum NetEstimator {
+    /// The paper's network.
+    OmniMvs(Box<Inference>),
+    /// The coarse-to-fine network.
+    Cascade(Box<CascadeInference>),
+}
+
+impl NetEstimator {
+    /// Prepares `net` for `dataset` on `device`: batch norms folded, the paper's network's
+    /// lookup table from `cache` (its status is returned) with the sweep on the device when
+    /// `sweep_on_device` (GPU backends).
+    ///
+    /// # Errors
+    /// [`NetError`] when the rig does not fit the network or a table cannot be built.
+    pub fn new(
+        net: AnyNet,
+        dataset: &Dataset,
+        cache: &LutCache,
+        device: Device,
+        sweep_on_device: bool,
+    ) -> Result<(Self, Option<CacheStatus>), NetError> {
+        Ok(match net {
+            AnyNet::OmniMvs(net) => {
+                let (mut inference, status) =
+                    Inference::new(net.fold_batch_norm(), dataset, cache, device)?;
+                if sweep_on_device {
+                    inference.sweep_on_device();
+                }
+                (Self::OmniMvs(Box::new(inference)), Some(status))
+            }
+            AnyNet::Cascade(net) => (
+                Self::Cascade(Box::new(CascadeInference::new(net, dataset, device)?)),
+                None,
+            ),
+        })
+    }
+
+    /// The network's configuration.
+    pub fn config(&self) -> &NetConfig {
+        match self {
+            Self::OmniMvs(i) => &i.net.config,
+            Self::Cascade(i) => &i.net().config,
+        }
+    }
+
+    /// The output grid.
+    pub fn grid(&self) -> &EquirectGrid {
+        match self {
+            Self::OmniMvs(i) => &i.grid,
+            Self::Cascade(i) => i.grid(),
+        }
+    }
+
+    /// The dataset's `N` hypotheses.
+    pub fn hypotheses(&self) -> &InvDepthHypotheses {
+        match self {
+            Self::OmniMvs(i) => &i.hypotheses,
+            Self::Cascade(i) => i.hypotheses(),
+        }
+    }
+
+    /// Validity masks of the cameras.
+    pub fn masks(&self) -> &[ValidityMask] {
+        match self {
+            Self::OmniMvs(i) => &i.masks,
+            Self::Cascade(i) => i.masks(),
+        }
+    }
+
+    /// Sets the paper's network's camera concatenation order (the cascade has none: its
+    /// correlation does not depend on the order).
+    ///
+    /// # Errors
+    /// [`NetError::CameraOrder`] for an order that is not a permutation, or any order for
+    /// the cascade.
+    pub fn set_order(&mut self, order: &[usize]) -> Result<(), NetError> {
+        match self {
+            Self::OmniMvs(i) => {
+                i.net.check_order(order)?;
+                i.order = order.to_vec();
+                Ok(())
+            }
+            Self::Cascade(_) => Err(NetError::InvalidConfig {
+                field: "order",
+                message: "the cascade network has no camera order".into(),
+            }),
+        }
+    }
+
+    /// The camera concatenation order (the rig's for the cascade).
+    pub fn order(&self) -> Vec<usize> {
+        match self {
+            Self::OmniMvs(i) => i.order.clone(),
+            Self::Cascade(i) => (0..i.net().config.num_cameras).collect(),
+        }
+    }
+
+    /// Runs the network on one frame's gray images (rig order).
+    ///
+    /// # Errors
+    /// [`NetError`] for inconsistent inputs.
+    pub fn run(&self, images: &[GrayImage]) -> Result<FrameResult, NetError> {
+        match self {
+            Self::OmniMvs(i) => i.run(images),
+            Self::Cascade(i) => {
+                let frame = i.run(images, false)?;
+                Ok(FrameResult {
+                    height: frame.height,
+                    width: frame.width,
+                    index: frame.index,
+                    inv_depth: frame.inv_depth,
+                    entropy: frame.entropy,
+                    seconds: frame.timings.total,
+                })
+            }
+        }
+    }
+}

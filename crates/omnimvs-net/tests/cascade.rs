@@ -1,0 +1,254 @@
+//! The cascade network: per-pixel sampling equals the lookup table on the spheres they share,
+//! every stage has the expected shape, gradients reach every stage's weights, it overfits one
+//! frame, and its weight files round-trip. Uses the published rig of `sunny_single` from
+//! `../shared/data/omnimvs-samples`.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::PathBuf;
+
+use burn::module::Module;
+use burn::optim::GradientsParams;
+use burn::tensor::Device;
+use omnimvs_camera::Rig;
+use omnimvs_data::Dataset;
+use omnimvs_data::gt::GroundTruth;
+use omnimvs_net::cascade::model::read_values;
+use omnimvs_net::cascade::{CascadeGeometry, PixelSampler};
+use omnimvs_net::train::{Learner, Optimizer, Sample, TrainConfig, Trainable};
+use omnimvs_net::{CascadeNet, NetConfig, weights};
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LookupTable, SphereSet};
+
+fn sample_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/omnimvs-samples")
+        .join(name);
+    assert!(
+        dir.join("config.yaml").exists(),
+        "{} is missing: these tests read the real samples from ../shared/data/omnimvs-samples \
+         beside the repository",
+        dir.display()
+    );
+    dir
+}
+
+fn sunny_rig() -> (Rig, InvDepthHypotheses) {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    (ds.rig, hyps)
+}
+
+/// The smallest cascade: a `16 x 64` output, `N = 32`, 8 coarse spheres, `48 x 50` inputs.
+fn micro_config() -> NetConfig {
+    let mut config = NetConfig {
+        num_invdepth: 32,
+        out_height: 16,
+        out_width: 64,
+        input_height: 48,
+        input_width: 50,
+        ..NetConfig::cascade()
+    };
+    config.cascade.feature_channels = [4, 4, 8];
+    config.cascade.groups = [2, 2, 4];
+    config.cascade.coarse_spheres = 8;
+    config.cascade.coarse_channels = [4, 4, 8];
+    config.cascade.stage_hypotheses = [4, 3];
+    config.cascade.stage_channels = [4, 4];
+    config
+}
+
+fn micro_images(config: &NetConfig) -> Vec<Vec<f32>> {
+    (0..config.num_cameras)
+        .map(|cam| {
+            (0..config.input_height * config.input_width)
+                .map(|i| {
+                    let (r, c) = (
+                        (i / config.input_width) as f32,
+                        (i % config.input_width) as f32,
+                    );
+                    ((0.7 * c + 1.3 * r + cam as f32).sin() + (0.31 * c * r).cos()) * 0.8
+                })
+                .collect()
+        })
+        .collect()
+}
+
+fn gt_on(h: usize, w: usize) -> GroundTruth {
+    let index = (0..h * w)
+        .map(|i| 4.0 + 20.0 * (i % w) as f32 / (w - 1) as f32 + 0.5 * ((i / w) % 3) as f32)
+        .collect();
+    GroundTruth {
+        width: w,
+        height: h,
+        index,
+        valid: (0..h * w).map(|i| i % 7 != 0).collect(),
+    }
+}
+
+fn micro_sample(config: &NetConfig) -> Sample {
+    let [coarse, mid, fine] = config.cascade_sizes();
+    Sample {
+        source: 0,
+        frame: 1,
+        rotation: 0,
+        images: micro_images(config),
+        gt: gt_on(fine[0], fine[1]),
+        stage_gt: vec![gt_on(coarse[0], coarse[1]), gt_on(mid[0], mid[1])],
+    }
+}
+
+#[test]
+fn per_pixel_positions_equal_the_lookup_table_on_its_spheres() {
+    let (rig, hyps) = sunny_rig();
+    let grid = EquirectGrid::new(16, 64, 45.0).unwrap();
+    let table = LookupTable::build(&rig, &grid, &hyps, SphereSet::EveryOther).unwrap();
+    let sampler = PixelSampler::new(&rig, &grid, &hyps);
+    let spheres: Vec<f64> = table.sphere_indices.iter().map(|&n| n as f64).collect();
+    let grids = sampler.sphere_grids(&spheres).unwrap();
+    let mut compared = 0;
+    for (cam, g) in grids.iter().enumerate() {
+        let expected = table.camera(cam);
+        assert_eq!(g.coords.len(), expected.len());
+        for (a, b) in g.coords.iter().zip(expected) {
+            if b.abs() > 10.0 {
+                // The invalid marker (-1e5 px normalised): ours must be invalid too.
+                assert!(a.abs() > 10.0, "valid {a} where the table is invalid");
+            } else {
+                assert!((a - b).abs() < 1e-5, "{a} vs {b}");
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 10_000, "only {compared} valid entries compared");
+
+    // Per-pixel hypotheses: each pixel at its own sphere gives that sphere's entry.
+    let plane = grid.len();
+    let index: Vec<f32> = (0..plane).map(|i| (2 * (i % 16)) as f32).collect();
+    let per_pixel = sampler.grids(&index, 1).unwrap();
+    for i in (0..plane).step_by(37) {
+        let sphere = i % 16;
+        let want = &table.plane(0, sphere)[2 * i..2 * i + 2];
+        let got = &per_pixel[0].coords[2 * i..2 * i + 2];
+        if want[0].abs() < 10.0 && want[1].abs() < 10.0 {
+            assert!((got[0] - want[0]).abs() < 1e-5 && (got[1] - want[1]).abs() < 1e-5);
+        }
+    }
+    assert!(sampler.grids(&index, 2).is_err());
+}
+
+#[test]
+fn stages_have_the_expected_shapes_and_stay_in_range() {
+    let (rig, hyps) = sunny_rig();
+    let config = micro_config();
+    let device = Device::flex();
+    let net = CascadeNet::new(&config, &device).unwrap();
+    let geometry = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
+    let sample = micro_sample(&config);
+    let learner_images: Vec<_> = sample
+        .images
+        .iter()
+        .map(|img| {
+            burn::tensor::Tensor::<4>::from_data(
+                burn::tensor::TensorData::new(
+                    img.clone(),
+                    [1, 1, config.input_height, config.input_width],
+                ),
+                &device,
+            )
+        })
+        .collect();
+    let out = net.forward(&learner_images, &geometry).unwrap();
+    let sizes = config.cascade_sizes();
+    let ks = [
+        config.cascade.coarse_spheres,
+        config.cascade.stage_hypotheses[0],
+        config.cascade.stage_hypotheses[1],
+    ];
+    for ((stage, [h, w]), k) in out.stages.iter().zip(sizes).zip(ks) {
+        assert_eq!(stage.prob.dims(), [1, k, h, w]);
+        assert_eq!(stage.index.dims(), [1, h, w]);
+        let index = read_values(stage.index.clone(), "index").unwrap();
+        assert!(index.iter().all(|&n| (0.0..=31.0 + 1e-3).contains(&n)));
+        let sums = read_values(stage.prob.clone().sum_dim(1), "sums").unwrap();
+        assert!(sums.iter().all(|s| (s - 1.0).abs() < 1e-4));
+    }
+    // A batch of two is refused (per-pixel hypotheses are built per frame).
+    let two: Vec<_> = learner_images
+        .iter()
+        .map(|t| burn::tensor::Tensor::cat(vec![t.clone(), t.clone()], 0))
+        .collect();
+    assert!(net.forward(&two, &geometry).is_err());
+    assert!(net.forward(&learner_images[..3], &geometry).is_err());
+}
+
+fn train_config(seed: u64) -> TrainConfig {
+    TrainConfig {
+        net: micro_config(),
+        seed,
+        optimizer: Optimizer::Adam,
+        ..TrainConfig::default()
+    }
+}
+
+#[test]
+fn gradients_reach_every_stage_and_it_overfits_one_frame() {
+    let (rig, hyps) = sunny_rig();
+    let config = train_config(3);
+    let device = Device::flex();
+    let mut learner = Learner::<CascadeNet>::for_model(&config, &device).unwrap();
+    let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
+    let sample = micro_sample(&config.net);
+
+    let loss = learner.loss(&sample, &geometry, &[]).unwrap();
+    let grads = GradientsParams::from_grads(loss.backward(), &learner.net);
+    let net = &learner.net;
+    let norm = |name: &str, grad: Option<Vec<f32>>| {
+        let grad = grad.unwrap_or_else(|| panic!("no gradient for {name}"));
+        let norm: f32 = grad.iter().map(|g| g.abs()).sum();
+        assert!(
+            norm > 0.0 && norm.is_finite(),
+            "{name}: gradient norm {norm}"
+        );
+    };
+    let read4 = |id| grads.get::<4>(id).map(|g| read_values(g, "grad").unwrap());
+    let read5 = |id| grads.get::<5>(id).map(|g| read_values(g, "grad").unwrap());
+    norm("features.conv0", read4(net.features.conv0.conv.weight.id));
+    norm("features.out2", read4(net.features.out2.conv.weight.id));
+    norm("features.out8", read4(net.features.out8.conv.weight.id));
+    norm("coarse.out", read5(net.coarse.out.conv.weight.id));
+    norm("mid.out", read5(net.mid.out.conv.weight.id));
+    norm("fine.out", read5(net.fine.out.conv.weight.id));
+
+    let first = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+    let mut last = first;
+    let mut steps = 1;
+    while steps < 80 && last > 0.3 * first {
+        last = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+        steps += 1;
+    }
+    assert!(
+        last < 0.3 * first,
+        "loss {first} -> {last} after {steps} steps: the cascade does not fit one frame"
+    );
+}
+
+#[test]
+fn weights_round_trip_and_the_family_is_recorded() {
+    let config = micro_config();
+    let device = Device::flex();
+    let net = CascadeNet::new(&config, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cascade.safetensors");
+    net.save_weights(&path).unwrap();
+    let json = std::fs::read_to_string(weights::config_path(&path)).unwrap();
+    assert!(json.contains("\"cascade\""), "{json}");
+    let back = weights::load_cascade(&path, &device).unwrap();
+    assert_eq!(back.config, config);
+    assert_eq!(back.num_params(), net.num_params());
+    // The paper's loader refuses it with a message that names the family.
+    let err = weights::load(&path, &device).unwrap_err().to_string();
+    assert!(err.contains("family"), "{err}");
+    match weights::load_family(&path, &NetConfig::tiny(), &device).unwrap() {
+        weights::AnyNet::Cascade(n) => assert_eq!(n.config, config),
+        weights::AnyNet::OmniMvs(_) => panic!("loaded as the paper's network"),
+    }
+}
