@@ -94,9 +94,9 @@ impl Weights {
                 eprintln!(
                     "warning: randomly initialised `{preset}` network, its outputs are meaningless"
                 );
-                AnyNet::Cascade(CascadeNet::new(&base, device)?)
+                AnyNet::Cascade(Box::new(CascadeNet::new(&base, device)?))
             }
-            Self::Bundled | Self::Random => AnyNet::OmniMvs(self.load(preset, device)?),
+            Self::Bundled | Self::Random => AnyNet::OmniMvs(Box::new(self.load(preset, device)?)),
         })
     }
 }

@@ -1,5 +1,6 @@
 //! Forward-pass and training-step benchmarks on synthetic inputs, per stage, with peak memory.
-//! Used by `omnimvs bench` and the memory test of the paper preset.
+//! Used by `omnimvs bench` and the memory test of the paper preset; the cascade's forward
+//! pass and training step run on a real rig (its per-pixel sampler needs camera models).
 
 use std::f32::consts::PI;
 use std::time::Instant;
@@ -8,11 +9,16 @@ use burn::tensor::{Device, Distribution, Tensor};
 use omnimvs_data::gt::GroundTruth;
 use serde::Serialize;
 
+use burn::module::Module;
+use omnimvs_camera::Rig;
+use omnimvs_sweep::InvDepthHypotheses;
+
+use crate::cascade::{CascadeGeometry, CascadeNet, CascadeTimings};
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
 use crate::taps::SweepGrid;
-use crate::train::{Learner, Sample, TrainConfig};
+use crate::train::{Learner, Optimizer, Sample, TrainConfig};
 
 /// Half field of view of the synthetic fisheyes, degrees (220 degree lenses).
 const HALF_FOV_DEG: f32 = 110.0;
@@ -313,6 +319,162 @@ pub fn bench_train_step(
     for step in 0..warmup + steps {
         let start = Instant::now();
         let loss = learner.step(&sample, &taps, &order, 0.003)?; // reads the loss: synchronises
+        let _ = learner.device.sync();
+        if step >= warmup {
+            report.steps.push(start.elapsed().as_secs_f64());
+            report.losses.push(loss);
+        }
+    }
+    report.peak_rss_bytes = peak_rss_bytes();
+    Ok(report)
+}
+
+/// One forward pass of the cascade, seconds per stage.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct CascadeRow {
+    /// Feature pyramids of all cameras.
+    pub features: f64,
+    /// Coarse volume, regularisation, soft argmax.
+    pub coarse: f64,
+    /// Half-resolution stage (hypotheses and taps on the host included).
+    pub mid: f64,
+    /// Full-resolution stage (likewise).
+    pub fine: f64,
+    /// Whole forward pass.
+    pub total: f64,
+}
+
+impl From<CascadeTimings> for CascadeRow {
+    fn from(t: CascadeTimings) -> Self {
+        Self {
+            features: t.features,
+            coarse: t.coarse,
+            mid: t.mid,
+            fine: t.fine,
+            total: t.total,
+        }
+    }
+}
+
+/// Result of [`bench_cascade_forward`].
+#[derive(Clone, Debug, Serialize)]
+pub struct CascadeBenchReport {
+    /// The configuration measured.
+    pub config: NetConfig,
+    /// Number of parameters of the network.
+    pub params: usize,
+    /// Timings of every measured run (warm-up runs excluded).
+    pub runs: Vec<CascadeRow>,
+    /// Peak resident memory of the process after the runs, bytes (Linux only).
+    pub peak_rss_bytes: Option<u64>,
+}
+
+impl CascadeBenchReport {
+    /// Median of each stage over the runs.
+    pub fn median(&self) -> Option<CascadeRow> {
+        if self.runs.is_empty() {
+            return None;
+        }
+        let med = |f: fn(&CascadeRow) -> f64| {
+            let mut v: Vec<f64> = self.runs.iter().map(f).collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        Some(CascadeRow {
+            features: med(|r| r.features),
+            coarse: med(|r| r.coarse),
+            mid: med(|r| r.mid),
+            fine: med(|r| r.fine),
+            total: med(|r| r.total),
+        })
+    }
+}
+
+/// Times the cascade's forward pass per stage on random images for `rig` (random weights,
+/// inference mode, `warmup` unmeasured runs first).
+///
+/// # Errors
+/// [`NetError`] for a configuration that is not a cascade or a rig that does not fit it.
+pub fn bench_cascade_forward(
+    config: &NetConfig,
+    rig: &Rig,
+    min_depth_m: f64,
+    warmup: usize,
+    repeats: usize,
+    device: &Device,
+) -> Result<CascadeBenchReport, NetError> {
+    let net = CascadeNet::new(config, device)?.valid();
+    let hypotheses = InvDepthHypotheses::new(config.num_invdepth, min_depth_m)?;
+    let geometry = CascadeGeometry::new(rig, config, &hypotheses, device)?;
+    let images = random_images(config, device);
+    let mut runs = Vec::new();
+    for run in 0..warmup + repeats {
+        let (_, timings) = net.forward_timed(&images, &geometry, true)?;
+        if run >= warmup {
+            runs.push(timings.into());
+        }
+    }
+    Ok(CascadeBenchReport {
+        config: config.clone(),
+        params: net.num_params(),
+        runs,
+        peak_rss_bytes: peak_rss_bytes(),
+    })
+}
+
+/// Times the cascade's training step (forward, the three stages' L1 losses, backward, Adam)
+/// on one sample of random images and a ramp of ground truth for `rig`.
+///
+/// # Errors
+/// [`NetError`] for a configuration that is not a cascade or a rig that does not fit it.
+pub fn bench_cascade_train_step(
+    config: &NetConfig,
+    rig: &Rig,
+    min_depth_m: f64,
+    warmup: usize,
+    steps: usize,
+    device: &Device,
+) -> Result<TrainStepReport, NetError> {
+    let train = TrainConfig {
+        net: config.clone(),
+        optimizer: Optimizer::Adam,
+        ..TrainConfig::default()
+    };
+    let mut learner = Learner::<CascadeNet>::for_model(&train, device)?;
+    let hypotheses = InvDepthHypotheses::new(config.num_invdepth, min_depth_m)?;
+    let geometry = CascadeGeometry::new(rig, config, &hypotheses, &learner.device)?;
+    let n_max = (config.num_invdepth - 1) as f32;
+    let ramp = |[h, w]: [usize; 2]| GroundTruth {
+        width: w,
+        height: h,
+        index: (0..h * w)
+            .map(|i| (i % w) as f32 / w as f32 * n_max)
+            .collect(),
+        valid: vec![true; h * w],
+    };
+    let [coarse, mid, fine] = config.cascade_sizes();
+    let sample = Sample {
+        source: 0,
+        frame: 0,
+        rotation: 0,
+        images: (0..config.num_cameras)
+            .map(|cam| {
+                (0..config.input_height * config.input_width)
+                    .map(|i| ((i * 7 + cam * 13) % 29) as f32 / 14.0 - 1.0)
+                    .collect()
+            })
+            .collect(),
+        gt: ramp(fine),
+        stage_gt: vec![ramp(coarse), ramp(mid)],
+    };
+    let mut report = TrainStepReport {
+        steps: Vec::new(),
+        losses: Vec::new(),
+        peak_rss_bytes: None,
+    };
+    for step in 0..warmup + steps {
+        let start = Instant::now();
+        let loss = learner.step(&sample, &geometry, &[], 0.001)?; // reads the loss: synchronises
         let _ = learner.device.sync();
         if step >= warmup {
             report.steps.push(start.elapsed().as_secs_f64());

@@ -317,7 +317,7 @@ impl NetConfig {
                 "channels must be positive and every stage needs at least 2 hypotheses".into(),
             ));
         }
-        if p.stage_intervals.iter().any(|&d| !(d > 0.0)) {
+        if p.stage_intervals.iter().any(|&d| d.is_nan() || d <= 0.0) {
             return Err(invalid(
                 "cascade.stage_intervals",
                 format!("must be positive, got {:?}", p.stage_intervals),

@@ -38,14 +38,14 @@ impl NetEstimator {
         Ok(match net {
             AnyNet::OmniMvs(net) => {
                 let (mut inference, status) =
-                    Inference::new(net.fold_batch_norm(), dataset, cache, device)?;
+                    Inference::new((*net).fold_batch_norm(), dataset, cache, device)?;
                 if sweep_on_device {
                     inference.sweep_on_device();
                 }
                 (Self::OmniMvs(Box::new(inference)), Some(status))
             }
             AnyNet::Cascade(net) => (
-                Self::Cascade(Box::new(CascadeInference::new(net, dataset, device)?)),
+                Self::Cascade(Box::new(CascadeInference::new(*net, dataset, device)?)),
                 None,
             ),
         })

@@ -187,9 +187,9 @@ pub fn load_bytes(
 #[derive(Debug)]
 pub enum AnyNet {
     /// The paper's network.
-    OmniMvs(OmniMvsNet),
+    OmniMvs(Box<OmniMvsNet>),
     /// The coarse-to-fine network.
-    Cascade(CascadeNet),
+    Cascade(Box<CascadeNet>),
 }
 
 impl AnyNet {
@@ -214,16 +214,16 @@ pub fn load_any_bytes(
 ) -> Result<AnyNet, NetError> {
     let config = parse_config(name, config_json)?;
     Ok(match config.family {
-        Family::OmniMvs => AnyNet::OmniMvs(apply_bytes(
+        Family::OmniMvs => AnyNet::OmniMvs(Box::new(apply_bytes(
             OmniMvsNet::new(&config, device)?,
             name,
             safetensors,
-        )?),
-        Family::Cascade => AnyNet::Cascade(apply_bytes(
+        )?)),
+        Family::Cascade => AnyNet::Cascade(Box::new(apply_bytes(
             CascadeNet::new(&config, device)?,
             name,
             safetensors,
-        )?),
+        )?)),
     })
 }
 
@@ -239,9 +239,9 @@ pub fn load_family(path: &Path, base: &NetConfig, device: &Device) -> Result<Any
         Some("pt" | "pth" | "tar")
     );
     if !is_pytorch && read_config(&config_path(path))?.family == Family::Cascade {
-        return Ok(AnyNet::Cascade(load_cascade(path, device)?));
+        return Ok(AnyNet::Cascade(Box::new(load_cascade(path, device)?)));
     }
-    Ok(AnyNet::OmniMvs(load_any(path, base, device)?))
+    Ok(AnyNet::OmniMvs(Box::new(load_any(path, base, device)?)))
 }
 
 /// What a reference checkpoint says about the network it holds.

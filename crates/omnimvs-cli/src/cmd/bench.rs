@@ -6,21 +6,24 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use omnimvs_camera::fs::write_atomic;
 use omnimvs_net::bench::{
-    BenchReport, ForwardOptions, TrainStepReport, bench_forward_with, bench_train_step,
+    BenchReport, CascadeBenchReport, ForwardOptions, TrainStepReport, bench_cascade_forward,
+    bench_cascade_train_step, bench_forward_with, bench_train_step,
 };
-use omnimvs_net::{Backend, NetConfig};
+use omnimvs_net::{Backend, Family, NetConfig};
+use omnimvs_synth::rig::preset_rig;
 use serde::Serialize;
 
 use crate::args::{BACKEND_HELP, parse_backend, parse_output_file};
 
 /// Time the network on a compute backend: the forward pass per stage (features,
-/// sweep, fusion, cost volume, softargmin), a training step (forward, backward,
-/// SGD update), and peak memory. Random weights, random inputs and a synthetic
-/// 220-degree lookup table; warm-up runs are not measured. Compare with
-/// PyTorch on the same machine: scripts/net_parity/bench_torch.py.
+/// sweep, fusion, cost volume, softargmin; for the cascade features, coarse, half- and
+/// full-resolution stages), a training step (forward, backward, optimiser update), and
+/// peak memory. Random weights and inputs, a synthetic 220-degree lookup table (the
+/// cascade: the published rig); warm-up runs are not measured. Compare with PyTorch on
+/// the same machine: scripts/net_parity/bench_torch.py.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Network sizes: tiny or paper.
+    /// Network: tiny, paper or cascade.
     #[arg(long, default_value = "tiny")]
     pub preset: String,
     #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
@@ -62,8 +65,15 @@ struct Report {
     backend: String,
     preset: String,
     device_sweep: bool,
-    forward: BenchReport,
+    forward: Forward,
     train_step: Option<TrainStepReport>,
+}
+
+#[derive(Serialize)]
+#[serde(untagged)]
+enum Forward {
+    OmniMvs(BenchReport),
+    Cascade(CascadeBenchReport),
 }
 
 pub fn run(args: &Args) -> Result<()> {
@@ -87,43 +97,10 @@ pub fn run(args: &Args) -> Result<()> {
         config.input_height,
         if device_sweep { "device" } else { "host" },
     );
-    let options = ForwardOptions {
-        warmup: args.warmup,
-        repeats: args.repeats,
-        fold_batch_norm: !args.no_fold,
-        device_sweep,
-    };
-    let forward = bench_forward_with(&config, &options, &device).context("forward benchmark")?;
-    println!(
-        "{:<8} {:>9} {:>9} {:>9} {:>9} {:>10} {:>9}",
-        "forward", "features", "sweep", "fusion", "cost", "softargmin", "total"
-    );
-    let median = forward.median();
-    let rows = forward
-        .runs
-        .iter()
-        .map(|r| ("run", r))
-        .chain(median.as_ref().map(|m| ("median", m)));
-    for (label, r) in rows {
-        println!(
-            "{label:<8} {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s {:>9.3}s {:>8.3}s",
-            r.features, r.sweep, r.fusion, r.cost, r.softargmin, r.total
-        );
-    }
-    print_peak("after the forward passes", forward.peak_rss_bytes);
-    let train_step = if args.train_steps > 0 {
-        let report = bench_train_step(&config, args.warmup, args.train_steps, &device)
-            .context("train-step benchmark")?;
-        for (i, (seconds, loss)) in report.steps.iter().zip(&report.losses).enumerate() {
-            println!("train step {:>2}: {seconds:.3}s (loss {loss:.3})", i + 1);
-        }
-        if let Some(m) = report.median() {
-            println!("train step median {m:.3}s ({:.2} steps/s)", 1.0 / m);
-        }
-        print_peak("after the training steps", report.peak_rss_bytes);
-        Some(report)
+    let (forward, train_step) = if config.family == Family::Cascade {
+        bench_cascade(args, &config, &device)?
     } else {
-        None
+        bench_omnimvs(args, &config, device_sweep, &device)?
     };
     if backend.is_gpu() {
         println!("(peak memory above is host RSS; GPU memory is not measured here)");
@@ -142,6 +119,108 @@ pub fn run(args: &Args) -> Result<()> {
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+fn bench_omnimvs(
+    args: &Args,
+    config: &NetConfig,
+    device_sweep: bool,
+    device: &burn::tensor::Device,
+) -> Result<(Forward, Option<TrainStepReport>)> {
+    let options = ForwardOptions {
+        warmup: args.warmup,
+        repeats: args.repeats,
+        fold_batch_norm: !args.no_fold,
+        device_sweep,
+    };
+    let forward = bench_forward_with(config, &options, device).context("forward benchmark")?;
+    println!(
+        "{:<8} {:>9} {:>9} {:>9} {:>9} {:>10} {:>9}",
+        "forward", "features", "sweep", "fusion", "cost", "softargmin", "total"
+    );
+    let median = forward.median();
+    let rows = forward
+        .runs
+        .iter()
+        .map(|r| ("run", r))
+        .chain(median.as_ref().map(|m| ("median", m)));
+    for (label, r) in rows {
+        println!(
+            "{label:<8} {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s {:>9.3}s {:>8.3}s",
+            r.features, r.sweep, r.fusion, r.cost, r.softargmin, r.total
+        );
+    }
+    print_peak("after the forward passes", forward.peak_rss_bytes);
+    let train_step = if args.train_steps > 0 {
+        let report = bench_train_step(config, args.warmup, args.train_steps, device)
+            .context("train-step benchmark")?;
+        print_steps(&report);
+        Some(report)
+    } else {
+        None
+    };
+    Ok((Forward::OmniMvs(forward), train_step))
+}
+
+fn bench_cascade(
+    args: &Args,
+    config: &NetConfig,
+    device: &burn::tensor::Device,
+) -> Result<(Forward, Option<TrainStepReport>)> {
+    let rig = preset_rig()?;
+    let forward = bench_cascade_forward(
+        config,
+        &rig.rig,
+        rig.min_depth_m,
+        args.warmup,
+        args.repeats,
+        device,
+    )
+    .context("forward benchmark")?;
+    println!("{} parameters", forward.params);
+    println!(
+        "{:<8} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "forward", "features", "coarse", "half", "full", "total"
+    );
+    let median = forward.median();
+    let rows = forward
+        .runs
+        .iter()
+        .map(|r| ("run", r))
+        .chain(median.as_ref().map(|m| ("median", m)));
+    for (label, r) in rows {
+        println!(
+            "{label:<8} {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s",
+            r.features, r.coarse, r.mid, r.fine, r.total
+        );
+    }
+    print_peak("after the forward passes", forward.peak_rss_bytes);
+    let train_step = if args.train_steps > 0 {
+        let report = bench_cascade_train_step(
+            config,
+            &rig.rig,
+            rig.min_depth_m,
+            args.warmup,
+            args.train_steps,
+            device,
+        )
+        .context("train-step benchmark")?;
+        print_steps(&report);
+        Some(report)
+    } else {
+        None
+    };
+    Ok((Forward::Cascade(forward), train_step))
+}
+
+fn print_steps(report: &TrainStepReport) {
+    for (i, (seconds, loss)) in report.steps.iter().zip(&report.losses).enumerate() {
+        println!("train step {:>2}: {seconds:.3}s (loss {loss:.3})", i + 1);
+    }
+    if let Some(m) = report.median() {
+        println!("train step median {m:.3}s ({:.2} steps/s)", 1.0 / m);
+    }
+    print_peak("after the training steps", report.peak_rss_bytes);
 }
 
 fn print_peak(when: &str, bytes: Option<u64>) {

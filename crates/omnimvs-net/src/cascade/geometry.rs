@@ -7,10 +7,10 @@ use std::time::Instant;
 
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::Rig;
-use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
 use super::model::{CascadeNet, StageOutput, hypothesis_tensor, read_values};
-use super::sampler::{PixelSampler, coarse_indices, hypotheses_around, resample_map};
+use super::sampler::{PixelSampler, coarse_indices, hypotheses_around};
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;

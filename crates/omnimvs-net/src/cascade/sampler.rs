@@ -152,39 +152,6 @@ pub fn hypotheses_around(center: &[f32], k: usize, interval: f64, num_invdepth: 
     out
 }
 
-/// Resamples a map on grid `from` at the rays of grid `to` (same latitude range): bilinear,
-/// wrapping around in longitude, clamped in latitude. Used to carry one stage's estimate to
-/// the next stage's grid.
-pub fn resample_map(map: &[f32], from: &EquirectGrid, to: &EquirectGrid) -> Vec<f32> {
-    debug_assert_eq!(map.len(), from.len());
-    let (hf, wf) = (from.height, from.width);
-    let row_scale = if to.height > 1 {
-        (hf as f64 - 1.0) / (to.height as f64 - 1.0)
-    } else {
-        0.0
-    };
-    let col_scale = wf as f64 / to.width as f64;
-    let mut out = Vec::with_capacity(to.len());
-    for row in 0..to.height {
-        let r = (row as f64 * row_scale).clamp(0.0, hf as f64 - 1.0);
-        let r0 = r.floor() as usize;
-        let r1 = (r0 + 1).min(hf - 1);
-        let fr = (r - r0 as f64) as f32;
-        for col in 0..to.width {
-            // Column centres: theta is linear in col / width on both grids.
-            let c = (col as f64 * col_scale).rem_euclid(wf as f64);
-            let c0 = c.floor() as usize % wf;
-            let c1 = (c0 + 1) % wf;
-            let fc = (c - c.floor()) as f32;
-            let at = |r: usize, c: usize| map[r * wf + c];
-            let top = at(r0, c0) * (1.0 - fc) + at(r0, c1) * fc;
-            let bottom = at(r1, c0) * (1.0 - fc) + at(r1, c1) * fc;
-            out.push(top * (1.0 - fr) + bottom * fr);
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -200,27 +167,5 @@ mod tests {
         assert_eq!(c.len(), 48);
         assert_eq!(c[0], 0.0);
         assert!((c[47] - 191.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn resampling_keeps_constants_and_wraps_columns() {
-        let from = EquirectGrid::new(4, 8, 45.0).unwrap();
-        let to = EquirectGrid::new(8, 16, 45.0).unwrap();
-        let constant = vec![3.5f32; from.len()];
-        assert!(
-            resample_map(&constant, &from, &to)
-                .iter()
-                .all(|&v| (v - 3.5).abs() < 1e-6)
-        );
-        // A map that is 1 in the last column only: the last target column lies halfway
-        // between the last and the first source column (wrap-around).
-        let mut map = vec![0f32; from.len()];
-        for r in 0..4 {
-            map[r * 8 + 7] = 1.0;
-        }
-        let out = resample_map(&map, &from, &to);
-        assert!((out[15] - 0.5).abs() < 1e-6, "{}", out[15]);
-        assert!((out[14] - 1.0).abs() < 1e-6, "{}", out[14]);
-        assert!(out[0].abs() < 1e-6);
     }
 }

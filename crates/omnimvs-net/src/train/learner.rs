@@ -69,7 +69,7 @@ struct OptimizerSettings {
 }
 
 fn init_optimizer(kind: Optimizer, s: OptimizerSettings) -> ModuleOptimizer {
-    let decay = (s.weight_decay > 0.0).then(|| WeightDecayConfig {
+    let decay = (s.weight_decay > 0.0).then_some(WeightDecayConfig {
         penalty: s.weight_decay as f32,
     });
     match kind {
