@@ -1,0 +1,141 @@
+"""Type stubs of the compiled module (re-exported by ``omnimvs``)."""
+
+import os
+from typing import Optional, Sequence, Tuple, TypedDict, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+PathLike = Union[str, os.PathLike[str]]
+Image = npt.NDArray[np.uint8]
+FloatMap = npt.NDArray[np.float32]
+
+class Metrics(TypedDict):
+    """The paper's metrics of one frame (``E = |n_hat - n*| / N * 100``)."""
+
+    over1_pct: float
+    over3_pct: float
+    over5_pct: float
+    mae: float
+    rms: float
+    valid_pixels: int
+
+class Rig:
+    """The geometry of a rig (cameras, poses, minimum depth, validity masks), for images that
+    do not come from a dataset folder: ``sgm(images, rig=rig)``."""
+
+    @staticmethod
+    def from_config(path: PathLike) -> "Rig":
+        """Reads the rig of a reference ``config.yaml`` (or of the folder holding it).
+
+        Raises FileNotFoundError for a missing file, ValueError for a wrong field."""
+    @property
+    def num_cameras(self) -> int:
+        """Number of cameras."""
+    @property
+    def min_depth(self) -> float:
+        """Minimum depth of the sweep, metres."""
+    @property
+    def image_sizes(self) -> list[Tuple[int, int]]:
+        """``(height, width)`` of each camera's images."""
+
+class Dataset:
+    """A dataset folder in the reference layout (``config.yaml`` + images), read as the
+    ``omnimvs`` command reads it; never written to.
+
+    Raises FileNotFoundError when there is no ``config.yaml``, ValueError for a wrong field."""
+
+    def __init__(self, path: PathLike) -> None: ...
+    @property
+    def root(self) -> os.PathLike[str]:
+        """The dataset folder."""
+    @property
+    def frames(self) -> list[int]:
+        """The frames of the configured range whose images all exist."""
+    @property
+    def num_cameras(self) -> int:
+        """Number of cameras of the rig."""
+    @property
+    def min_depth(self) -> float:
+        """Minimum depth of the sweep (``config.omnimvs_sweep_min_depth``), metres."""
+    @property
+    def rig(self) -> Rig:
+        """The rig of the dataset."""
+    def images(self, frame: int) -> list[Image]:
+        """The gray images of every camera at ``frame``, ``uint8`` ``(height, width)``.
+
+        Raises FileNotFoundError when an image is missing."""
+    def ground_truth(self, frame: int) -> Optional[FloatMap]:
+        """The stored ground-truth inverse depth (1/m) of ``frame``, or None."""
+
+def lookup_table(
+    source: Union[Dataset, Rig],
+    height: int = 160,
+    width: int = 640,
+    ndepth: int = 192,
+    phi_deg: float = 45.0,
+) -> npt.NDArray[np.float32]:
+    """The lookup table in the ``.hwd`` layout: ``[cameras, ndepth/2, height, width, 2]``
+    sampling positions normalised for ``grid_sample(align_corners=True)``."""
+
+@overload
+def sgm(
+    source: Dataset,
+    frame: int,
+    height: int = 160,
+    width: int = 640,
+    ndepth: int = 192,
+    phi_deg: float = 45.0,
+) -> FloatMap: ...
+@overload
+def sgm(
+    source: Sequence[Image],
+    frame: None = None,
+    height: int = 160,
+    width: int = 640,
+    ndepth: int = 192,
+    phi_deg: float = 45.0,
+    *,
+    rig: Rig,
+) -> FloatMap: ...
+@overload
+def infer(
+    source: Dataset,
+    frame: int,
+    weights: Optional[PathLike] = None,
+    *,
+    preset: str = "paper",
+    backend: str = "cpu",
+) -> FloatMap: ...
+@overload
+def infer(
+    source: Sequence[Image],
+    frame: None = None,
+    weights: Optional[PathLike] = None,
+    *,
+    preset: str = "paper",
+    backend: str = "cpu",
+    rig: Rig,
+) -> FloatMap: ...
+def evaluate(
+    prediction: Union[npt.NDArray[np.float32], npt.NDArray[np.float64]],
+    dataset: Dataset,
+    frame: int,
+    ndepth: int = 192,
+    phi_deg: float = 45.0,
+) -> Metrics:
+    """The paper's metrics of a predicted inverse-depth map against the frame's ground truth."""
+
+def synth(
+    kind: str,
+    out: PathLike,
+    frames: Union[Tuple[int, int], int, None] = None,
+    seed: int = 0,
+    rig: Union[Rig, PathLike, None] = None,
+    size: Optional[Tuple[int, int]] = None,
+    spp: int = 1,
+) -> Dataset:
+    """Renders a synthetic dataset (``"things"`` or ``"house"``) with exact ground truth into
+    ``out`` (frames 1..10 by default) and returns it."""

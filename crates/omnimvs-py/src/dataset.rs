@@ -1,0 +1,212 @@
+//! `omnimvs.Dataset` (a dataset folder) and `omnimvs.Rig` (the geometry of a rig, for frames
+//! that come from elsewhere than files).
+
+use std::path::PathBuf;
+
+use numpy::{PyArray2, PyArrayMethods};
+use omnimvs_data::Dataset;
+use pyo3::prelude::*;
+use pyo3::types::PyList;
+
+use crate::error::{IntoPyResult, bad_argument, bad_type, detached};
+use crate::images::gray_to_array;
+
+/// A frame number from Python: a non-negative int.
+pub fn frame_number(frame: i64) -> PyResult<u32> {
+    u32::try_from(frame).map_err(|_| {
+        bad_argument(
+            "frame",
+            format!("expected a non-negative frame number, found {frame}"),
+        )
+    })
+}
+
+/// A dataset folder in the reference layout (`config.yaml` with the rig, the minimum depth,
+/// `img_fmt` and the frame range, plus the images), read exactly as the `omnimvs` command
+/// reads it. Nothing is ever written into the folder.
+///
+/// Args:
+///     path: the dataset folder or its `config.yaml` (`str` or `pathlib.Path`).
+///
+/// Raises:
+///     FileNotFoundError: no `config.yaml` there.
+///     ValueError: a `config.yaml` field is missing or wrong (the message names it).
+#[pyclass(name = "Dataset", module = "omnimvs", frozen)]
+pub struct PyDataset {
+    pub inner: Dataset,
+}
+
+#[pymethods]
+impl PyDataset {
+    #[new]
+    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let inner = detached(py, || Dataset::open(&path).py_err())?;
+        Ok(Self { inner })
+    }
+
+    /// The dataset folder.
+    #[getter]
+    fn root(&self) -> PathBuf {
+        self.inner.root.clone()
+    }
+
+    /// The frames of the configured range whose images all exist (`list[int]`).
+    #[getter]
+    fn frames(&self, py: Python<'_>) -> PyResult<Vec<u32>> {
+        detached(py, || Ok(self.inner.frames_found()))
+    }
+
+    /// Number of cameras of the rig.
+    #[getter]
+    fn num_cameras(&self) -> usize {
+        self.inner.rig.len()
+    }
+
+    /// Minimum depth of the sweep (`config.omnimvs_sweep_min_depth`), metres.
+    #[getter]
+    fn min_depth(&self) -> f64 {
+        self.inner.config.min_depth_m
+    }
+
+    /// The rig of the dataset.
+    #[getter]
+    fn rig(&self) -> PyRig {
+        PyRig {
+            inner: self.inner.clone(),
+        }
+    }
+
+    /// The gray images of every camera at `frame`: a list of `numpy.uint8` arrays
+    /// `(height, width)`, in the rig's camera order.
+    ///
+    /// Raises:
+    ///     FileNotFoundError: an image of the frame is missing (the message lists the paths tried).
+    ///     ValueError: an image has another size than its camera's.
+    fn images<'py>(&self, py: Python<'py>, frame: i64) -> PyResult<Bound<'py, PyList>> {
+        let frame = frame_number(frame)?;
+        let images = detached(py, || self.inner.read_frame(frame).py_err())?;
+        let arrays = images
+            .iter()
+            .map(|image| gray_to_array(py, image))
+            .collect::<PyResult<Vec<_>>>()?;
+        PyList::new(py, arrays)
+    }
+
+    /// The ground-truth inverse depth (1/m) of `frame` as stored (`numpy.float32`,
+    /// `(rows, cols)`, typically 320x640 over +-90 degrees; 0 where there is no surface), or
+    /// `None` when the dataset has no ground truth for the frame.
+    ///
+    /// Raises:
+    ///     FileNotFoundError: the frame has neither ground truth nor images.
+    ///     OSError, ValueError: the ground-truth file cannot be read.
+    fn ground_truth<'py>(
+        &self,
+        py: Python<'py>,
+        frame: i64,
+    ) -> PyResult<Option<Bound<'py, PyArray2<f32>>>> {
+        let frame = frame_number(frame)?;
+        let map = detached(py, || {
+            let map = self.inner.read_gt(frame).py_err()?;
+            if map.is_none() && !self.inner.has_frame(frame) {
+                // Neither ground truth nor images: say which files were looked for.
+                self.inner.image_path(0, frame).py_err()?;
+            }
+            Ok(map)
+        })?;
+        map.map(|m| {
+            numpy::PyArray1::from_vec(py, m.data)
+                .reshape([m.height, m.width])
+                .map_err(|e| bad_argument("ground truth", e))
+        })
+        .transpose()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "omnimvs.Dataset({:?}: {} cameras, min depth {} m)",
+            self.inner.root.display().to_string(),
+            self.inner.rig.len(),
+            self.inner.config.min_depth_m
+        )
+    }
+}
+
+/// The geometry of a rig (cameras, poses, minimum depth, validity masks), for images that do
+/// not come from a dataset folder, e.g. a robot's live frames: `sgm(images, rig=rig)`.
+#[pyclass(name = "Rig", module = "omnimvs", frozen)]
+pub struct PyRig {
+    /// The rig's `config.yaml` read as a dataset (its images are never read).
+    pub inner: Dataset,
+}
+
+#[pymethods]
+impl PyRig {
+    /// Reads the rig of a reference `config.yaml` (or of the dataset folder holding it):
+    /// cameras, poses, `config.omnimvs_sweep_min_depth`; validity masks named there are read
+    /// relative to its folder.
+    ///
+    /// Raises:
+    ///     FileNotFoundError: no such file.
+    ///     ValueError: a field is missing or wrong (the message names it).
+    #[staticmethod]
+    fn from_config(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let inner = detached(py, || Dataset::open(&path).py_err())?;
+        Ok(Self { inner })
+    }
+
+    /// Number of cameras.
+    #[getter]
+    fn num_cameras(&self) -> usize {
+        self.inner.rig.len()
+    }
+
+    /// Minimum depth of the sweep, metres.
+    #[getter]
+    fn min_depth(&self) -> f64 {
+        self.inner.config.min_depth_m
+    }
+
+    /// `(height, width)` of each camera's images, in the rig's order.
+    #[getter]
+    fn image_sizes(&self) -> Vec<(u32, u32)> {
+        self.inner
+            .rig
+            .cameras
+            .iter()
+            .map(|c| (c.model.height(), c.model.width()))
+            .collect()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "omnimvs.Rig({:?}: {} cameras, min depth {} m)",
+            self.inner.config_path.display().to_string(),
+            self.inner.rig.len(),
+            self.inner.config.min_depth_m
+        )
+    }
+}
+
+/// Where a function's geometry comes from: a `Dataset` or a `Rig`.
+pub fn geometry(source: &Bound<'_, PyAny>, name: &str) -> PyResult<Dataset> {
+    if let Ok(ds) = source.cast::<PyDataset>() {
+        return Ok(ds.get().inner.clone());
+    }
+    if let Ok(rig) = source.cast::<PyRig>() {
+        return Ok(rig.get().inner.clone());
+    }
+    Err(bad_type(
+        name,
+        format!(
+            "expected an omnimvs.Dataset or omnimvs.Rig, found {}",
+            type_name(source)
+        ),
+    ))
+}
+
+/// The Python type name of `obj`, for messages.
+pub fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type()
+        .name()
+        .map_or_else(|_| "an object".into(), |n| n.to_string())
+}

@@ -1,0 +1,93 @@
+//! `omnimvs.infer`: the OmniMVS network on one frame.
+
+use std::path::{Path, PathBuf};
+
+use numpy::PyArray2;
+use omnimvs_net::weights::{AnyNet, load_bytes, load_family};
+use omnimvs_net::{Backend, NetConfig, NetEstimator};
+use omnimvs_sweep::LutCache;
+use pyo3::prelude::*;
+
+use crate::dataset::PyRig;
+use crate::error::{IntoPyResult, bad_argument, detached, with_context};
+use crate::images::{frame_source, map_to_array};
+
+/// The bundled model, the same files the `omnimvs` binary compiles in
+/// (`crates/omnimvs-cli/src/weights.rs`).
+const BUNDLED_LABEL: &str = "models/omnimvs-tiny.safetensors";
+const BUNDLED_CONFIG: &str = include_str!("../../../models/omnimvs-tiny.json");
+const BUNDLED_BYTES: &[u8] = include_bytes!("../../../models/omnimvs-tiny.safetensors");
+
+/// Loads the network as `omnimvs infer --weights` does: the bundled model, or a file of
+/// either family (our `.safetensors` with its `.json`, or a reference PyTorch checkpoint
+/// sized by `preset`).
+fn load_network(
+    weights: Option<&Path>,
+    preset: &str,
+    device: &burn::tensor::Device,
+) -> PyResult<AnyNet> {
+    match weights {
+        None => load_bytes(
+            Path::new(BUNDLED_LABEL),
+            BUNDLED_CONFIG,
+            BUNDLED_BYTES,
+            device,
+        )
+        .map(AnyNet::OmniMvs)
+        .py_err(),
+        Some(path) => {
+            let base = NetConfig::preset(preset).py_err()?;
+            load_family(path, &base, device)
+                .map_err(|e| with_context(format!("weights {}: ", path.display()), &e))
+        }
+    }
+}
+
+/// 360-degree inverse depth by a network, as `omnimvs infer` computes it: a `numpy.float32`
+/// array `(height, width)` of inverse depth (1/m) on the network's output grid (32x128 over
+/// +-45 degrees for the bundled `omnimvs-tiny` model; a weights file of the paper's network
+/// or of the cascade family brings its own).
+///
+/// Args:
+///     source: an `omnimvs.Dataset`, or the frame's images as a list of `numpy.uint8` arrays
+///         `(rows, cols)`, one per camera in the rig's order (then `rig` is required).
+///     frame: the frame of the dataset (only with a Dataset).
+///     weights: `None` for the bundled model, or a weights file: our `.safetensors` (with its
+///         `.json` beside it) or a reference PyTorch checkpoint (`.pt`/`.pth`).
+///     preset: the sizes of a PyTorch checkpoint, `"paper"` or `"tiny"`.
+///     backend: the compute backend, `"cpu"` unless the package was built with the
+///         `libtorch` or `wgpu` feature.
+///     rig: the `omnimvs.Rig` of images given as arrays.
+///
+/// Raises:
+///     FileNotFoundError: the weights file or an image of the frame is missing.
+///     ValueError: a bad argument or array, or a rig that does not fit the network.
+#[pyfunction]
+#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None))]
+pub fn infer<'py>(
+    py: Python<'py>,
+    source: &Bound<'py, PyAny>,
+    frame: Option<i64>,
+    weights: Option<PathBuf>,
+    preset: &str,
+    backend: &str,
+    rig: Option<&Bound<'py, PyRig>>,
+) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    let (ds, images) = frame_source(source, frame, rig)?;
+    let backend: Backend = backend.parse().map_err(|e| bad_argument("backend", e))?;
+    let result = detached(py, || {
+        let device = backend.device().py_err()?;
+        let net = load_network(weights.as_deref(), preset, &device)?;
+        let (estimator, _status) = NetEstimator::new(
+            net,
+            &ds,
+            &LutCache::default_location(),
+            device,
+            backend.is_gpu(),
+        )
+        .py_err()?;
+        let images = images.load(&ds)?;
+        estimator.run(&images).py_err()
+    })?;
+    map_to_array(py, result.inv_depth, result.height, result.width)
+}

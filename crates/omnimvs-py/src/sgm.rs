@@ -1,0 +1,53 @@
+//! `omnimvs.sgm`: the classical method (spherical-sweep ZNCC + SGM).
+
+use numpy::PyArray2;
+use omnimvs_stereo::{SgmParams, SphericalStereo};
+use omnimvs_sweep::EquirectGrid;
+use pyo3::prelude::*;
+
+use crate::dataset::PyRig;
+use crate::error::{IntoPyResult, detached};
+use crate::images::{frame_source, map_to_array};
+
+/// 360-degree inverse depth by the classical method of the paper's Table 3 (9x9 ZNCC over
+/// every camera pair on a spherical sweep, SGM along 8 paths wrapping round in longitude,
+/// winner-take-all with parabola refinement), as `omnimvs sgm` computes it with its default
+/// penalties: a `numpy.float32` array `(height, width)` of inverse depth (1/m).
+///
+/// Args:
+///     source: an `omnimvs.Dataset`, or the frame's images as a list of `numpy.uint8` arrays
+///         `(rows, cols)`, one per camera in the rig's order (then `rig` is required).
+///     frame: the frame of the dataset (only with a Dataset).
+///     height, width: the equirectangular output grid.
+///     ndepth: number of inverse-depth hypotheses N (even).
+///     phi_deg: latitude range of the output, +-degrees.
+///     rig: the `omnimvs.Rig` of images given as arrays.
+///
+/// Raises:
+///     FileNotFoundError: an image of the frame is missing.
+///     ValueError: a bad argument or array (the message names it).
+#[pyfunction]
+#[pyo3(signature = (source, frame=None, height=160, width=640, ndepth=192, phi_deg=45.0, *, rig=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn sgm<'py>(
+    py: Python<'py>,
+    source: &Bound<'py, PyAny>,
+    frame: Option<i64>,
+    height: usize,
+    width: usize,
+    ndepth: usize,
+    phi_deg: f64,
+    rig: Option<&Bound<'py, PyRig>>,
+) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    let (ds, images) = frame_source(source, frame, rig)?;
+    let inv_depth = detached(py, || {
+        let grid = EquirectGrid::new(height, width, phi_deg).py_err()?;
+        let hyps = ds.hypotheses(ndepth).py_err()?;
+        let stereo = SphericalStereo::new(&ds.rig, grid, hyps, SgmParams::default()).py_err()?;
+        let masks = ds.masks().py_err()?;
+        let images = images.load(&ds)?;
+        let out = stereo.compute(&images, Some(&masks)).py_err()?;
+        Ok(out.inv_depth)
+    })?;
+    map_to_array(py, inv_depth, height, width)
+}

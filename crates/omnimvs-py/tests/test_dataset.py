@@ -1,0 +1,81 @@
+"""omnimvs.Dataset and omnimvs.Rig on the real samples, and their errors."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from PIL import Image
+
+import omnimvs
+
+
+def test_dataset_reads_the_sample_as_the_config_says(itbt_path):
+    config = yaml.safe_load((itbt_path / "config.yaml").read_text())
+    for path in (str(itbt_path), itbt_path, itbt_path / "config.yaml"):
+        ds = omnimvs.Dataset(path)
+        assert ds.frames == [1, 2, 3]
+        assert ds.num_cameras == len(config["cameras"]) == 4
+        assert ds.min_depth == config["config"]["omnimvs_sweep_min_depth"]
+        assert Path(ds.root) == itbt_path
+    assert "4 cameras" in repr(ds)
+
+
+def test_images_are_the_png_pixels(itbt_path):
+    ds = omnimvs.Dataset(itbt_path)
+    images = ds.images(2)
+    assert len(images) == 4
+    for cam, image in enumerate(images, start=1):
+        expected = np.asarray(Image.open(itbt_path / f"cam{cam}" / "00002.png"))
+        assert image.dtype == np.uint8
+        assert image.shape == expected.shape
+        np.testing.assert_array_equal(image, expected)
+
+
+def test_rgb_images_are_the_channel_mean(sunny_path):
+    # FORMATS.md: RGB is converted to gray by the channel mean; sunny names frames 0001.png.
+    ds = omnimvs.Dataset(sunny_path)
+    assert ds.frames == [1]
+    image = ds.images(1)[0]
+    rgb = np.asarray(Image.open(sunny_path / "cam1" / "0001.png").convert("RGB")).astype(np.float64)
+    assert image.shape == rgb.shape[:2]
+    assert np.abs(image.astype(np.float64) - rgb.mean(axis=2)).max() <= 0.5 + 1e-9
+
+
+def test_samples_have_no_ground_truth(itbt_path):
+    assert omnimvs.Dataset(itbt_path).ground_truth(1) is None
+
+
+def test_rig_from_config(itbt_path):
+    config = yaml.safe_load((itbt_path / "config.yaml").read_text())
+    for path in (itbt_path / "config.yaml", str(itbt_path)):
+        rig = omnimvs.Rig.from_config(path)
+        assert rig.num_cameras == 4
+        assert rig.min_depth == 0.5
+        assert rig.image_sizes == [tuple(c["image_size"]) for c in config["cameras"]]
+    assert omnimvs.Dataset(itbt_path).rig.image_sizes == rig.image_sizes
+
+
+def test_missing_folder_names_the_path(tmp_path):
+    missing = tmp_path / "no-such-dataset"
+    with pytest.raises(FileNotFoundError, match="no-such-dataset"):
+        omnimvs.Dataset(missing)
+    with pytest.raises(FileNotFoundError, match="no-such-dataset"):
+        omnimvs.Rig.from_config(missing / "config.yaml")
+
+
+def test_bad_config_names_the_field(tmp_path, itbt_path):
+    text = (itbt_path / "config.yaml").read_text().replace("omnimvs_sweep_min_depth: 0.5", "omnimvs_sweep_min_depth: -1")
+    (tmp_path / "config.yaml").write_text(text)
+    with pytest.raises(ValueError, match="omnimvs_sweep_min_depth"):
+        omnimvs.Dataset(tmp_path)
+
+
+def test_frame_that_does_not_exist(itbt_path):
+    ds = omnimvs.Dataset(itbt_path)
+    with pytest.raises(FileNotFoundError, match="frame 99"):
+        ds.images(99)
+    with pytest.raises(FileNotFoundError, match="frame 99"):
+        ds.ground_truth(99)
+    with pytest.raises(ValueError, match="frame"):
+        ds.images(-1)

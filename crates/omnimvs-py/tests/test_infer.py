@@ -1,0 +1,64 @@
+"""omnimvs.infer (the bundled network and weights files) against the TIFF that
+`omnimvs infer` writes, images given as arrays, and bad input."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tifffile
+
+import omnimvs
+
+MODEL = Path(__file__).resolve().parents[3] / "models" / "omnimvs-tiny.safetensors"
+
+
+@pytest.fixture(scope="module")
+def itbt(itbt_path):
+    return omnimvs.Dataset(itbt_path)
+
+
+@pytest.fixture(scope="module")
+def itbt_net(itbt):
+    return omnimvs.infer(itbt, 1)
+
+
+def test_equals_the_tiff_of_the_command_line(itbt_path, itbt_net, cli, tmp_path):
+    cli("infer", itbt_path, "--frames", 1, "--out", tmp_path)
+    expected = tifffile.imread(tmp_path / "00001.tiff")
+    assert itbt_net.dtype == np.float32
+    assert itbt_net.shape == expected.shape == (32, 128)
+    np.testing.assert_allclose(itbt_net, expected, rtol=1e-5, atol=1e-6)
+
+
+def test_is_a_plausible_depth_map(itbt, itbt_net):
+    assert np.isfinite(itbt_net).all()
+    assert itbt_net.min() >= 0 and itbt_net.max() <= 1 / itbt.min_depth + 1e-6
+    assert itbt_net.std() > 0.05
+
+
+def test_weights_file_is_the_bundled_model(itbt, itbt_net):
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, weights=MODEL), itbt_net)
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, str(MODEL)), itbt_net)
+
+
+def test_images_as_arrays_with_a_rig(itbt_path, itbt, itbt_net):
+    rig = omnimvs.Rig.from_config(itbt_path)
+    np.testing.assert_array_equal(omnimvs.infer(itbt.images(1), rig=rig), itbt_net)
+
+
+def test_sunny_rig(sunny_path):
+    out = omnimvs.infer(omnimvs.Dataset(sunny_path), 1)
+    assert out.shape == (32, 128) and np.isfinite(out).all()
+
+
+def test_bad_input(itbt, tmp_path):
+    missing = tmp_path / "no-such-weights.safetensors"
+    with pytest.raises(FileNotFoundError, match="weights .*no-such-weights"):
+        omnimvs.infer(itbt, 1, weights=missing)
+    with pytest.raises(ValueError, match="backend"):
+        omnimvs.infer(itbt, 1, backend="abacus")
+    with pytest.raises(FileNotFoundError, match="frame 7"):
+        omnimvs.infer(itbt, 7)
+    images = itbt.images(1)
+    with pytest.raises(ValueError, match=r"images\[2\].*uint16"):
+        omnimvs.infer([*images[:2], images[2].astype(np.uint16), images[3]], rig=itbt.rig)
