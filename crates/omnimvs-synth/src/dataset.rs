@@ -182,6 +182,29 @@ impl FramePaths {
     }
 }
 
+/// The frame range `config.yaml` announces after rendering `frames` into a dataset whose
+/// `config.yaml` (if any) already announces a range: both together (first to last, step 1
+/// when both ranges have step 1), so that a dataset filled in several runs, e.g. its
+/// validation frames first, lists every frame it holds.
+///
+/// # Errors
+/// [`SynthError`] when an existing `config.yaml` cannot be read or parsed.
+fn covered_frames(config_path: &Path, frames: &FrameRange) -> Result<FrameRange, SynthError> {
+    if !config_path.exists() {
+        return Ok(*frames);
+    }
+    let text = std::fs::read_to_string(config_path).map_err(io(config_path, "cannot read"))?;
+    let old = DatasetConfig::parse(config_path, &text)?.frames;
+    if old.step != 1 || frames.step != 1 {
+        return Ok(*frames);
+    }
+    Ok(FrameRange {
+        start: old.start.min(frames.start),
+        step: 1,
+        end: old.end.max(frames.end),
+    })
+}
+
 /// One rendered frame, in memory.
 pub struct Frame {
     pub scene: SceneSpec,
@@ -322,13 +345,13 @@ impl DatasetWriter {
             omnimvs_camera::fs::write_atomic(&settings_path, settings_json.as_bytes())
                 .map_err(io(&settings_path, "cannot write"))?;
         }
+        let config_path = out.join("config.yaml");
         let config = DatasetConfig {
             min_depth_m: rig.min_depth_m,
             img_fmt: IMG_FMT.to_string(),
-            frames: *frames,
+            frames: covered_frames(&config_path, frames)?,
             gt_fmt: Some(GT_FMT.to_string()),
         };
-        let config_path = out.join("config.yaml");
         omnimvs_camera::fs::write_atomic(
             &config_path,
             write_config_yaml(&rig.rig, &config).as_bytes(),

@@ -121,6 +121,29 @@ fn rerun_resumes_and_shards_cover_the_range() {
 }
 
 #[test]
+fn a_dataset_filled_in_several_runs_announces_every_frame() {
+    // Validation frames first, then the rest: config.yaml must cover both runs, or readers
+    // (which list the frames of the announced range) lose the first run's frames.
+    let dir = tempfile::tempdir().unwrap();
+    let create = |frames: &str| {
+        DatasetWriter::create(
+            dir.path(),
+            &small_rig(),
+            SceneKind::House,
+            4,
+            1,
+            &[],
+            &parse_frames(frames).unwrap(),
+        )
+        .unwrap()
+    };
+    create("5..6").run(&[5, 6], |_| {}).unwrap();
+    create("1..2").run(&[1, 2], |_| {}).unwrap();
+    let ds = omnimvs_data::Dataset::open(dir.path()).unwrap();
+    assert_eq!(ds.frames_found(), vec![1, 2, 5, 6]);
+}
+
+#[test]
 fn bad_input_gives_clear_errors_and_keeps_finished_frames() {
     let dir = tempfile::tempdir().unwrap();
     // Unknown kind.
