@@ -11,6 +11,8 @@
 //!   `grid_sample(align_corners=True)` semantics and zeros outside.
 //! * [`panorama`]: the gray panorama composed from all cameras at a given
 //!   inverse depth.
+//! * [`resample_map`]: a map carried from one grid to another of the same
+//!   latitudes (bilinear, longitude wrapping around).
 
 mod cache;
 mod error;
@@ -18,6 +20,7 @@ mod grid;
 mod hypotheses;
 mod lut;
 pub mod panorama;
+mod resample;
 pub mod warp;
 
 pub use cache::{CacheStatus, LutCache};
@@ -26,4 +29,5 @@ pub use grid::EquirectGrid;
 pub use hypotheses::InvDepthHypotheses;
 pub use lut::{INVALID_PIXEL, LookupTable, SphereSet, hwd_file_name, normalized_position};
 pub use panorama::{InvDepthSource, Panorama, compose_panorama, warp_camera_to_panorama};
+pub use resample::resample_map;
 pub use warp::{BilinearTap, GrayImage, sample_bilinear, warp_camera_onto_spheres};
