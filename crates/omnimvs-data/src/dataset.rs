@@ -1,12 +1,9 @@
 use std::path::{Path, PathBuf};
 
-use omnimvs_camera::nalgebra::Rotation3;
 use omnimvs_camera::{Rig, ValidityMask, parse_config_rig};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 
-use crate::gt::{
-    GroundTruth, InvDepthMap, ground_truth_index, read_inv_depth, sample_ground_truth,
-};
+use crate::gt::{EvalTruth, GroundTruth, InvDepthMap, eval_truth_on_grid, read_inv_depth};
 use crate::image_io::read_gray_sized;
 use crate::{DataError, DatasetConfig, format_printf};
 
@@ -194,7 +191,8 @@ impl Dataset {
     /// (`phi_deg = 180 height / width`) gets the middle rows cropped, exactly as the
     /// reference does; any other grid (a smaller network grid, another latitude range)
     /// samples the indices and the validity, computed at full resolution, at its rays
-    /// ([`sample_ground_truth`]).
+    /// ([`crate::gt::sample_ground_truth`]). Sky is valid at index 0 (the ground truth of training and
+    /// of the `with-sky` protocol); [`Self::eval_truth`] adds the sky mask.
     ///
     /// # Errors
     /// An unreadable file, or a grid that reaches beyond the map's latitudes.
@@ -204,6 +202,20 @@ impl Dataset {
         grid: &EquirectGrid,
         hyps: &InvDepthHypotheses,
     ) -> Result<Option<GroundTruth>, DataError> {
+        Ok(self.eval_truth(frame, grid, hyps)?.map(|truth| truth.gt))
+    }
+
+    /// [`Self::ground_truth`] together with the sky mask on the same pixels, for scoring under
+    /// either protocol ([`crate::metrics::Protocol`]; [`eval_truth_on_grid`]).
+    ///
+    /// # Errors
+    /// As [`Self::ground_truth`].
+    pub fn eval_truth(
+        &self,
+        frame: u32,
+        grid: &EquirectGrid,
+        hyps: &InvDepthHypotheses,
+    ) -> Result<Option<EvalTruth>, DataError> {
         let Some(map) = self.read_gt(frame)? else {
             return Ok(None);
         };
@@ -217,16 +229,6 @@ impl Dataset {
                 format!("±{} degrees", map.phi_deg()),
             ));
         }
-        let square_phi_deg = 180.0 * grid.height as f64 / grid.width as f64;
-        if map.width == grid.width && (grid.phi_deg - square_phi_deg).abs() < 1e-9 {
-            let cropped = map.crop_rows_centered(grid.height)?;
-            return Ok(Some(ground_truth_index(&cropped, hyps)));
-        }
-        Ok(Some(sample_ground_truth(
-            &map,
-            hyps,
-            grid,
-            &Rotation3::identity(),
-        )?))
+        Ok(Some(eval_truth_on_grid(&map, hyps, grid)?))
     }
 }

@@ -10,6 +10,7 @@ use tiff::decoder::{Decoder, DecodingResult};
 use tiff::encoder::{Compression, DeflateLevel, TiffEncoder, colortype};
 
 use crate::DataError;
+use crate::metrics::Protocol;
 
 /// Width of the published ground-truth panoramas.
 pub const GT_WIDTH: usize = 640;
@@ -212,8 +213,11 @@ pub const FINITE_INV_DEPTH: f32 = 1e-3;
 /// reference's invalid-pixel rule: an "infinite" pixel (inverse depth below
 /// [`FINITE_INV_DEPTH`]) inside a hole that a 5x5 binary closing of the
 /// finite-depth mask fills is invalid (it is noise, not sky); every valid
-/// pixel has `0 <= n* <= N`. Inverse depth 0 (sky) maps to index 0: `d_0`
-/// is `f64::EPSILON`, not 0, and the difference is a numerical artefact.
+/// pixel has `0 <= n* <= N`. Inverse depth 0 (sky) maps to index 0 and is
+/// valid: the ground truth of training, and of the `with-sky` evaluation
+/// protocol. The reference's `evalError` does not score sky (its index is
+/// `(0 - d_0) / step`, just below 0 there); [`EvalTruth`] carries the sky mask
+/// that the `reference` protocol ([`crate::metrics::Protocol`]) leaves out.
 pub fn ground_truth_index(map: &InvDepthMap, hyps: &InvDepthHypotheses) -> GroundTruth {
     let (w, h) = (map.width, map.height);
     let finite: Vec<bool> = map.data.iter().map(|&d| d >= FINITE_INV_DEPTH).collect();
@@ -249,21 +253,20 @@ pub fn sample_ground_truth(
     grid: &EquirectGrid,
     source_from_grid: &Rotation3<f64>,
 ) -> Result<GroundTruth, DataError> {
-    let source = EquirectGrid::new(map.height, map.width, map.phi_deg())?;
     let full = ground_truth_index(map, hyps);
     let mut index = Vec::with_capacity(grid.len());
     let mut valid = Vec::with_capacity(grid.len());
-    for ray in grid.rays() {
-        let (row, col) = source.position_of(&(source_from_grid * ray));
-        let row = row.round();
-        if !(row >= 0.0 && row <= (map.height - 1) as f64) {
-            index.push(0.0);
-            valid.push(false);
-            continue;
+    for at in nearest_pixels(map, grid, source_from_grid)? {
+        match at {
+            Some(at) => {
+                index.push(full.index[at]);
+                valid.push(full.valid[at]);
+            }
+            None => {
+                index.push(0.0);
+                valid.push(false);
+            }
         }
-        let at = row as usize * map.width + (col.round() as usize) % map.width;
-        index.push(full.index[at]);
-        valid.push(full.valid[at]);
     }
     Ok(GroundTruth {
         width: grid.width,
@@ -271,6 +274,107 @@ pub fn sample_ground_truth(
         index,
         valid,
     })
+}
+
+/// The pixel of `map` nearest to `source_from_grid * ray` for every ray of `grid`, `None`
+/// outside the map's latitudes: the one sampling of [`sample_ground_truth`] and
+/// [`sample_eval_truth`].
+fn nearest_pixels(
+    map: &InvDepthMap,
+    grid: &EquirectGrid,
+    source_from_grid: &Rotation3<f64>,
+) -> Result<Vec<Option<usize>>, DataError> {
+    let source = EquirectGrid::new(map.height, map.width, map.phi_deg())?;
+    Ok(grid
+        .rays()
+        .iter()
+        .map(|ray| {
+            let (row, col) = source.position_of(&(source_from_grid * ray));
+            let row = row.round();
+            (row >= 0.0 && row <= (map.height - 1) as f64)
+                .then(|| row as usize * map.width + (col.round() as usize) % map.width)
+        })
+        .collect())
+}
+
+/// Whether a ground-truth inverse depth (1/m) is sky in the reference's convention: below
+/// `d_0` (the sphere at infinity, `f64::EPSILON`), so that its index `(d - d_0) / step` is
+/// negative and the reference's `evalError` (`0 <= n* <= N`) does not score it. Inverse
+/// depth 0, the encoding of sky in every ground-truth format, is sky.
+pub fn is_sky(inv_depth: f32, hyps: &InvDepthHypotheses) -> bool {
+    f64::from(inv_depth) < hyps.min_inv_depth()
+}
+
+/// The ground truth of one frame for evaluation under both protocols
+/// ([`crate::metrics::Protocol`]): `gt` is the ground truth of training and of the
+/// `with-sky` protocol (sky valid at index 0), `sky` marks the pixels that are sky
+/// ([`is_sky`]), which the `reference` protocol does not score.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvalTruth {
+    /// Indices and validity, exactly as [`ground_truth_index`] / [`sample_ground_truth`].
+    pub gt: GroundTruth,
+    /// Whether each pixel is sky (inverse depth below `d_0`), row-major like `gt`.
+    pub sky: Vec<bool>,
+}
+
+impl EvalTruth {
+    /// Whether pixel `i` is scored under `protocol`: valid in `gt`, and not sky for the
+    /// `reference` protocol.
+    pub fn scored(&self, i: usize, protocol: Protocol) -> bool {
+        self.gt.valid[i]
+            && match protocol {
+                Protocol::Reference => !self.sky[i],
+                Protocol::WithSky => true,
+            }
+    }
+}
+
+/// [`ground_truth_index`] of a (cropped) map together with its sky mask.
+pub fn eval_truth_index(map: &InvDepthMap, hyps: &InvDepthHypotheses) -> EvalTruth {
+    EvalTruth {
+        gt: ground_truth_index(map, hyps),
+        sky: map.data.iter().map(|&d| is_sky(d, hyps)).collect(),
+    }
+}
+
+/// [`sample_ground_truth`] together with the sky mask sampled at the same pixels.
+///
+/// # Errors
+/// As [`sample_ground_truth`].
+pub fn sample_eval_truth(
+    map: &InvDepthMap,
+    hyps: &InvDepthHypotheses,
+    grid: &EquirectGrid,
+    source_from_grid: &Rotation3<f64>,
+) -> Result<EvalTruth, DataError> {
+    let gt = sample_ground_truth(map, hyps, grid, source_from_grid)?;
+    let sky = nearest_pixels(map, grid, source_from_grid)?
+        .into_iter()
+        .map(|at| at.is_some_and(|at| is_sky(map.data[at], hyps)))
+        .collect();
+    Ok(EvalTruth { gt, sky })
+}
+
+/// The evaluation ground truth of `map` on an output `grid`: a grid at the map's own width
+/// with square pixels (`phi_deg = 180 height / width`, e.g. 160x640 at ±45 degrees for a
+/// 640-wide map) gets the middle rows cropped and the invalid rule applied to the crop,
+/// exactly as the reference's `loadGTInvdepthIndex`; any other grid samples the indices, the
+/// validity (computed at full resolution) and the sky mask at its rays
+/// ([`sample_eval_truth`]). The caller checks that the grid's latitudes lie inside the map's.
+///
+/// # Errors
+/// A crop taller than the map.
+pub fn eval_truth_on_grid(
+    map: &InvDepthMap,
+    hyps: &InvDepthHypotheses,
+    grid: &EquirectGrid,
+) -> Result<EvalTruth, DataError> {
+    let square_phi_deg = 180.0 * grid.height as f64 / grid.width as f64;
+    if map.width == grid.width && (grid.phi_deg - square_phi_deg).abs() < 1e-9 {
+        let cropped = map.crop_rows_centered(grid.height)?;
+        return Ok(eval_truth_index(&cropped, hyps));
+    }
+    sample_eval_truth(map, hyps, grid, &Rotation3::identity())
 }
 
 /// One pass of a 5-wide max (dilate) or min (erode) along rows or columns,
@@ -388,6 +492,44 @@ mod tests {
         };
         let gt = sample_ground_truth(&narrow, &hyps, &tall, &Rotation3::identity()).unwrap();
         assert!(!gt.valid[0] && gt.valid[32 * 128]);
+    }
+
+    #[test]
+    fn sky_is_below_the_farthest_sphere_and_follows_the_sampling() {
+        let hyps = InvDepthHypotheses::new(192, 0.5).unwrap();
+        assert!(is_sky(0.0, &hyps) && is_sky(-1.0, &hyps));
+        // 1e-10 1/m (10,000,000 km) has a positive index: the reference scores it.
+        assert!(!is_sky(1e-10, &hyps) && !is_sky(0.5, &hyps) && !is_sky(f32::NAN, &hyps));
+        // Top half sky, bottom half at 2 m, on the 320x640 grid of the ground truth.
+        let (w, h) = (640, 320);
+        let data = (0..w * h)
+            .map(|i| if i / w < h / 2 { 0.0 } else { 0.5 })
+            .collect();
+        let map = InvDepthMap {
+            width: w,
+            height: h,
+            data,
+        };
+        // The paper's grid crops the middle rows; the sky mask is the crop's.
+        let crop =
+            eval_truth_on_grid(&map, &hyps, &EquirectGrid::new(160, 640, 45.0).unwrap()).unwrap();
+        assert!(crop.sky[79 * w] && !crop.sky[80 * w]);
+        assert_eq!(
+            crop.gt,
+            ground_truth_index(&map.crop_rows_centered(160).unwrap(), &hyps)
+        );
+        assert!(crop.scored(0, Protocol::WithSky) && !crop.scored(0, Protocol::Reference));
+        assert!(crop.scored(159 * w, Protocol::Reference));
+        // A coarser grid samples the same rays for the indices, the validity and the sky.
+        let grid = EquirectGrid::new(32, 128, 45.0).unwrap();
+        let sampled = eval_truth_on_grid(&map, &hyps, &grid).unwrap();
+        assert_eq!(
+            sampled.gt,
+            sample_ground_truth(&map, &hyps, &grid, &Rotation3::identity()).unwrap()
+        );
+        for (i, &sky) in sampled.sky.iter().enumerate() {
+            assert_eq!(sky, i / 128 < 16, "pixel {i}");
+        }
     }
 
     #[test]
