@@ -33,7 +33,7 @@ fn load_network(
             BUNDLED_BYTES,
             device,
         )
-        .map(AnyNet::OmniMvs)
+        .map(|net| AnyNet::OmniMvs(Box::new(net)))
         .py_err(),
         Some(path) => {
             let base = NetConfig::preset(preset).py_err()?;
