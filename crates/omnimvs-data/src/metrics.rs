@@ -50,7 +50,7 @@ impl Protocol {
     pub fn description(self) -> &'static str {
         match self {
             Self::Reference => {
-                "the reference's evalError, as in the paper's tables: sky (index just below 0 there) is not scored"
+                "the reference's evalError, as in the paper's tables; sky, whose index is just below 0 there, is not scored"
             }
             Self::WithSky => "sky scored as index 0, as in training",
         }

@@ -4,15 +4,17 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::read_inv_depth;
 use omnimvs_data::image_io::write_png_u8;
-use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
+use omnimvs_data::metrics::{ProtocolMetrics, eval_metrics};
 use omnimvs_data::ply::write_ply;
 use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
 
 use crate::args::{Frames, Size};
+use crate::cmd::eval::protocol_tables;
 use crate::cmd::{eval, infer, sgm, synth};
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud};
 use crate::weights::Weights;
@@ -21,7 +23,7 @@ use crate::weights::Weights;
 /// repository: render a few frames of a synthetic `things` scene with exact
 /// ground truth for the published 4-camera rig, estimate 360-degree depth with
 /// the classical method (ZNCC + SGM) and with the bundled network; print the
-/// paper's metrics table; write pictures (inputs, panorama, ground truth,
+/// paper's metrics tables (the reference's protocol, and with sky scored); write pictures (inputs, panorama, ground truth,
 /// estimates, error maps) and a PLY point cloud. If the reference samples are beside the repository
 /// (../shared/data/omnimvs-samples), the real itbt_sample frame 1 is
 /// processed as well.
@@ -91,10 +93,11 @@ pub fn run(args: &Args) -> Result<()> {
         let images = ds.read_frame(frame)?;
         let index = read_inv_depth(&sgm_dir.join(format!("{frame:05}_index.tiff")))?;
         let inv = read_inv_depth(&sgm_dir.join(format!("{frame:05}.tiff")))?;
-        let gt = ds
-            .ground_truth(frame, &grid, &hyps)?
+        let truth = ds
+            .eval_truth(frame, &grid, &hyps)?
             .context("the synthetic frame has no ground truth")?;
-        frame_metrics_sgm.push(frame_metrics(&index.data, &gt, args.ndepth)?);
+        frame_metrics_sgm.push(eval_metrics(&index.data, &truth, args.ndepth)?);
+        let gt = &truth.gt;
         let pano = compose_panorama(
             &ds.rig,
             &grid,
@@ -124,7 +127,7 @@ pub fn run(args: &Args) -> Result<()> {
             ),
             (
                 "ZNCC+SGM error".into(),
-                error_map(&index.data, &gt, args.ndepth),
+                error_map(&index.data, gt, args.ndepth),
             ),
         ];
         let (px, height) = label_rows(&rows, grid.width);
@@ -136,16 +139,21 @@ pub fn run(args: &Args) -> Result<()> {
         )?;
         println!("  wrote {} and its point cloud", path.display());
     }
-    let mut table = vec![Metrics::MARKDOWN_HEADER.to_string()];
-    if let Some(mean) = mean_metrics(&frame_metrics_sgm) {
-        table.push(mean.markdown_row("ZNCC+SGM"));
-    }
-    let table = table.join("\n");
-    std::fs::write(args.out.join("metrics.md"), format!("{table}\n"))?;
+    let rows: Vec<(String, ProtocolMetrics)> = ProtocolMetrics::mean(&frame_metrics_sgm)
+        .map(|mean| ("ZNCC+SGM".to_string(), mean))
+        .into_iter()
+        .collect();
+    let table = protocol_tables(&rows);
+    let md = args.out.join("metrics.md");
+    write_atomic(&md, table.as_bytes()).with_context(|| format!("writing {}", md.display()))?;
 
     println!(
-        "[4/5] bundled network ({}) against the classical method at the network's grid",
-        Weights::Bundled
+        "[4/5] bundled network ({}) against the classical method, both scored at {}x{}, N = {} \
+         (the network's coarser output upsampled)",
+        Weights::Bundled,
+        args.size.height,
+        args.size.width,
+        args.ndepth
     );
     let eval_dir = args.out.join("eval");
     eval::run(&eval::Args {
@@ -153,8 +161,9 @@ pub fn run(args: &Args) -> Result<()> {
         method: vec!["net".into(), "sgm".into()],
         weights: vec![Weights::Bundled],
         frames: Frames(1..=args.frames),
-        size: None,
-        ndepth: None,
+        size: args.size,
+        ndepth: args.ndepth,
+        phi_deg: 45.0,
         out: Some(eval_dir.clone()),
         pictures: true,
         backend: omnimvs_net::Backend::Cpu,
@@ -178,12 +187,16 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     println!(
-        "\nClassical method at {}x{}, N = {}, on {} synthetic frames (error in % of N; lower is better):\n{table}",
-        args.size.height, args.size.width, args.ndepth, args.frames
+        "\nClassical method at {}x{}, N = {}, on {} synthetic frames (error in % of N; lower is better):\n\n{}",
+        args.size.height,
+        args.size.width,
+        args.ndepth,
+        args.frames,
+        table.trim_end()
     );
     if let Some(t) = net_table {
         println!(
-            "\nNetwork and classical method at the network's grid:\n{}",
+            "\nNetwork and classical method at the same grid:\n\n{}",
             t.trim_end()
         );
     }

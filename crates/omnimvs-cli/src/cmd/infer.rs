@@ -4,11 +4,12 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
-use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
+use omnimvs_data::metrics::{Protocol, ProtocolMetrics, eval_metrics};
 use omnimvs_data::ply::write_ply;
 use omnimvs_net::Backend;
 use omnimvs_net::NetEstimator;
@@ -16,6 +17,7 @@ use omnimvs_net::infer::FrameResult;
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
 use crate::args::{BACKEND_HELP, Frames, parse_backend};
+use crate::cmd::eval::protocol_tables;
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 use crate::weights::{BUNDLED, Weights};
 
@@ -23,7 +25,10 @@ use crate::weights::{BUNDLED, Weights};
 /// OUT/%05d.tiff (f32 inverse depth, 1/m), %05d_index.tiff (hypothesis index),
 /// %05d_entropy.tiff, %05d.png (colour-mapped inverse depth), %05d_vis.png
 /// (inputs, panorama, depth, entropy and error when ground truth exists) and
-/// optionally %05d.ply; metrics.json when ground truth exists.
+/// optionally %05d.ply; metrics.json when ground truth exists, scored at the
+/// network's own grid under the `reference` protocol (the reference's evalError,
+/// the paper's tables: sky is not scored) with the `with-sky` protocol (sky
+/// scored as index 0) beside it (`omnimvs eval` compares methods at one grid).
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Dataset folder (or its config.yaml).
@@ -88,10 +93,12 @@ pub fn run(args: &Args) -> Result<()> {
         "order": inference.order(),
         "backend": args.backend.to_string(),
     });
-    std::fs::write(
-        args.out.join("infer.json"),
-        serde_json::to_string_pretty(&settings)? + "\n",
-    )?;
+    let path = args.out.join("infer.json");
+    write_atomic(
+        &path,
+        (serde_json::to_string_pretty(&settings)? + "\n").as_bytes(),
+    )
+    .with_context(|| format!("writing {}", path.display()))?;
 
     let frames: Vec<u32> = args.frames.0.clone().collect();
     let bar = ProgressBar::new(frames.len() as u64);
@@ -101,7 +108,7 @@ pub fn run(args: &Args) -> Result<()> {
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let mut metrics: Vec<(u32, Metrics)> = Vec::new();
+    let mut metrics: Vec<(u32, ProtocolMetrics)> = Vec::new();
     for &frame in &frames {
         let images = ds
             .read_frame(frame)
@@ -111,7 +118,7 @@ pub fn run(args: &Args) -> Result<()> {
             .with_context(|| format!("frame {frame}"))?;
         let error = write_frame(args, &ds, &inference, frame, &images, &result)?;
         if let Some(m) = error {
-            bar.set_message(format!("frame {frame}: MAE {:.3}", m.mae));
+            bar.set_message(format!("frame {frame}: MAE {:.3}", m.reference.mae));
             metrics.push((frame, m));
         } else {
             bar.set_message(format!("frame {frame}: {:.2} s", result.seconds));
@@ -120,25 +127,41 @@ pub fn run(args: &Args) -> Result<()> {
     }
     bar.finish();
     if !metrics.is_empty() {
-        let rows: Vec<Metrics> = metrics.iter().map(|(_, m)| *m).collect();
-        let mean = mean_metrics(&rows);
+        let rows: Vec<ProtocolMetrics> = metrics.iter().map(|(_, m)| *m).collect();
+        let mean = ProtocolMetrics::mean(&rows);
         let json = serde_json::json!({
-            "frames": metrics.iter().map(|(f, m)| serde_json::json!({"frame": f, "metrics": m})).collect::<Vec<_>>(),
-            "mean": mean,
+            "protocol": Protocol::Reference,
+            "frames": metrics.iter().map(|(f, m)| serde_json::json!({
+                "frame": f,
+                "metrics": m.reference,
+                "metrics_with_sky": m.with_sky,
+            })).collect::<Vec<_>>(),
+            "mean": mean.map(|m| m.reference),
+            "mean_with_sky": mean.map(|m| m.with_sky),
         });
-        std::fs::write(
-            args.out.join("metrics.json"),
-            serde_json::to_string_pretty(&json)? + "\n",
-        )?;
+        let path = args.out.join("metrics.json");
+        write_atomic(
+            &path,
+            (serde_json::to_string_pretty(&json)? + "\n").as_bytes(),
+        )
+        .with_context(|| format!("writing {}", path.display()))?;
         if let Some(mean) = mean {
-            println!("{}", mean.markdown_row("OmniMVS (burn)"));
+            let c = inference.config();
+            print!(
+                "{}x{}, N = {} (the network's grid)\n\n{}",
+                c.out_height,
+                c.out_width,
+                c.num_invdepth,
+                protocol_tables(&[("OmniMVS (burn)".into(), mean)])
+            );
         }
     }
     println!("wrote {} frames to {}", frames.len(), args.out.display());
     Ok(())
 }
 
-/// Writes every output of one frame; returns its metrics when ground truth exists.
+/// Writes every output of one frame; returns its metrics (both protocols) when ground truth
+/// exists.
 fn write_frame(
     args: &Args,
     ds: &Dataset,
@@ -146,7 +169,7 @@ fn write_frame(
     frame: u32,
     images: &[GrayImage],
     result: &FrameResult,
-) -> Result<Option<Metrics>> {
+) -> Result<Option<ProtocolMetrics>> {
     let (w, h) = (result.width, result.height);
     let out = |suffix: &str| args.out.join(format!("{frame:05}{suffix}"));
     write_f32_tiff(&out(".tiff"), w, h, &result.inv_depth)?;
@@ -157,10 +180,10 @@ fn write_frame(
     write_png_u8(&out(".png"), w, h, 3, &depth_rgb)?;
 
     let ndepth = inference.config().num_invdepth;
-    let gt = ds.ground_truth(frame, inference.grid(), inference.hypotheses())?;
-    let metrics = gt
+    let truth = ds.eval_truth(frame, inference.grid(), inference.hypotheses())?;
+    let metrics = truth
         .as_ref()
-        .map(|gt| frame_metrics(&result.index, gt, ndepth))
+        .map(|truth| eval_metrics(&result.index, truth, ndepth))
         .transpose()?;
 
     let pano = compose_panorama(
@@ -183,8 +206,8 @@ fn write_frame(
         depth_rgb,
         entropy_rgb,
     ];
-    if let Some(gt) = &gt {
-        rows.push(error_map(&result.index, gt, ndepth));
+    if let Some(truth) = &truth {
+        rows.push(error_map(&result.index, &truth.gt, ndepth));
     }
     let composite: Vec<u8> = rows.concat();
     write_png_u8(

@@ -4,11 +4,12 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
+use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
-use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
+use omnimvs_data::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics};
 use omnimvs_stereo::{
     DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SphericalStereo, StageTimings, SweepStep,
 };
@@ -16,6 +17,7 @@ use omnimvs_sweep::EquirectGrid;
 use serde::Serialize;
 
 use crate::args::{Frames, Size};
+use crate::cmd::eval::protocol_tables;
 
 /// Depth by the classical method of the paper's Table 3 ("ZNCC+SGM"):
 /// every camera's gray image is swept over N spheres, 9x9 ZNCC between all
@@ -28,7 +30,10 @@ use crate::args::{Frames, Size};
 /// near = warm, scaled to the frame's 1st..99th percentile),
 /// %05d_confidence.png/.tiff (1 - best/second-best aggregated cost); and
 /// sgm.json (the parameters, timings and, when the dataset has ground
-/// truth, the per-frame metrics and their mean, also in metrics.md).
+/// truth, the per-frame metrics and their mean, also in metrics.md). Metrics
+/// follow the `reference` protocol (the reference's evalError, the paper's
+/// tables: sky is not scored), with the `with-sky` protocol (sky scored as
+/// index 0) beside them.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Dataset folder (or its config.yaml).
@@ -71,7 +76,10 @@ struct FrameRecord {
     /// Inverse depths (1/m) at the ends of the colour map.
     color_range: [f32; 2],
     mean_confidence: f32,
+    /// The `reference` protocol.
     metrics: Option<Metrics>,
+    /// The `with-sky` protocol.
+    metrics_with_sky: Option<Metrics>,
 }
 
 #[derive(Serialize)]
@@ -84,8 +92,11 @@ struct Summary<'a> {
     ndepth: usize,
     min_depth_m: f64,
     params: SgmParams,
+    /// The protocol of the `metrics` fields; `metrics_with_sky` scores sky too.
+    protocol: Protocol,
     frames: &'a [FrameRecord],
     mean_metrics: Option<Metrics>,
+    mean_metrics_with_sky: Option<Metrics>,
 }
 
 /// The `q`-quantile of the finite values.
@@ -165,8 +176,8 @@ pub fn run(args: &Args) -> Result<()> {
             .map(|&c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
             .collect();
         write_png_u8(&path("_confidence.png"), w, h, 1, &gray)?;
-        let metrics = match ds.ground_truth(frame, &grid, &hyps) {
-            Ok(Some(gt)) => Some(frame_metrics(&out.index.index, &gt, args.ndepth)?),
+        let metrics = match ds.eval_truth(frame, &grid, &hyps) {
+            Ok(Some(truth)) => Some(eval_metrics(&out.index.index, &truth, args.ndepth)?),
             Ok(None) => None,
             Err(e) => {
                 eprintln!("frame {frame}: no metrics: {e}");
@@ -181,40 +192,53 @@ pub fn run(args: &Args) -> Result<()> {
             t.aggregation_s,
             t.wta_s,
             t.total_s,
-            metrics.map_or(String::new(), |m| format!(
-                "; >1 {:.2}% >3 {:.2}% >5 {:.2}% MAE {:.2} RMS {:.2}",
-                m.over1_pct, m.over3_pct, m.over5_pct, m.mae, m.rms
-            ))
+            metrics.map_or(String::new(), |m| {
+                let (r, s) = (m.reference, m.with_sky);
+                format!(
+                    "; >1 {:.2}% >3 {:.2}% >5 {:.2}% MAE {:.2} RMS {:.2} (with sky: MAE {:.2} RMS {:.2})",
+                    r.over1_pct, r.over3_pct, r.over5_pct, r.mae, r.rms, s.mae, s.rms
+                )
+            })
         );
         records.push(FrameRecord {
             frame,
             timings: t,
             color_range: [lo, hi],
             mean_confidence: conf.iter().sum::<f32>() / conf.len() as f32,
-            metrics,
+            metrics: metrics.map(|m| m.reference),
+            metrics_with_sky: metrics.map(|m| m.with_sky),
         });
     }
-    let per_frame: Vec<Metrics> = records.iter().filter_map(|r| r.metrics).collect();
-    let mean = mean_metrics(&per_frame);
+    let per_frame: Vec<(u32, ProtocolMetrics)> = records
+        .iter()
+        .filter_map(|r| {
+            Some((
+                r.frame,
+                ProtocolMetrics {
+                    reference: r.metrics?,
+                    with_sky: r.metrics_with_sky?,
+                },
+            ))
+        })
+        .collect();
+    let all: Vec<ProtocolMetrics> = per_frame.iter().map(|(_, m)| *m).collect();
+    let mean = ProtocolMetrics::mean(&all);
     if let Some(m) = mean {
-        let mut table = format!(
-            "{} ({} frames with ground truth), {h}x{w}, N = {}\n\n{}\n",
+        let mut rows: Vec<(String, ProtocolMetrics)> = per_frame
+            .iter()
+            .map(|(f, fm)| (format!("frame {f}"), *fm))
+            .collect();
+        rows.push(("ZNCC+SGM (mean)".into(), m));
+        let table = format!(
+            "{} ({} frames with ground truth), {h}x{w}, N = {}\n\n{}",
             ds.root.display(),
             per_frame.len(),
             args.ndepth,
-            Metrics::MARKDOWN_HEADER
+            protocol_tables(&rows)
         );
-        for r in &records {
-            if let Some(fm) = r.metrics {
-                table.push_str(&fm.markdown_row(&format!("frame {}", r.frame)));
-                table.push('\n');
-            }
-        }
-        table.push_str(&m.markdown_row("ZNCC+SGM (mean)"));
-        table.push('\n');
         print!("{table}");
         let md = args.out.join("metrics.md");
-        std::fs::write(&md, table).with_context(|| format!("writing {}", md.display()))?;
+        write_atomic(&md, table.as_bytes()).with_context(|| format!("writing {}", md.display()))?;
     }
     let summary = Summary {
         method: "ZNCC+SGM",
@@ -225,11 +249,13 @@ pub fn run(args: &Args) -> Result<()> {
         ndepth: args.ndepth,
         min_depth_m: ds.config.min_depth_m,
         params,
+        protocol: Protocol::Reference,
         frames: &records,
-        mean_metrics: mean,
+        mean_metrics: mean.map(|m| m.reference),
+        mean_metrics_with_sky: mean.map(|m| m.with_sky),
     };
     let json = args.out.join("sgm.json");
-    std::fs::write(&json, serde_json::to_string_pretty(&summary)?)
+    write_atomic(&json, serde_json::to_string_pretty(&summary)?.as_bytes())
         .with_context(|| format!("writing {}", json.display()))?;
     println!("wrote {} frames to {}", records.len(), args.out.display());
     Ok(())
