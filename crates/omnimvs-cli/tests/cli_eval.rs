@@ -68,9 +68,9 @@ fn eval_prints_both_protocols_at_one_grid() {
     );
     for table in [&stdout[reference..with_sky], &stdout[with_sky..]] {
         assert!(table.contains("| method | >1 (%) |"), "{table}");
-        assert!(table.contains("| net (at 32x128, N = 64) | "), "{table}");
+        assert!(table.contains("| net, native 32x128, N = 64 | "), "{table}");
         assert!(
-            table.contains("| ZNCC+SGM (at 40x160, N = 48) | "),
+            table.contains("| ZNCC+SGM, native 40x160, N = 48 | "),
             "{table}"
         );
     }

@@ -343,7 +343,7 @@ pub fn run(args: &Args) -> Result<()> {
             let n = &m.native;
             (
                 format!(
-                    "{} (at {}x{}, N = {})",
+                    "{}, native {}x{}, N = {}",
                     m.method, n.height, n.width, n.ndepth
                 ),
                 ProtocolMetrics {
