@@ -32,8 +32,7 @@ fn main() {
     let inference = CascadeInference::new(net, &ds, device.clone()).unwrap();
     println!("geometry: {:.3} s", start.elapsed().as_secs_f64());
     for _ in 0..2 {
-        let out = inference.run(&images, true).unwrap();
-        let t = out.timings;
+        let (_, t) = inference.run(&images, true).unwrap();
         println!(
             "forward: features {:.3}  coarse {:.3}  mid {:.3}  fine {:.3}  total {:.3} s",
             t.features, t.coarse, t.mid, t.fine, t.total

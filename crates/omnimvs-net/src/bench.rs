@@ -68,17 +68,20 @@ impl From<StageTimings> for StageTimingsRow {
     }
 }
 
+/// The median of `f` over `runs` (the upper one for an even count); `runs` is not empty.
+fn median_of<T>(runs: &[T], f: fn(&T) -> f64) -> f64 {
+    let mut v: Vec<f64> = runs.iter().map(f).collect();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
 impl BenchReport {
     /// Median of each stage over the runs.
     pub fn median(&self) -> Option<StageTimingsRow> {
         if self.runs.is_empty() {
             return None;
         }
-        let med = |f: fn(&StageTimingsRow) -> f64| {
-            let mut v: Vec<f64> = self.runs.iter().map(f).collect();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
+        let med = |f| median_of(&self.runs, f);
         Some(StageTimingsRow {
             features: med(|r| r.features),
             sweep: med(|r| r.sweep),
@@ -375,11 +378,7 @@ impl CascadeBenchReport {
         if self.runs.is_empty() {
             return None;
         }
-        let med = |f: fn(&CascadeRow) -> f64| {
-            let mut v: Vec<f64> = self.runs.iter().map(f).collect();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
+        let med = |f| median_of(&self.runs, f);
         Some(CascadeRow {
             features: med(|r| r.features),
             coarse: med(|r| r.coarse),

@@ -118,17 +118,7 @@ impl NetEstimator {
     pub fn run(&self, images: &[GrayImage]) -> Result<FrameResult, NetError> {
         match self {
             Self::OmniMvs(i) => i.run(images),
-            Self::Cascade(i) => {
-                let frame = i.run(images, false)?;
-                Ok(FrameResult {
-                    height: frame.height,
-                    width: frame.width,
-                    index: frame.index,
-                    inv_depth: frame.inv_depth,
-                    entropy: frame.entropy,
-                    seconds: frame.timings.total,
-                })
-            }
+            Self::Cascade(i) => Ok(i.run(images, false)?.0),
         }
     }
 }

@@ -10,24 +10,7 @@ use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use super::geometry::{CascadeGeometry, CascadeTimings};
 use super::model::{CascadeNet, read_values};
 use crate::error::NetError;
-use crate::infer::{network_inputs, sweep_geometry};
-
-/// The cascade's results for one frame on its output grid.
-#[derive(Clone, Debug)]
-pub struct CascadeFrame {
-    /// Rows of the maps.
-    pub height: usize,
-    /// Columns of the maps.
-    pub width: usize,
-    /// Expected hypothesis index in `[0, N - 1]`.
-    pub index: Vec<f32>,
-    /// Inverse depth (1/m) of the index.
-    pub inv_depth: Vec<f32>,
-    /// Entropy of the final stage's distribution over its hypotheses (nats).
-    pub entropy: Vec<f32>,
-    /// Stage timings (zero unless asked for).
-    pub timings: CascadeTimings,
-}
+use crate::infer::{FrameResult, network_inputs, sweep_geometry};
 
 /// A cascade network ready to run on the frames of one rig.
 pub struct CascadeInference {
@@ -75,12 +58,16 @@ impl CascadeInference {
         &self.masks
     }
 
-    /// Runs the network on one frame's gray images (rig order); `timed` measures each stage
-    /// (waiting for the device after each).
+    /// Runs the network on one frame's gray images (rig order): the final stage's maps, and
+    /// each stage's time when `timed` (which waits for the device after each).
     ///
     /// # Errors
     /// [`NetError`] for a wrong number of images or a mask of another size.
-    pub fn run(&self, images: &[GrayImage], timed: bool) -> Result<CascadeFrame, NetError> {
+    pub fn run(
+        &self,
+        images: &[GrayImage],
+        timed: bool,
+    ) -> Result<(FrameResult, CascadeTimings), NetError> {
         let config = &self.net.config;
         if images.len() != config.num_cameras {
             return Err(NetError::Shape {
@@ -108,13 +95,14 @@ impl CascadeInference {
             .iter()
             .map(|&n| hypotheses.inv_depth(f64::from(n)) as f32)
             .collect();
-        Ok(CascadeFrame {
+        let result = FrameResult {
             height: self.grid.height,
             width: self.grid.width,
             index,
             inv_depth,
             entropy,
-            timings,
-        })
+            seconds: timings.total,
+        };
+        Ok((result, timings))
     }
 }

@@ -28,6 +28,6 @@ pub mod model;
 pub mod sampler;
 
 pub use geometry::{CascadeGeometry, CascadeOutput, CascadeTimings, StageTaps};
-pub use infer::{CascadeFrame, CascadeInference};
+pub use infer::CascadeInference;
 pub use model::{CascadeNet, StageOutput};
 pub use sampler::PixelSampler;

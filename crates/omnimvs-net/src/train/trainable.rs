@@ -113,10 +113,7 @@ impl Trainable for OmniMvsNet {
         order: &[usize],
         sample: &Sample,
     ) -> Result<Tensor<1>, NetError> {
-        let device = images
-            .first()
-            .map(Tensor::device)
-            .ok_or_else(|| no_images(self.config.num_cameras))?;
+        let device = first_device(images, self.config.num_cameras)?;
         let out = self.forward(images, geometry, order)?; // index [1, H, W]
         Ok(index_l1(out.index, &sample.gt, true, &device))
     }
@@ -176,10 +173,7 @@ impl Trainable for CascadeNet {
         _order: &[usize],
         sample: &Sample,
     ) -> Result<Tensor<1>, NetError> {
-        let device = images
-            .first()
-            .map(Tensor::device)
-            .ok_or_else(|| no_images(self.config.num_cameras))?;
+        let device = first_device(images, self.config.num_cameras)?;
         if sample.stage_gt.len() != 2 {
             return Err(NetError::Shape {
                 what: "ground truth of the cascade's coarse and half-resolution stages".into(),
@@ -214,6 +208,14 @@ impl Trainable for CascadeNet {
     fn save_weights(&self, path: &Path) -> Result<(), NetError> {
         weights::save_module(self, &self.config, path)
     }
+}
+
+/// The device of the first image.
+fn first_device(images: &[Tensor<4>], expected: usize) -> Result<Device, NetError> {
+    images
+        .first()
+        .map(Tensor::device)
+        .ok_or_else(|| no_images(expected))
 }
 
 fn no_images(expected: usize) -> NetError {
