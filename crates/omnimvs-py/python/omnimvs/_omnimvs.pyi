@@ -1,6 +1,7 @@
 """Type stubs of the compiled module (re-exported by ``omnimvs``)."""
 
 import os
+from pathlib import Path
 from typing import Optional, Sequence, Tuple, TypedDict, Union, overload
 
 import numpy as np
@@ -49,7 +50,7 @@ class Dataset:
 
     def __init__(self, path: PathLike) -> None: ...
     @property
-    def root(self) -> os.PathLike[str]:
+    def root(self) -> Path:
         """The dataset folder."""
     @property
     def frames(self) -> list[int]:
@@ -131,7 +132,7 @@ def evaluate(
 def synth(
     kind: str,
     out: PathLike,
-    frames: Union[Tuple[int, int], int, None] = None,
+    frames: Union[Tuple[int, int], int, None] = (1, 10),
     seed: int = 0,
     rig: Union[Rig, PathLike, None] = None,
     size: Optional[Tuple[int, int]] = None,
