@@ -1,7 +1,8 @@
-//! `omnimvs.evaluate`: the paper's metrics of a prediction against a frame's ground truth.
+//! `omnimvs.evaluate`: the paper's metrics of a prediction against a frame's ground truth,
+//! scored as `omnimvs eval` scores a method.
 
 use numpy::{PyArray2, PyArrayMethods, PyUntypedArrayMethods};
-use omnimvs_data::metrics::frame_metrics;
+use omnimvs_data::metrics::{Protocol, index_on_eval_grid, protocol_metrics};
 use omnimvs_sweep::EquirectGrid;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -46,46 +47,68 @@ fn prediction_values(prediction: &Bound<'_, PyAny>) -> PyResult<(Vec<f64>, usize
 }
 
 /// The paper's metrics of a predicted inverse-depth map on one frame, as `omnimvs eval`
-/// computes them: per pixel `E = |n_hat - n*| / N * 100` (hypothesis indices of `ndepth`
-/// spheres), over the pixels valid in the ground truth (the reference's invalid rule at full
-/// resolution, sampled at the prediction grid's rays); returns a dict with `over1_pct`,
-/// `over3_pct`, `over5_pct` (percent of pixels with `E > 1, 3, 5`), `mae`, `rms` and
-/// `valid_pixels`.
+/// scores a method: the prediction (on its own equirectangular grid over `+-phi_deg`) is
+/// resampled on the sphere to the evaluation grid `height x width` (bilinear, longitude
+/// wrapping around), turned into hypothesis indices of `ndepth` spheres and scored against the
+/// frame's ground truth: per pixel `E = |n_hat - n*| / N * 100`; returns a dict with
+/// `over1_pct`, `over3_pct`, `over5_pct` (percent of scored pixels with `E > 1, 3, 5`),
+/// `mae`, `rms` and `valid_pixels` (the number of pixels scored).
 ///
 /// Args:
-///     prediction: inverse depth (1/m), a 2-D `numpy.float32` (or float64) array
-///         `(height, width)` on an equirectangular grid of `+-phi_deg` latitude.
+///     prediction: inverse depth (1/m), a 2-D `numpy.float32` (or float64) array on its own
+///         grid, e.g. `sgm`'s 160x640 or the bundled network's 32x128.
 ///     dataset: the `omnimvs.Dataset` with the frame's ground truth.
 ///     frame: the frame.
-///     ndepth: N of the method (192 for `sgm`'s default, 64 for the bundled network).
-///     phi_deg: latitude range of the prediction, +-degrees.
+///     height, width, ndepth: the evaluation grid and its N (the unit of `E`), `omnimvs
+///         eval`'s defaults.
+///     phi_deg: latitude range of the prediction and of the evaluation grid, +-degrees.
+///     protocol: `"reference"` (the reference's evalError, the paper's tables: sky is not
+///         scored) or `"with-sky"` (sky scored as index 0, as in training).
 ///
 /// Raises:
 ///     ValueError: a bad argument, or no ground truth for the frame.
 #[pyfunction]
-#[pyo3(signature = (prediction, dataset, frame, ndepth=192, phi_deg=45.0))]
+#[pyo3(signature = (prediction, dataset, frame, height=160, width=640, ndepth=192, phi_deg=45.0, protocol="reference"))]
+#[allow(clippy::too_many_arguments)]
 pub fn evaluate<'py>(
     py: Python<'py>,
     prediction: &Bound<'py, PyAny>,
     dataset: PyRef<'py, PyDataset>,
     frame: i64,
+    height: usize,
+    width: usize,
     ndepth: usize,
     phi_deg: f64,
+    protocol: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let frame = frame_number(frame)?;
-    let (inv_depth, height, width) = prediction_values(prediction)?;
+    let protocol = Protocol::ALL
+        .into_iter()
+        .find(|p| p.name() == protocol)
+        .ok_or_else(|| {
+            bad_argument(
+                "protocol",
+                format!("expected \"reference\" or \"with-sky\", found {protocol:?}"),
+            )
+        })?;
+    let (inv_depth, rows, cols) = prediction_values(prediction)?;
     let ds = &dataset.inner;
     let metrics = detached(py, || {
         let grid = EquirectGrid::new(height, width, phi_deg).py_err()?;
         let hyps = ds.hypotheses(ndepth).py_err()?;
-        let Some(gt) = ds.ground_truth(frame, &grid, &hyps).py_err()? else {
+        let native =
+            EquirectGrid::new(rows, cols, phi_deg).map_err(|e| bad_argument("prediction", e))?;
+        let Some(truth) = ds.eval_truth(frame, &grid, &hyps).py_err()? else {
             return Err(bad_argument(
                 "frame",
                 format!("frame {frame} of {} has no ground truth", ds.root.display()),
             ));
         };
-        let index: Vec<f32> = inv_depth.iter().map(|&d| hyps.index(d) as f32).collect();
-        frame_metrics(&index, &gt, ndepth).py_err()
+        // Inverse depth as indices of the evaluation's hypotheses on the prediction's grid,
+        // then on the evaluation grid, exactly as eval brings a method's output there.
+        let native_index: Vec<f32> = inv_depth.iter().map(|&d| hyps.index(d) as f32).collect();
+        let index = index_on_eval_grid(&native_index, &native, &hyps, &grid, &hyps).py_err()?;
+        protocol_metrics(&index, &truth, ndepth, protocol).py_err()
     })?;
     let dict = PyDict::new(py);
     dict.set_item("over1_pct", metrics.over1_pct)?;

@@ -55,20 +55,22 @@ def test_ground_truth_scores_perfectly(synthetic):
 
 
 def test_evaluate_equals_the_command_line(synthetic, cli, tmp_path):
+    # eval scores each method at the 160x640, N = 192 evaluation grid: SGM runs there, the
+    # network's 32x128 output is resampled on the sphere; evaluate does the same.
     out, ds = synthetic
     cli("eval", "--data", out, "--method", "net,sgm", "--frames", 1, "--out", tmp_path)
     report = json.loads((tmp_path / "eval.json").read_text())
-    assert (report["height"], report["width"], report["ndepth"]) == (32, 128, 64)
-    expected = {m["method"]: m["metrics"] for m in report["methods"]}
-    predictions = {
-        "net": omnimvs.infer(ds, 1),
-        "ZNCC+SGM": omnimvs.sgm(ds, 1, height=32, width=128, ndepth=64),
-    }
+    assert (report["height"], report["width"], report["ndepth"]) == (160, 640, 192)
+    expected = {m["method"]: m for m in report["methods"]}
+    predictions = {"net": omnimvs.infer(ds, 1), "ZNCC+SGM": omnimvs.sgm(ds, 1)}
+    assert predictions["net"].shape == (32, 128)
     for method, prediction in predictions.items():
-        metrics = omnimvs.evaluate(prediction, ds, 1, ndepth=64)
-        assert metrics["valid_pixels"] == expected[method]["valid_pixels"], method
-        for key in ("over1_pct", "over3_pct", "over5_pct", "mae", "rms"):
-            assert metrics[key] == pytest.approx(expected[method][key], rel=1e-3, abs=1e-3), (method, key)
+        for protocol, key in (("reference", "metrics"), ("with-sky", "metrics_with_sky")):
+            metrics = omnimvs.evaluate(prediction, ds, 1, protocol=protocol)
+            want = expected[method][key]
+            assert metrics["valid_pixels"] == want["valid_pixels"], (method, protocol)
+            for name in ("over1_pct", "over3_pct", "over5_pct", "mae", "rms"):
+                assert metrics[name] == pytest.approx(want[name], rel=1e-3, abs=1e-3), (method, protocol, name)
 
 
 def test_bad_input(synthetic, itbt_path, tmp_path):
@@ -91,3 +93,5 @@ def test_bad_input(synthetic, itbt_path, tmp_path):
         omnimvs.evaluate(np.zeros((32, 128), np.int64), ds, 1)
     with pytest.raises(ValueError, match="prediction"):
         omnimvs.evaluate(np.zeros((4, 32, 128), np.float32), ds, 1)
+    with pytest.raises(ValueError, match="protocol"):
+        omnimvs.evaluate(np.zeros((32, 128), np.float32), ds, 1, protocol="paper")

@@ -124,10 +124,16 @@ def evaluate(
     prediction: Union[npt.NDArray[np.float32], npt.NDArray[np.float64]],
     dataset: Dataset,
     frame: int,
+    height: int = 160,
+    width: int = 640,
     ndepth: int = 192,
     phi_deg: float = 45.0,
+    protocol: str = "reference",
 ) -> Metrics:
-    """The paper's metrics of a predicted inverse-depth map against the frame's ground truth."""
+    """The paper's metrics of a predicted inverse-depth map (on its own grid, resampled to the
+    ``height x width`` evaluation grid, indices of ``ndepth`` spheres) against the frame's
+    ground truth, as ``omnimvs eval`` scores a method; ``protocol`` is ``"reference"`` (the
+    paper's: sky not scored) or ``"with-sky"``."""
 
 def synth(
     kind: str,
