@@ -1,7 +1,9 @@
 //! Profiles the cascade at full size on one real or generated frame: forward pass per stage
 //! (inference mode) and training steps (forward, backward, optimiser).
 //!
-//! `cargo run --release -p omnimvs-net --example cascade_profile -- DATASET [FRAME] [STEPS]`
+//! `cargo run --release -p omnimvs-net --example cascade_profile -- DATASET [FRAME] [STEPS]
+//! [WINDOW]` (WINDOW: train on that many output columns of longitude, see
+//! `omnimvs train --column-window`)
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::PathBuf;
@@ -22,6 +24,7 @@ fn main() {
     );
     let frame: u32 = args.get(2).map_or(1, |f| f.parse().unwrap());
     let steps: usize = args.get(3).map_or(3, |s| s.parse().unwrap());
+    let window: Option<usize> = args.get(4).map(|s| s.parse().unwrap());
     let config = NetConfig::cascade();
     let device = Device::flex();
     let ds = Dataset::open(&path).unwrap();
@@ -77,7 +80,8 @@ fn main() {
     };
     let mut learner = Learner::<CascadeNet>::for_model(&train, &device).unwrap();
     let source = SampleSource::open(&path, &config, RotationSet::new(1, 0.0, 0)).unwrap();
-    let sample = source.load(0, frame, 0).unwrap();
+    let mut sample = source.load(0, frame, 0).unwrap();
+    sample.window = window.map(|width| omnimvs_net::cascade::ColumnWindow { start: 100, width });
     let geometry =
         CascadeGeometry::new(&ds.rig, &config, &source.hypotheses, &learner.device).unwrap();
     for _ in 0..steps {

@@ -312,6 +312,7 @@ pub fn bench_train_step(
             valid: vec![true; cells],
         },
         stage_gt: Vec::new(),
+        window: None,
     };
     let order = learner.net.identity_order();
     let mut report = TrainStepReport {
@@ -465,6 +466,7 @@ pub fn bench_cascade_train_step(
             .collect(),
         gt: ramp(fine),
         stage_gt: vec![ramp(coarse), ramp(mid)],
+        window: None,
     };
     let mut report = TrainStepReport {
         steps: Vec::new(),

@@ -53,6 +53,7 @@ fn micro_sample(net: &NetConfig) -> Sample {
             valid,
         },
         stage_gt: Vec::new(),
+        window: None,
     }
 }
 

@@ -84,6 +84,11 @@ pub struct Args {
     /// Validation frames per epoch at most.
     #[arg(long)]
     pub max_val_frames: Option<usize>,
+    /// Train the cascade's refinement stages on a window of this many output columns at a
+    /// random longitude every step (cuts their cost in proportion; the coarse stage always
+    /// sees the whole panorama). Also taken with --resume, from then on.
+    #[arg(long)]
+    pub column_window: Option<usize>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
@@ -134,8 +139,14 @@ pub fn run(args: &Args) -> Result<()> {
 fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
     let device = device.clone();
     let mut trainer = match &args.resume {
-        Some(dir) => Trainer::<M>::resume(dir, args.epochs, &device)
-            .with_context(|| format!("resuming {}", dir.display()))?,
+        Some(dir) => {
+            let mut trainer = Trainer::<M>::resume(dir, args.epochs, &device)
+                .with_context(|| format!("resuming {}", dir.display()))?;
+            if args.column_window.is_some() {
+                trainer.set_column_window(args.column_window)?;
+            }
+            trainer
+        }
         None => {
             let Some(out) = &args.out else {
                 bail!("--out RUN_DIR is required for a new run");
@@ -164,6 +175,7 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 max_steps_per_epoch: args.max_steps,
                 max_val_frames: args.max_val_frames,
                 init: args.init.clone(),
+                column_window: args.column_window,
                 ..TrainConfig::default()
             };
             Trainer::<M>::create(config, out, &device)

@@ -3,6 +3,7 @@
 //! (each stage's estimate is read back to build the next stage's hypotheses, which carry no
 //! gradient, as in CasMVSNet).
 
+use std::ops::Range;
 use std::time::Instant;
 
 use burn::tensor::{Device, Tensor, TensorData};
@@ -164,12 +165,18 @@ impl CascadeGeometry {
         })
     }
 
-    /// The taps of refinement stage `stage` (1: half, 2: full resolution) around the previous
-    /// stage's index map `previous` (`N` units, on the previous stage's grid).
+    /// The taps of refinement stage `stage` (1: half, 2: full resolution) around `previous`,
+    /// an index map (`N` units) on the previous stage's whole grid, for the stage's columns
+    /// `cols` (all of them, or a training window).
     ///
     /// # Errors
-    /// [`NetError::Shape`] for a map of another size.
-    pub fn refine_taps(&self, stage: usize, previous: &[f32]) -> Result<StageTaps, NetError> {
+    /// [`NetError::Shape`] for a map of another size or a window outside the grid.
+    pub fn refine_taps(
+        &self,
+        stage: usize,
+        previous: &[f32],
+        cols: Range<usize>,
+    ) -> Result<StageTaps, NetError> {
         let from = self.samplers[stage - 1].grid();
         if previous.len() != from.len() {
             return Err(NetError::Shape {
@@ -179,7 +186,11 @@ impl CascadeGeometry {
             });
         }
         let sampler = &self.samplers[stage];
-        let center = resample_map(previous, from, sampler.grid());
+        let center = crop_columns(
+            &resample_map(previous, from, sampler.grid()),
+            sampler.grid(),
+            &cols,
+        )?;
         let p = &self.config.cascade;
         let k = p.stage_hypotheses[stage - 1];
         let index = hypotheses_around(
@@ -188,12 +199,81 @@ impl CascadeGeometry {
             p.stage_intervals[stage - 1],
             self.config.num_invdepth,
         );
-        let grids = sampler.grids(&index, k)?;
+        let grids = sampler.grids_window(&index, k, cols)?;
         // Stage 1 reads the stride-4 features, stage 2 the stride-2 ones.
         let feature_size = self.config.cascade_feature_sizes()[2 - stage];
         StageTaps::new(&grids, index, feature_size, &self.device)
     }
 }
+
+/// A window of longitudes for training on part of the panorama (the paper's grid is a
+/// circle; a window cuts the refinement stages' cost in proportion), in columns of the
+/// full-resolution grid. The coarse stage always sees the whole panorama.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ColumnWindow {
+    /// First column (full resolution, even).
+    pub start: usize,
+    /// Number of columns (full resolution, even).
+    pub width: usize,
+}
+
+impl ColumnWindow {
+    /// The window's columns on a grid `factor` times coarser (2 for the half-resolution
+    /// stage).
+    pub fn scaled(&self, factor: usize) -> Range<usize> {
+        self.start / factor..(self.start + self.width) / factor
+    }
+
+    /// Checks that the window fits a full-resolution grid of `width` columns and halves
+    /// exactly.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] naming what is wrong.
+    pub fn check(&self, width: usize) -> Result<(), NetError> {
+        if self.width < 2
+            || !self.start.is_multiple_of(2)
+            || !self.width.is_multiple_of(2)
+            || self.start + self.width > width
+        {
+            return Err(NetError::InvalidConfig {
+                field: "column_window",
+                message: format!(
+                    "columns {}..{} must be an even start and an even width (at least 2) inside \
+                     the {width} columns of the output",
+                    self.start,
+                    self.start + self.width
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The columns `cols` of a row-major map on `grid`.
+///
+/// # Errors
+/// [`NetError::Shape`] for columns outside the grid.
+pub fn crop_columns(
+    map: &[f32],
+    grid: &EquirectGrid,
+    cols: &Range<usize>,
+) -> Result<Vec<f32>, NetError> {
+    if cols.end > grid.width || cols.is_empty() || map.len() != grid.len() {
+        return Err(NetError::Shape {
+            what: "column window of a map".into(),
+            expected: vec![grid.height, grid.width],
+            actual: vec![map.len(), cols.start, cols.end],
+        });
+    }
+    Ok(map
+        .chunks_exact(grid.width)
+        .flat_map(|row| row[cols.clone()].iter().copied())
+        .collect())
+}
+
+/// Smallest batch of images the feature pyramid trains on (see
+/// [`CascadeNet::forward_window`]).
+pub const MIN_TRAINING_BATCH: usize = 5;
 
 /// Wall time of each stage of a cascade forward pass in seconds (measured only when asked,
 /// see [`CascadeNet::forward_timed`]).
@@ -244,6 +324,40 @@ impl CascadeNet {
         geometry: &CascadeGeometry,
         timed: bool,
     ) -> Result<(CascadeOutput, CascadeTimings), NetError> {
+        self.forward_window(images, geometry, None, timed, false)
+    }
+
+    /// [`CascadeNet::forward_timed`] with the refinement stages on a window of longitudes
+    /// only (`None`: the whole panorama); their outputs then cover the window's columns.
+    ///
+    /// All cameras go through the feature pyramid as one batch. With `training`, a batch of
+    /// fewer than [`MIN_TRAINING_BATCH`] images is padded with copies of the first one (their
+    /// features are dropped): burn-flex computes a convolution's weight gradient as a
+    /// convolution whose input channels are the batch, and below 5 of them, with at most 16
+    /// output channels, it takes a direct path with the whole output map as the kernel, 2-3
+    /// times slower per image than with 5 (`--example conv_grad_bench`).
+    ///
+    /// # Errors
+    /// See [`CascadeNet::forward`]; a window that does not fit the grid.
+    pub fn forward_window(
+        &self,
+        images: &[Tensor<4>],
+        geometry: &CascadeGeometry,
+        window: Option<ColumnWindow>,
+        timed: bool,
+        training: bool,
+    ) -> Result<(CascadeOutput, CascadeTimings), NetError> {
+        let [_, mid_grid, fine_grid] = geometry.samplers.each_ref().map(|s| *s.grid());
+        let window = match window {
+            Some(w) => {
+                w.check(fine_grid.width)?;
+                w
+            }
+            None => ColumnWindow {
+                start: 0,
+                width: fine_grid.width,
+            },
+        };
         if images.len() != self.config.num_cameras {
             return Err(NetError::Shape {
                 what: "images per frame".into(),
@@ -273,21 +387,35 @@ impl CascadeNet {
         };
         let device = geometry.device.clone();
         let mut timings = CascadeTimings::default();
-        let mut levels: [Vec<Tensor<4>>; 3] = Default::default();
-        for image in images {
-            for (level, f) in self.features.forward(image.clone()).into_iter().enumerate() {
-                levels[level].push(f);
+        let cams = images.len();
+        let mut batch = images.to_vec();
+        if training {
+            while batch.len() < MIN_TRAINING_BATCH {
+                batch.push(images[0].clone());
             }
         }
+        let pyramid = self.features.forward(Tensor::cat(batch, 0)); // [B', C, h, w] x 3
+        let levels: [Vec<Tensor<4>>; 3] =
+            pyramid.map(|f| (0..cams).map(|c| f.clone().narrow(0, c, 1)).collect());
         timings.features = lap(&device);
         let coarse = self.coarse_stage(&levels[2], &geometry.coarse)?;
         timings.coarse = lap(&device);
         let coarse_index = read_values(coarse.index.clone(), "coarse index")?;
-        let mid_taps = geometry.refine_taps(1, &coarse_index)?;
+        let mid_cols = window.scaled(2);
+        let mid_taps = geometry.refine_taps(1, &coarse_index, mid_cols.clone())?;
         let mid = self.refine_stage(1, &levels[1], &mid_taps)?;
         timings.mid = lap(&device);
-        let mid_index = read_values(mid.index.clone(), "half-resolution index")?;
-        let fine_taps = geometry.refine_taps(2, &mid_index)?;
+        // The fine stage's centres: the half-resolution estimate inside the window, the
+        // coarse one carried to the half-resolution grid outside it (only the window's
+        // edges read it).
+        let mut mid_index = resample_map(&coarse_index, geometry.samplers[0].grid(), &mid_grid);
+        let mid_window = read_values(mid.index.clone(), "half-resolution index")?;
+        let w = mid_cols.len();
+        for (row, values) in mid_window.chunks_exact(w).enumerate() {
+            let at = row * mid_grid.width + mid_cols.start;
+            mid_index[at..at + w].copy_from_slice(values);
+        }
+        let fine_taps = geometry.refine_taps(2, &mid_index, window.scaled(1))?;
         let fine = self.refine_stage(0, &levels[0], &fine_taps)?;
         timings.fine = lap(&device);
         timings.total = start.elapsed().as_secs_f64();

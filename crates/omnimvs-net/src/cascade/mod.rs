@@ -27,7 +27,7 @@ pub mod infer;
 pub mod model;
 pub mod sampler;
 
-pub use geometry::{CascadeGeometry, CascadeOutput, CascadeTimings, StageTaps};
+pub use geometry::{CascadeGeometry, CascadeOutput, CascadeTimings, ColumnWindow, StageTaps};
 pub use infer::CascadeInference;
 pub use model::{CascadeNet, StageOutput};
 pub use sampler::PixelSampler;

@@ -10,6 +10,8 @@
 //! function that fills the lookup table, so positions agree with the table on every sphere
 //! the two share (tested).
 
+use std::ops::Range;
+
 use omnimvs_camera::Rig;
 use omnimvs_camera::nalgebra::Vector3;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, normalized_position};
@@ -85,11 +87,34 @@ impl PixelSampler {
     /// # Errors
     /// [`NetError::Shape`] when `index` is not `K` planes of the grid.
     pub fn grids(&self, index: &[f32], k: usize) -> Result<Vec<SweepGrid>, NetError> {
-        let plane = self.grid.len();
+        self.grids_window(index, k, 0..self.grid.width)
+    }
+
+    /// [`PixelSampler::grids`] for the columns `cols` of the grid only: `index` is
+    /// `[K, rows, cols.len()]` and so are the grids (training on a window of longitudes).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when `cols` leaves the grid or `index` is not `K` planes of the
+    /// window.
+    pub fn grids_window(
+        &self,
+        index: &[f32],
+        k: usize,
+        cols: Range<usize>,
+    ) -> Result<Vec<SweepGrid>, NetError> {
+        let (rows, width) = (self.grid.height, cols.len());
+        if cols.end > self.grid.width || cols.is_empty() {
+            return Err(NetError::Shape {
+                what: "column window of the grid".into(),
+                expected: vec![self.grid.width],
+                actual: vec![cols.start, cols.end],
+            });
+        }
+        let plane = rows * width;
         if index.len() != k * plane {
             return Err(NetError::Shape {
                 what: "per-pixel hypothesis indices".into(),
-                expected: vec![k, self.grid.height, self.grid.width],
+                expected: vec![k, rows, width],
                 actual: vec![index.len()],
             });
         }
@@ -105,12 +130,13 @@ impl PixelSampler {
                     .zip(index.par_chunks(plane))
                     .for_each(|(out, plane_index)| {
                         for (i, (dst, &n)) in out.chunks_exact_mut(2).zip(plane_index).enumerate() {
+                            let pixel = (i / width) * self.grid.width + cols.start + i % width;
                             let inv_depth = min + f64::from(n) * step;
-                            let p_cam = cam.rays_in_cam[i] + cam.t_cam * inv_depth;
+                            let p_cam = cam.rays_in_cam[pixel] + cam.t_cam * inv_depth;
                             dst.copy_from_slice(&normalized_position(camera, cam.size, &p_cam));
                         }
                     });
-                SweepGrid::new(k, self.grid.height, self.grid.width, coords)
+                SweepGrid::new(k, rows, width, coords)
             })
             .collect()
     }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-use crate::config::NetConfig;
+use crate::config::{Family, NetConfig};
 use crate::error::NetError;
 
 /// The optimiser of a run.
@@ -67,6 +67,9 @@ pub struct TrainConfig {
     pub prefetch: usize,
     /// Weights the run started from (`--init`, fine-tuning), if any.
     pub init: Option<PathBuf>,
+    /// Columns (of the output grid) of the window of longitudes the cascade's refinement
+    /// stages train on, at a random even start every step (`None`: the whole panorama).
+    pub column_window: Option<usize>,
 }
 
 impl Default for TrainConfig {
@@ -92,6 +95,7 @@ impl Default for TrainConfig {
             max_val_frames: None,
             prefetch: 4,
             init: None,
+            column_window: None,
         }
     }
 }
@@ -142,6 +146,23 @@ impl TrainConfig {
                 "val_fraction",
                 format!("must be in [0, 1], got {}", self.val_fraction),
             ));
+        }
+        if let Some(w) = self.column_window {
+            if self.net.family != Family::Cascade {
+                return Err(invalid(
+                    "column_window",
+                    "only the cascade network trains on a window of longitudes".into(),
+                ));
+            }
+            if w < 2 || !w.is_multiple_of(2) || w > self.net.out_width {
+                return Err(invalid(
+                    "column_window",
+                    format!(
+                        "{w} must be even, at least 2 and at most the output's {} columns",
+                        self.net.out_width
+                    ),
+                ));
+            }
         }
         for (field, range) in [
             ("train_frames", self.train_frames),

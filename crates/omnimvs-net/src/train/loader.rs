@@ -19,6 +19,8 @@ pub struct PlanItem {
     pub rotation: usize,
     /// Cyclic shift of the camera order at the concatenation.
     pub shift: usize,
+    /// First column of the training window of longitudes (0 without one).
+    pub window_start: usize,
 }
 
 /// A running loader; dropping the receiver stops the thread after its current sample.

@@ -9,6 +9,7 @@ use omnimvs_data::gt::GroundTruth;
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 
 use super::augment::{RotationSet, resample_ground_truth, rotate_rig, rotated_grids};
+use crate::cascade::ColumnWindow;
 use crate::config::{Family, NetConfig};
 use crate::error::NetError;
 use crate::infer::{network_inputs, sweep_geometry};
@@ -31,6 +32,9 @@ pub struct Sample {
     /// Ground truth on the grids of the network's earlier stages (the cascade's coarse and
     /// half-resolution grids; empty for the paper's network), rotated likewise.
     pub stage_gt: Vec<GroundTruth>,
+    /// The window of longitudes the cascade's refinement stages train on (`None`: the whole
+    /// panorama; the paper's network ignores it).
+    pub window: Option<ColumnWindow>,
 }
 
 /// A dataset prepared for training: its rig, masks, hypotheses and the sweep grids of every
@@ -148,6 +152,7 @@ impl SampleSource {
             images,
             gt,
             stage_gt,
+            window: None,
         })
     }
 }

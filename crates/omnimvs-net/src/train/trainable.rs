@@ -11,6 +11,7 @@ use omnimvs_data::gt::GroundTruth;
 
 use super::learner::{masked_l1, target_data};
 use super::sample::{Sample, SampleSource};
+use crate::cascade::geometry::crop_columns;
 use crate::cascade::{CascadeGeometry, CascadeNet};
 use crate::config::NetConfig;
 use crate::error::NetError;
@@ -181,8 +182,15 @@ impl Trainable for CascadeNet {
                 actual: vec![sample.stage_gt.len()],
             });
         }
-        let out = self.forward(images, geometry)?;
-        let targets = [&sample.stage_gt[0], &sample.stage_gt[1], &sample.gt];
+        let (out, _) = self.forward_window(images, geometry, sample.window, false, true)?;
+        let (mid, fine) = match sample.window {
+            Some(w) => (
+                crop_gt(&sample.stage_gt[1], w.scaled(2))?,
+                crop_gt(&sample.gt, w.scaled(1))?,
+            ),
+            None => (sample.stage_gt[1].clone(), sample.gt.clone()),
+        };
+        let targets = [&sample.stage_gt[0], &mid, &fine];
         let weights = self.config.cascade.loss_weights;
         let mut total: Option<Tensor<1>> = None;
         for ((stage, gt), w) in out.stages.into_iter().zip(targets).zip(weights) {
@@ -208,6 +216,23 @@ impl Trainable for CascadeNet {
     fn save_weights(&self, path: &Path) -> Result<(), NetError> {
         weights::save_module(self, &self.config, path)
     }
+}
+
+/// The columns `cols` of a ground truth.
+fn crop_gt(gt: &GroundTruth, cols: std::ops::Range<usize>) -> Result<GroundTruth, NetError> {
+    let grid = omnimvs_sweep::EquirectGrid::new(gt.height, gt.width, 45.0)?;
+    let index = crop_columns(&gt.index, &grid, &cols)?;
+    let valid = gt
+        .valid
+        .chunks_exact(gt.width)
+        .flat_map(|row| row[cols.clone()].iter().copied())
+        .collect();
+    Ok(GroundTruth {
+        width: cols.len(),
+        height: gt.height,
+        index,
+        valid,
+    })
 }
 
 /// The device of the first image.

@@ -31,6 +31,7 @@ use super::plot::plot_curves;
 use super::rng::SplitMix64;
 use super::sample::SampleSource;
 use super::trainable::Trainable;
+use crate::cascade::ColumnWindow;
 use crate::error::NetError;
 use crate::model::OmniMvsNet;
 
@@ -278,6 +279,11 @@ impl<M: Trainable> Trainer<M> {
                 } else {
                     0
                 },
+                // Drawn only with a window, so that runs without one keep their plans.
+                window_start: match self.config.column_window {
+                    Some(w) => 2 * rng.below((self.config.net.out_width - w) / 2 + 1),
+                    None => 0,
+                },
             })
             .collect()
     }
@@ -292,6 +298,20 @@ impl<M: Trainable> Trainer<M> {
             .geometry(&self.sources[source], rotation, &self.learner.device)?;
         self.geometries.insert((source, rotation), g.clone());
         Ok(g)
+    }
+
+    /// Sets the training window of longitudes from now on (a resumed run may take one it
+    /// did not have) and records it in `train_config.json`.
+    ///
+    /// # Errors
+    /// [`NetError`] for a window the run cannot use or a file that cannot be written.
+    pub fn set_column_window(&mut self, width: Option<usize>) -> Result<(), NetError> {
+        let mut config = self.config.clone();
+        config.column_window = width;
+        config.validate()?;
+        write_json(&self.run_dir.join("train_config.json"), &config)?;
+        self.config = config;
+        Ok(())
     }
 
     /// Trains until `config.epochs`, validating and checkpointing after every epoch.
@@ -332,7 +352,11 @@ impl<M: Trainable> Trainer<M> {
                 break;
             };
             wait += waited.elapsed().as_secs_f64();
-            let sample = sample?;
+            let mut sample = sample?;
+            sample.window = self.config.column_window.map(|width| ColumnWindow {
+                start: item.window_start,
+                width,
+            });
             let order: Vec<usize> = (0..cams).map(|j| (j + item.shift) % cams).collect();
             let geometry = self.geometry_for(item.source, item.rotation)?;
             let loss = self.learner.step(&sample, &geometry, &order, lr)?;
