@@ -108,24 +108,7 @@ impl Inference {
     /// # Errors
     /// [`NetError`] for a wrong number of images or a mask of another size.
     pub fn input_tensors(&self, images: &[GrayImage]) -> Result<Vec<Tensor<4>>, NetError> {
-        let config = &self.net.config;
-        if images.len() != config.num_cameras {
-            return Err(NetError::Shape {
-                what: "images per frame".into(),
-                expected: vec![config.num_cameras],
-                actual: vec![images.len()],
-            });
-        }
-        let size = [config.input_height, config.input_width];
-        Ok(network_inputs(images, &self.masks, size)?
-            .into_iter()
-            .map(|data| {
-                Tensor::from_data(
-                    TensorData::new(data, [1, 1, size[0], size[1]]),
-                    &self.device,
-                )
-            })
-            .collect())
+        input_tensors(&self.net.config, images, &self.masks, &self.device)
     }
 
     /// Runs the network on one frame's gray images (camera order of the rig).
@@ -186,6 +169,32 @@ pub fn sweep_geometry(
     let grid = EquirectGrid::new(config.out_height, config.out_width, config.phi_deg)?;
     let hypotheses = dataset.hypotheses(config.num_invdepth)?;
     Ok((grid, hypotheses))
+}
+
+/// Network inputs `[1, 1, H_I, W_I]` of a frame's gray images on `device`, for either family:
+/// one image per camera of `config`, each normalised over its valid pixels (`masks`), then
+/// resized to the configuration's input size.
+///
+/// # Errors
+/// [`NetError`] for a wrong number of images or a mask of another size.
+pub fn input_tensors(
+    config: &NetConfig,
+    images: &[GrayImage],
+    masks: &[ValidityMask],
+    device: &Device,
+) -> Result<Vec<Tensor<4>>, NetError> {
+    if images.len() != config.num_cameras {
+        return Err(NetError::Shape {
+            what: "images per frame".into(),
+            expected: vec![config.num_cameras],
+            actual: vec![images.len()],
+        });
+    }
+    let size = [config.input_height, config.input_width];
+    Ok(network_inputs(images, masks, size)?
+        .into_iter()
+        .map(|data| Tensor::from_data(TensorData::new(data, [1, 1, size[0], size[1]]), device))
+        .collect())
 }
 
 /// Network inputs of a frame's gray images (camera order of `masks`): each normalised over

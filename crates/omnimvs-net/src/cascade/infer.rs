@@ -2,7 +2,7 @@
 //! (normalised over the valid pixels, resized to the network's input), the forward pass and
 //! the maps of the final stage.
 
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::Device;
 use omnimvs_camera::ValidityMask;
 use omnimvs_data::Dataset;
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
@@ -10,7 +10,7 @@ use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use super::geometry::{CascadeGeometry, CascadeTimings};
 use super::model::{CascadeNet, read_values};
 use crate::error::NetError;
-use crate::infer::{FrameResult, network_inputs, sweep_geometry};
+use crate::infer::{FrameResult, input_tensors, sweep_geometry};
 
 /// A cascade network ready to run on the frames of one rig.
 pub struct CascadeInference {
@@ -68,24 +68,7 @@ impl CascadeInference {
         images: &[GrayImage],
         timed: bool,
     ) -> Result<(FrameResult, CascadeTimings), NetError> {
-        let config = &self.net.config;
-        if images.len() != config.num_cameras {
-            return Err(NetError::Shape {
-                what: "images per frame".into(),
-                expected: vec![config.num_cameras],
-                actual: vec![images.len()],
-            });
-        }
-        let size = [config.input_height, config.input_width];
-        let inputs: Vec<Tensor<4>> = network_inputs(images, &self.masks, size)?
-            .into_iter()
-            .map(|data| {
-                Tensor::from_data(
-                    TensorData::new(data, [1, 1, size[0], size[1]]),
-                    &self.device,
-                )
-            })
-            .collect();
+        let inputs = input_tensors(&self.net.config, images, &self.masks, &self.device)?;
         let (out, timings) = self.net.forward_timed(&inputs, &self.geometry, timed)?;
         let [_, _, fine] = out.stages;
         let entropy = read_values(fine.entropy(), "entropy map")?;
