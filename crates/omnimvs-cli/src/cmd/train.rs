@@ -12,8 +12,10 @@ use omnimvs_net::{CascadeNet, Family, NetConfig, OmniMvsNet};
 
 use crate::args::{BACKEND_HELP, Frames, parse_backend};
 
-/// Train the OmniMVS network end to end (paper, sections 3.3 and 5.1): L1 loss between the
-/// predicted and the rounded ground-truth index over valid pixels, SGD with momentum 0.9,
+/// Train a network end to end: the paper's (`--preset tiny|paper`, sections 3.3 and 5.1: L1
+/// loss between the predicted and the rounded ground-truth index over valid pixels) or the
+/// cascade (`--preset cascade`: L1 of each of its three stages against the exact index on
+/// its grid, weights 0.5, 1, 2). SGD with momentum 0.9 (or Adam with --optimizer adam),
 /// learning rate --lr then --lr-low for the last third of the epochs, random cyclic camera
 /// order and small rig rotations (a fixed seeded set of precomputed rotations, ground truth
 /// rotated to match). A loader thread prepares samples while the step runs.
