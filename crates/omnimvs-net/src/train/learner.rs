@@ -31,12 +31,21 @@ pub fn masked_l1(index: Tensor<3>, target: Tensor<3>, mask: Tensor<3>) -> Tensor
 
 /// Rounded ground-truth indices and the valid mask as `[1, H, W]` data.
 pub fn target_data(gt: &GroundTruth) -> (TensorData, TensorData) {
+    target_data_with(gt, true)
+}
+
+/// Ground-truth indices (rounded when `round`) and the valid mask as `[1, H, W]` data.
+pub fn target_data_with(gt: &GroundTruth, round: bool) -> (TensorData, TensorData) {
     let shape = [1, gt.height, gt.width];
     let target: Vec<f32> = gt
         .index
         .iter()
         .zip(&gt.valid)
-        .map(|(&n, &v)| if v { n.round() } else { 0.0 })
+        .map(|(&n, &v)| match (v, round) {
+            (false, _) => 0.0,
+            (true, true) => n.round(),
+            (true, false) => n,
+        })
         .collect();
     let mask: Vec<f32> = gt.valid.iter().map(|&v| f32::from(u8::from(v))).collect();
     (TensorData::new(target, shape), TensorData::new(mask, shape))

@@ -6,10 +6,10 @@
 use std::path::Path;
 
 use burn::module::Module;
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::{Device, Tensor};
 use omnimvs_data::gt::GroundTruth;
 
-use super::learner::{masked_l1, target_data};
+use super::learner::{masked_l1, target_data_with};
 use super::sample::{Sample, SampleSource};
 use crate::cascade::geometry::crop_columns;
 use crate::cascade::{CascadeGeometry, CascadeNet};
@@ -255,19 +255,7 @@ fn no_images(expected: usize) -> NetError {
 /// target is the rounded ground-truth index when `round` (the paper's network, as trained so
 /// far), the exact index otherwise.
 fn index_l1(index: Tensor<3>, gt: &GroundTruth, round: bool, device: &Device) -> Tensor<1> {
-    let (target, mask) = if round {
-        target_data(gt)
-    } else {
-        let shape = [1, gt.height, gt.width];
-        let target: Vec<f32> = gt
-            .index
-            .iter()
-            .zip(&gt.valid)
-            .map(|(&n, &v)| if v { n } else { 0.0 })
-            .collect();
-        let mask: Vec<f32> = gt.valid.iter().map(|&v| f32::from(u8::from(v))).collect();
-        (TensorData::new(target, shape), TensorData::new(mask, shape))
-    };
+    let (target, mask) = target_data_with(gt, round);
     masked_l1(
         index,
         Tensor::from_data(target, device),
