@@ -80,7 +80,7 @@ fn main() {
     };
     let mut learner = Learner::<CascadeNet>::for_model(&train, &device).unwrap();
     let source = SampleSource::open(&path, &config, RotationSet::new(1, 0.0, 0)).unwrap();
-    let mut sample = source.load(0, frame, 0).unwrap();
+    let mut sample = source.load(0, frame, 0, None).unwrap();
     sample.window = window.map(|width| omnimvs_net::cascade::ColumnWindow { start: 100, width });
     let geometry =
         CascadeGeometry::new(&ds.rig, &config, &source.hypotheses, &learner.device).unwrap();

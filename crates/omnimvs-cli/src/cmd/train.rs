@@ -7,7 +7,9 @@ use anyhow::{Context, Result, bail};
 use burn::tensor::Device;
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_net::train::trainer::read_run_config;
-use omnimvs_net::train::{EpochRecord, Optimizer, StepInfo, TrainConfig, Trainable, Trainer};
+use omnimvs_net::train::{
+    EpochRecord, Optimizer, PhotometricAugment, StepInfo, TrainConfig, Trainable, Trainer,
+};
 use omnimvs_net::{CascadeNet, Family, NetConfig, OmniMvsNet};
 
 use crate::args::{BACKEND_HELP, Frames, parse_backend};
@@ -91,6 +93,12 @@ pub struct Args {
     /// sees the whole panorama). Also taken with --resume, from then on.
     #[arg(long)]
     pub column_window: Option<usize>,
+    /// Per-camera photometric augmentation of the training images, as real cameras differ:
+    /// exposure with clipping, gamma, vignetting, blur and sensor noise (ranges in
+    /// `train_config.json`, field `photometric`). Also taken with --resume: `on` starts it
+    /// from the next epoch, `off` stops it.
+    #[arg(long, value_enum)]
+    pub photometric: Option<Switch>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
@@ -110,6 +118,15 @@ fn print_epoch(r: &EpochRecord) {
         "epoch {:3}  lr {:.0e}  train loss {:.3}  {} steps  {:.3} steps/s (loader wait {:.1} s)  {val}",
         r.epoch, r.lr, r.train_loss, r.steps, r.steps_per_second, r.loader_wait_seconds
     );
+}
+
+/// `on` or `off`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Switch {
+    /// On.
+    On,
+    /// Off.
+    Off,
 }
 
 /// `--optimizer` values.
@@ -147,6 +164,14 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
             if args.column_window.is_some() {
                 trainer.set_column_window(args.column_window)?;
             }
+            match args.photometric {
+                // Keep the ranges of a run that has them.
+                Some(Switch::On) if trainer.config.photometric.is_none() => {
+                    trainer.set_photometric(Some(PhotometricAugment::default()))?;
+                }
+                Some(Switch::Off) => trainer.set_photometric(None)?,
+                _ => {}
+            }
             trainer
         }
         None => {
@@ -178,6 +203,8 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 max_val_frames: args.max_val_frames,
                 init: args.init.clone(),
                 column_window: args.column_window,
+                photometric: (args.photometric == Some(Switch::On))
+                    .then(PhotometricAugment::default),
                 ..TrainConfig::default()
             };
             Trainer::<M>::create(config, out, &device)
@@ -191,7 +218,7 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         .fold((0, 0), |acc, (t, v)| (acc.0 + t.len(), acc.1 + v.len()));
     println!(
         "{}: {} training and {} validation frames from {} dataset(s); epochs {}..{} of {}; \
-         {} rotations up to {} deg; camera permutation {}",
+         {} rotations up to {} deg; camera permutation {}; photometric augmentation {}",
         trainer.run_dir.display(),
         train,
         val,
@@ -201,7 +228,12 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         config.epochs,
         config.rotations,
         config.max_rotation_deg,
-        if config.permute_cameras { "on" } else { "off" }
+        if config.permute_cameras { "on" } else { "off" },
+        if config.photometric.is_some() {
+            "on"
+        } else {
+            "off"
+        }
     );
     let last = match args.stop_after {
         Some(n) => (trainer.state.epochs_done + n).min(config.epochs),

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+use super::photometric::PhotometricAugment;
 use crate::config::{Family, NetConfig};
 use crate::error::NetError;
 
@@ -70,6 +71,9 @@ pub struct TrainConfig {
     /// Columns (of the output grid) of the window of longitudes the cascade's refinement
     /// stages train on, at a random even start every step (`None`: the whole panorama).
     pub column_window: Option<usize>,
+    /// Per-camera photometric augmentation (exposure, gamma, vignetting, blur, noise) of the
+    /// training images (`None`: the rendered images as they are; absent in older runs).
+    pub photometric: Option<PhotometricAugment>,
 }
 
 impl Default for TrainConfig {
@@ -96,6 +100,7 @@ impl Default for TrainConfig {
             prefetch: 4,
             init: None,
             column_window: None,
+            photometric: None,
         }
     }
 }
@@ -163,6 +168,9 @@ impl TrainConfig {
                     ),
                 ));
             }
+        }
+        if let Some(p) = &self.photometric {
+            p.validate()?;
         }
         for (field, range) in [
             ("train_frames", self.train_frames),

@@ -5,6 +5,7 @@ use std::sync::Arc;
 use std::sync::mpsc::{Receiver, sync_channel};
 use std::thread::JoinHandle;
 
+use super::photometric::PhotometricAugment;
 use super::sample::{Sample, SampleSource};
 use crate::error::NetError;
 
@@ -21,6 +22,8 @@ pub struct PlanItem {
     pub shift: usize,
     /// First column of the training window of longitudes (0 without one).
     pub window_start: usize,
+    /// Seed of the sample's photometric augmentation (0 without one).
+    pub photometric_seed: u64,
 }
 
 /// A running loader; dropping the receiver stops the thread after its current sample.
@@ -31,12 +34,20 @@ pub struct Loader {
 }
 
 impl Loader {
-    /// Starts a thread that loads `plan` from `sources`.
-    pub fn spawn(sources: Arc<Vec<SampleSource>>, plan: Vec<PlanItem>, prefetch: usize) -> Self {
+    /// Starts a thread that loads `plan` from `sources`, applying `photometric` (with each
+    /// item's seed) when given.
+    pub fn spawn(
+        sources: Arc<Vec<SampleSource>>,
+        plan: Vec<PlanItem>,
+        prefetch: usize,
+        photometric: Option<PhotometricAugment>,
+    ) -> Self {
         let (tx, rx) = sync_channel(prefetch.max(1));
         let handle = std::thread::spawn(move || {
             for item in plan {
-                let sample = sources[item.source].load(item.source, item.frame, item.rotation);
+                let augment = photometric.as_ref().map(|p| (p, item.photometric_seed));
+                let sample =
+                    sources[item.source].load(item.source, item.frame, item.rotation, augment);
                 if tx.send((item, sample)).is_err() {
                     break;
                 }

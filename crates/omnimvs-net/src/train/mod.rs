@@ -3,6 +3,7 @@
 //! - [`config`]: the training configuration written next to every run.
 //! - [`rng`]: the seeded generator behind shuffling and augmentation (resumable by epoch).
 //! - [`augment`]: the fixed set of small rig rotations and the ground truth rotated to match.
+//! - [`photometric`]: per-camera exposure, gamma, vignetting, blur and noise of real cameras.
 //! - [`sample`]: reading one training sample (normalised inputs, ground-truth indices).
 //! - [`loader`]: a loader thread that prepares samples while the step runs.
 //! - [`trainable`]: what the trainer needs of a network family (the paper's, the cascade).
@@ -14,6 +15,7 @@ pub mod augment;
 pub mod config;
 pub mod learner;
 pub mod loader;
+pub mod photometric;
 pub mod plot;
 pub mod rng;
 pub mod sample;
@@ -23,6 +25,7 @@ pub mod trainer;
 pub use augment::{RotationSet, resample_ground_truth};
 pub use config::{Optimizer, TrainConfig};
 pub use learner::{Learner, masked_l1};
+pub use photometric::PhotometricAugment;
 pub use sample::{Sample, SampleSource};
 pub use trainable::Trainable;
 pub use trainer::{EpochRecord, StepInfo, Trainer};

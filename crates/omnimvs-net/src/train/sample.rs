@@ -8,6 +8,8 @@ use omnimvs_data::Dataset;
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 
+use super::photometric::PhotometricAugment;
+
 use super::augment::{RotationSet, resample_ground_truth, rotate_rig, rotated_grids};
 use crate::cascade::ColumnWindow;
 use crate::config::{Family, NetConfig};
@@ -120,12 +122,22 @@ impl SampleSource {
         network_inputs(images, &self.masks, self.input_size)
     }
 
-    /// Reads `frame` for rotation `rotation` (`source` is only recorded in the sample).
+    /// Reads `frame` for rotation `rotation` (`source` is only recorded in the sample), its
+    /// images changed by `photometric` with the given seed when one is given.
     ///
     /// # Errors
     /// [`NetError`] when a file is missing or unreadable, or the frame has no ground truth.
-    pub fn load(&self, source: usize, frame: u32, rotation: usize) -> Result<Sample, NetError> {
-        let images = self.dataset.read_frame(frame)?;
+    pub fn load(
+        &self,
+        source: usize,
+        frame: u32,
+        rotation: usize,
+        photometric: Option<(&PhotometricAugment, u64)>,
+    ) -> Result<Sample, NetError> {
+        let mut images = self.dataset.read_frame(frame)?;
+        if let Some((augment, seed)) = photometric {
+            augment.apply(&mut images, seed);
+        }
         let images = self.inputs(&images)?;
         let map =
             self.dataset

@@ -27,6 +27,7 @@ use super::augment::RotationSet;
 use super::config::TrainConfig;
 use super::learner::{Learner, target_data};
 use super::loader::{Loader, PlanItem};
+use super::photometric::PhotometricAugment;
 use super::plot::plot_curves;
 use super::rng::SplitMix64;
 use super::sample::SampleSource;
@@ -284,6 +285,11 @@ impl<M: Trainable> Trainer<M> {
                     Some(w) => 2 * rng.below((self.config.net.out_width - w) / 2 + 1),
                     None => 0,
                 },
+                // Likewise drawn only with the augmentation.
+                photometric_seed: match self.config.photometric {
+                    Some(_) => rng.next_u64(),
+                    None => 0,
+                },
             })
             .collect()
     }
@@ -308,6 +314,23 @@ impl<M: Trainable> Trainer<M> {
     pub fn set_column_window(&mut self, width: Option<usize>) -> Result<(), NetError> {
         let mut config = self.config.clone();
         config.column_window = width;
+        config.validate()?;
+        write_json(&self.run_dir.join("train_config.json"), &config)?;
+        self.config = config;
+        Ok(())
+    }
+
+    /// Sets the photometric augmentation from now on (a resumed run may start or stop it) and
+    /// records it in `train_config.json`.
+    ///
+    /// # Errors
+    /// [`NetError`] for ranges the run cannot use or a file that cannot be written.
+    pub fn set_photometric(
+        &mut self,
+        photometric: Option<PhotometricAugment>,
+    ) -> Result<(), NetError> {
+        let mut config = self.config.clone();
+        config.photometric = photometric;
         config.validate()?;
         write_json(&self.run_dir.join("train_config.json"), &config)?;
         self.config = config;
@@ -342,7 +365,12 @@ impl<M: Trainable> Trainer<M> {
         let lr = self.config.lr_at(epoch);
         let plan = self.plan(epoch);
         let steps = plan.len();
-        let loader = Loader::spawn(Arc::clone(&self.sources), plan, self.config.prefetch);
+        let loader = Loader::spawn(
+            Arc::clone(&self.sources),
+            plan,
+            self.config.prefetch,
+            self.config.photometric.clone(),
+        );
         let cams = self.config.net.num_cameras;
         let (mut loss_sum, mut wait) = (0f64, 0f64);
         let start = Instant::now();
@@ -423,7 +451,7 @@ impl<M: Trainable> Trainer<M> {
             .collect();
         for (s, frame) in frames {
             let source = &self.sources[s];
-            let sample = source.load(s, frame, 0)?;
+            let sample = source.load(s, frame, 0, None)?;
             let images = self.learner.image_tensors_on(&sample, &device);
             let geometry = match self.val_geometries.get(&s) {
                 Some(g) => g.clone(),
