@@ -3,27 +3,25 @@
 
 use std::path::{Path, PathBuf};
 
+use anyhow::bail;
 use anyhow::{Context, Result};
 use burn::tensor::Device;
-use omnimvs_net::weights::{AnyNet, load_any, load_bytes, load_family};
+use omnimvs_net::bundled::BundledModel;
+use omnimvs_net::weights::{AnyNet, load_any, load_family};
 use omnimvs_net::{CascadeNet, Family};
 use omnimvs_net::{NetConfig, OmniMvsNet};
 
-/// `--weights` value that names the bundled model (also the default).
+/// `--weights` value that names the default bundled model (also the default value).
 pub const BUNDLED: &str = "bundled";
 /// `--weights` value that asks for a randomly initialised network.
 pub const RANDOM: &str = "random";
 
-/// The bundled model (`models/omnimvs-tiny.*` in the repository).
-const BUNDLED_LABEL: &str = "models/omnimvs-tiny.safetensors";
-const BUNDLED_CONFIG: &str = include_str!("../../../models/omnimvs-tiny.json");
-const BUNDLED_BYTES: &[u8] = include_bytes!("../../../models/omnimvs-tiny.safetensors");
-
 /// A `--weights` value.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Weights {
-    /// The model bundled into the binary.
-    Bundled,
+    /// A model bundled into the binary (`bundled`: the default one, or by name: `tiny`,
+    /// `cascade`).
+    Bundled(BundledModel),
     /// A randomly initialised network of the `--preset` sizes.
     Random,
     /// Our `.safetensors` (with its `.json`) or a reference PyTorch checkpoint.
@@ -31,19 +29,28 @@ pub enum Weights {
 }
 
 impl Weights {
-    /// Reads a `--weights` value: `bundled`, `random`, or a path.
+    /// Reads a `--weights` value: `bundled`, a bundled model's name, `random`, or a path.
     pub fn parse(text: &str) -> Result<Self, String> {
         Ok(match text {
-            BUNDLED => Self::Bundled,
+            BUNDLED => Self::Bundled(BundledModel::DEFAULT),
             RANDOM => Self::Random,
-            path => Self::File(PathBuf::from(path)),
+            name => match BundledModel::from_name(name) {
+                Some(model) => Self::Bundled(model),
+                None => Self::File(PathBuf::from(name)),
+            },
         })
     }
 
-    /// A short name for tables and file names: the file stem, `bundled` or `random`.
+    /// The default: the default bundled model.
+    pub fn bundled() -> Self {
+        Self::Bundled(BundledModel::DEFAULT)
+    }
+
+    /// A short name for tables and file names: the file stem, the bundled model's name or
+    /// `random`.
     pub fn stem(&self) -> String {
         match self {
-            Self::Bundled => BUNDLED.into(),
+            Self::Bundled(model) => model.name().into(),
             Self::Random => RANDOM.into(),
             Self::File(path) => path
                 .file_stem()
@@ -60,12 +67,13 @@ impl Weights {
     pub fn load(&self, preset: &str, device: &Device) -> Result<OmniMvsNet> {
         let base = NetConfig::preset(preset)?;
         Ok(match self {
-            Self::Bundled => load_bytes(
-                Path::new(BUNDLED_LABEL),
-                BUNDLED_CONFIG,
-                BUNDLED_BYTES,
-                device,
-            )?,
+            Self::Bundled(model) => match model.load(device)? {
+                AnyNet::OmniMvs(net) => *net,
+                AnyNet::Cascade(_) => bail!(
+                    "the bundled `{model}` model is the cascade network, not the paper's; \
+                     this command needs the paper's (e.g. --weights tiny)"
+                ),
+            },
             Self::Random => {
                 eprintln!(
                     "warning: randomly initialised `{preset}` network, its outputs are meaningless"
@@ -96,7 +104,8 @@ impl Weights {
                 );
                 AnyNet::Cascade(Box::new(CascadeNet::new(&base, device)?))
             }
-            Self::Bundled | Self::Random => AnyNet::OmniMvs(Box::new(self.load(preset, device)?)),
+            Self::Bundled(model) => model.load(device)?,
+            Self::Random => AnyNet::OmniMvs(Box::new(self.load(preset, device)?)),
         })
     }
 }
@@ -104,7 +113,7 @@ impl Weights {
 impl std::fmt::Display for Weights {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Self::Bundled => write!(f, "{BUNDLED} ({BUNDLED_LABEL})"),
+            Self::Bundled(model) => write!(f, "{model} ({})", model.label()),
             Self::Random => f.write_str(RANDOM),
             Self::File(path) => write!(f, "{}", path.display()),
         }

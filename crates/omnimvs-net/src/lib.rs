@@ -18,6 +18,7 @@
 
 pub mod backend;
 pub mod bench;
+pub mod bundled;
 pub mod cascade;
 pub mod config;
 pub mod error;
@@ -29,6 +30,7 @@ pub mod train;
 pub mod weights;
 
 pub use backend::Backend;
+pub use bundled::BundledModel;
 pub use cascade::CascadeNet;
 pub use config::{CascadeParams, Family, Layout, NetConfig};
 pub use error::NetError;

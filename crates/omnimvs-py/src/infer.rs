@@ -3,7 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use numpy::PyArray2;
-use omnimvs_net::weights::{AnyNet, load_bytes, load_family};
+use omnimvs_net::bundled::BundledModel;
+use omnimvs_net::weights::{AnyNet, load_family};
 use omnimvs_net::{Backend, NetConfig, NetEstimator};
 use omnimvs_sweep::LutCache;
 use pyo3::prelude::*;
@@ -12,35 +13,23 @@ use crate::dataset::PyRig;
 use crate::error::{IntoPyResult, bad_argument, detached, with_context};
 use crate::images::{frame_source, map_to_array};
 
-/// The bundled model, the same files the `omnimvs` binary compiles in
-/// (`crates/omnimvs-cli/src/weights.rs`).
-const BUNDLED_LABEL: &str = "models/omnimvs-tiny.safetensors";
-const BUNDLED_CONFIG: &str = include_str!("../../../models/omnimvs-tiny.json");
-const BUNDLED_BYTES: &[u8] = include_bytes!("../../../models/omnimvs-tiny.safetensors");
-
-/// Loads the network as `omnimvs infer --weights` does: the bundled model, or a file of
-/// either family (our `.safetensors` with its `.json`, or a reference PyTorch checkpoint
-/// sized by `preset`).
+/// Loads the network as `omnimvs infer --weights` does: a bundled model (the default one for
+/// `None`, or by name: `"tiny"`, `"cascade"`), or a file of either family (our `.safetensors`
+/// with its `.json`, or a reference PyTorch checkpoint sized by `preset`).
 fn load_network(
     weights: Option<&Path>,
     preset: &str,
     device: &burn::tensor::Device,
 ) -> PyResult<AnyNet> {
-    match weights {
-        None => load_bytes(
-            Path::new(BUNDLED_LABEL),
-            BUNDLED_CONFIG,
-            BUNDLED_BYTES,
-            device,
-        )
-        .map(|net| AnyNet::OmniMvs(Box::new(net)))
-        .py_err(),
-        Some(path) => {
-            let base = NetConfig::preset(preset).py_err()?;
-            load_family(path, &base, device)
-                .map_err(|e| with_context(format!("weights {}: ", path.display()), &e))
-        }
+    let Some(path) = weights else {
+        return BundledModel::DEFAULT.load(device).py_err();
+    };
+    if let Some(model) = path.to_str().and_then(BundledModel::from_name) {
+        return model.load(device).py_err();
     }
+    let base = NetConfig::preset(preset).py_err()?;
+    load_family(path, &base, device)
+        .map_err(|e| with_context(format!("weights {}: ", path.display()), &e))
 }
 
 /// 360-degree inverse depth by a network, as `omnimvs infer` computes it: a `numpy.float32`
@@ -52,7 +41,8 @@ fn load_network(
 ///     source: an `omnimvs.Dataset`, or the frame's images as a list of `numpy.uint8` arrays
 ///         `(rows, cols)`, one per camera in the rig's order (then `rig` is required).
 ///     frame: the frame of the dataset (only with a Dataset).
-///     weights: `None` for the bundled model, or a weights file: our `.safetensors` (with its
+///     weights: `None` for the default bundled model, `"tiny"` or `"cascade"` for a bundled
+///         model by name, or a weights file: our `.safetensors` (with its
 ///         `.json` beside it) or a reference PyTorch checkpoint (`.pt`/`.pth`).
 ///     preset: the sizes of a PyTorch checkpoint, `"paper"` or `"tiny"`.
 ///     backend: the compute backend, `"cpu"` unless the package was built with the

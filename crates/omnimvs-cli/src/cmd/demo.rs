@@ -150,7 +150,7 @@ pub fn run(args: &Args) -> Result<()> {
     println!(
         "[4/5] bundled network ({}) against the classical method, both scored at {}x{}, N = {} \
          (the network's coarser output upsampled)",
-        Weights::Bundled,
+        Weights::bundled(),
         args.size.height,
         args.size.width,
         args.ndepth
@@ -159,7 +159,7 @@ pub fn run(args: &Args) -> Result<()> {
     eval::run(&eval::Args {
         data: data_dir.clone(),
         method: vec!["net".into(), "sgm".into()],
-        weights: vec![Weights::Bundled],
+        weights: vec![Weights::bundled()],
         frames: Frames(1..=args.frames),
         size: args.size,
         ndepth: args.ndepth,
@@ -211,7 +211,7 @@ pub fn run(args: &Args) -> Result<()> {
 fn infer_args(dataset: &Path, out: &Path, frames: u32) -> infer::Args {
     infer::Args {
         dataset: dataset.to_path_buf(),
-        weights: Weights::Bundled,
+        weights: Weights::bundled(),
         preset: "tiny".into(),
         frames: Frames(1..=frames),
         out: out.to_path_buf(),

@@ -1,0 +1,112 @@
+//! The models compiled into the library (`models/` of the repository): they work from any
+//! folder, with no file to find.
+//!
+//! - `tiny`: the paper's architecture at 192x200 inputs, answering at 32x128 with N = 64.
+//! - `cascade`: the cascade network (see `cascade`), answering at the paper's 160x640 with
+//!   N = 192 from the full-size inputs. Its weights and the commands that trained them are in
+//!   `models/training/`.
+
+use std::path::Path;
+
+use burn::tensor::Device;
+
+use crate::error::NetError;
+use crate::weights::{AnyNet, load_any_bytes};
+
+/// A model compiled into the library.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BundledModel {
+    /// `models/omnimvs-tiny.*`: the paper's network, small.
+    Tiny,
+    /// `models/omnimvs-cascade.*`: the cascade network at full resolution.
+    Cascade,
+}
+
+impl BundledModel {
+    /// Every bundled model.
+    pub const ALL: [Self; 2] = [Self::Tiny, Self::Cascade];
+
+    /// The model used when none is named.
+    pub const DEFAULT: Self = Self::Tiny;
+
+    /// Its short name (`tiny`, `cascade`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Tiny => "tiny",
+            Self::Cascade => "cascade",
+        }
+    }
+
+    /// The model of a short name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// Where its weights live in the repository (named in errors and reports).
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Tiny => "models/omnimvs-tiny.safetensors",
+            Self::Cascade => "models/omnimvs-cascade.safetensors",
+        }
+    }
+
+    /// Its configuration (the `.json` beside the weights).
+    pub fn config_json(self) -> &'static str {
+        match self {
+            Self::Tiny => include_str!("../../../models/omnimvs-tiny.json"),
+            Self::Cascade => include_str!("../../../models/omnimvs-cascade.json"),
+        }
+    }
+
+    /// Its weights (`.safetensors`).
+    pub fn bytes(self) -> &'static [u8] {
+        match self {
+            Self::Tiny => include_bytes!("../../../models/omnimvs-tiny.safetensors"),
+            Self::Cascade => include_bytes!("../../../models/omnimvs-cascade.safetensors"),
+        }
+    }
+
+    /// The network, on `device`.
+    ///
+    /// # Errors
+    /// [`NetError`] if the compiled-in files do not match their network (a build defect).
+    pub fn load(self, device: &Device) -> Result<AnyNet, NetError> {
+        load_any_bytes(
+            Path::new(self.label()),
+            self.config_json(),
+            self.bytes(),
+            device,
+        )
+    }
+}
+
+impl std::fmt::Display for BundledModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Family;
+
+    #[test]
+    fn every_bundled_model_loads_as_its_family() {
+        let device = Device::flex();
+        for model in BundledModel::ALL {
+            assert_eq!(BundledModel::from_name(model.name()), Some(model));
+            let net = model.load(&device).unwrap();
+            let (family, out) = match &net {
+                AnyNet::OmniMvs(n) => (Family::OmniMvs, [n.config.out_height, n.config.out_width]),
+                AnyNet::Cascade(n) => (Family::Cascade, [n.config.out_height, n.config.out_width]),
+            };
+            let expected = match model {
+                BundledModel::Tiny => (Family::OmniMvs, [32, 128]),
+                BundledModel::Cascade => (Family::Cascade, [160, 640]),
+            };
+            assert_eq!((family, out), expected, "{model}");
+        }
+        assert_eq!(BundledModel::from_name("paper"), None);
+    }
+}
