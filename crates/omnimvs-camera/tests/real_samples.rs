@@ -1,4 +1,4 @@
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)]
 //! The camera model and the readers on the two real samples of the reference
 //! implementation (`../shared/data/omnimvs-samples`).
 

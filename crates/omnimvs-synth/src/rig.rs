@@ -184,6 +184,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), SynthError> {
 }
 
 #[cfg(test)]
+#[allow(clippy::disallowed_methods)] // fixtures are written directly
 mod tests {
     use omnimvs_camera::Pixel;
     use omnimvs_camera::nalgebra::Vector3;
