@@ -23,6 +23,7 @@ mod pixel;
 mod pose;
 mod radial;
 mod rig;
+pub mod rng;
 pub mod yaml;
 
 pub use config_yaml::{config_cameras_yaml, parse_config_rig, read_config_rig};
