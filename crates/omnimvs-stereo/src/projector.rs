@@ -209,12 +209,12 @@ impl SphereProjector {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synthetic::fixture_rig;
     use omnimvs_sweep::{InvDepthHypotheses, LookupTable, SphereSet};
 
     #[test]
     fn matches_the_lookup_table() {
-        let rig = fixture_rig(0.25);
+        let preset = omnimvs_synth::rig::preset_rig().unwrap().rig;
+        let rig = omnimvs_synth::rig::resize_rig(&preset, 192, 200).unwrap();
         let grid = EquirectGrid::new(20, 80, 45.0).unwrap();
         let hyps = InvDepthHypotheses::new(16, 0.8).unwrap();
         let lut = LookupTable::build(&rig, &grid, &hyps, SphereSet::All).unwrap();
