@@ -1,5 +1,6 @@
-//! Reader for the reference `config.yaml` (the `cameras:` list).
+//! Reader and writer for the reference `config.yaml` (the `cameras:` list).
 
+use std::fmt::Write as _;
 use std::path::Path;
 
 use serde::Deserialize;
@@ -191,4 +192,38 @@ fn camera_from_entry(path: &Path, index: usize, entry: CameraEntry) -> Result<Ca
         },
         entry.invalid_mask,
     ))
+}
+
+/// The `cameras:` section of a reference `config.yaml` for `rig`, the inverse
+/// of [`parse_config_rig`]: numbers are written at full precision, so reading
+/// the text back gives the same rig bit for bit.
+pub fn config_cameras_yaml(rig: &Rig) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "cameras:");
+    for cam in &rig.cameras {
+        let CameraModel::Ocam(m) = &cam.model;
+        let mut poly = vec![m.poly.len() as f64];
+        poly.extend(&m.poly);
+        let mut inv = vec![m.inv_poly.len() as f64];
+        inv.extend(&m.inv_poly);
+        let _ = writeln!(s, "  - cam_id: {}", cam.id);
+        let _ = writeln!(s, "    img_dir: {:?}", cam.img_dir);
+        let _ = writeln!(s, "    model: ocam");
+        let _ = writeln!(s, "    poly: {}", list(&poly));
+        let _ = writeln!(s, "    inv_poly: {}", list(&inv));
+        let _ = writeln!(s, "    center: {}", list(&[m.center_row, m.center_col]));
+        let _ = writeln!(s, "    affine: {}", list(&[m.c, m.d, m.e]));
+        let _ = writeln!(s, "    image_size: [{}, {}]", m.height, m.width);
+        if let Some(mask) = &cam.invalid_mask {
+            let _ = writeln!(s, "    invalid_mask: {mask:?}");
+        }
+        let _ = writeln!(s, "    pose: {}", list(&cam.pose.to_array()));
+        let _ = writeln!(s, "    max_fov: {:?}", m.max_fov_deg);
+    }
+    s
+}
+
+fn list(values: &[f64]) -> String {
+    let items: Vec<String> = values.iter().map(|v| format!("{v:?}")).collect();
+    format!("[{}]", items.join(", "))
 }

@@ -21,10 +21,12 @@ mod ocam;
 mod ocam_txt;
 mod pixel;
 mod pose;
+mod radial;
 mod rig;
+pub mod rng;
 pub mod yaml;
 
-pub use config_yaml::{parse_config_rig, read_config_rig};
+pub use config_yaml::{config_cameras_yaml, parse_config_rig, read_config_rig};
 pub use error::CameraError;
 pub use mask::ValidityMask;
 pub use model::CameraModel;
@@ -32,6 +34,7 @@ pub use ocam::OcamModel;
 pub use ocam_txt::{parse_ocam_txt, read_ocam_txt_rig};
 pub use pixel::Pixel;
 pub use pose::{Pose, isometry_from_pose};
+pub use radial::RadialProjection;
 pub use rig::{Camera, Rig};
 
 /// Re-exported so that callers use the same nalgebra version.

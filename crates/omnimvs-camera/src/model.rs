@@ -1,6 +1,6 @@
 use nalgebra::Vector3;
 
-use crate::{OcamModel, Pixel};
+use crate::{OcamModel, Pixel, RadialProjection};
 
 /// A camera's intrinsic model. An enum rather than a trait object so that a
 /// rig stays `Clone + PartialEq + Send + Sync` and can be hashed for caching;
@@ -44,6 +44,32 @@ impl CameraModel {
     pub fn max_fov_deg(&self) -> f64 {
         match self {
             Self::Ocam(m) => m.max_fov_deg,
+        }
+    }
+
+    /// Half the field of view, radians: the largest angle from the optical
+    /// axis that the camera sees.
+    pub fn half_fov_rad(&self) -> f64 {
+        match self {
+            Self::Ocam(m) => m.half_fov_rad(),
+        }
+    }
+
+    /// The same camera with its images resized to `height x width` pixels:
+    /// the same rays at the new resolution (pixel centres map as
+    /// `(p + 0.5) * s - 0.5`). Sizes must be positive.
+    pub fn resized(&self, height: u32, width: u32) -> Self {
+        debug_assert!(height > 0 && width > 0);
+        match self {
+            Self::Ocam(m) => Self::Ocam(m.resized(height, width)),
+        }
+    }
+
+    /// The projection as a radial function of the angle from the optical axis
+    /// and an affine map, for projectors that tabulate it.
+    pub fn radial_projection(&self) -> RadialProjection {
+        match self {
+            Self::Ocam(m) => RadialProjection::ocam(m),
         }
     }
 

@@ -34,7 +34,7 @@ pub struct OcamModel {
 }
 
 /// Horner evaluation of `sum coeffs[i] x^i`.
-fn polyval(coeffs: &[f64], x: f64) -> f64 {
+pub(crate) fn polyval(coeffs: &[f64], x: f64) -> f64 {
     coeffs.iter().rev().fold(0.0, |acc, &a| acc * x + a)
 }
 
@@ -80,6 +80,32 @@ impl OcamModel {
             return None;
         }
         Some(Vector3::new(y, x, -z).normalize())
+    }
+
+    /// The same rays for images resized to `height x width` pixels. Pixel
+    /// centres map as `(p + 0.5) * s - 0.5`; the radius scales with the column
+    /// factor and the row/column aspect goes into the affine terms `c`, `d`.
+    pub fn resized(&self, height: u32, width: u32) -> Self {
+        let sr = f64::from(height) / f64::from(self.height);
+        let sc = f64::from(width) / f64::from(self.width);
+        Self {
+            // z'(rho') = s z(rho'/s): a_i' = a_i s^(1-i); rho' = s rho.
+            poly: self
+                .poly
+                .iter()
+                .enumerate()
+                .map(|(i, a)| a * sc.powi(1 - i as i32))
+                .collect(),
+            inv_poly: self.inv_poly.iter().map(|p| p * sc).collect(),
+            center_row: (self.center_row + 0.5) * sr - 0.5,
+            center_col: (self.center_col + 0.5) * sc - 0.5,
+            c: self.c * sr / sc,
+            d: self.d * sr / sc,
+            e: self.e,
+            width,
+            height,
+            max_fov_deg: self.max_fov_deg,
+        }
     }
 
     /// Whether a pixel position lies inside the image rectangle

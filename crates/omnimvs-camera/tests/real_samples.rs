@@ -1,4 +1,4 @@
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)]
 //! The camera model and the readers on the two real samples of the reference
 //! implementation (`../shared/data/omnimvs-samples`).
 
@@ -178,5 +178,33 @@ fn ocam_txt_files_give_the_same_rig() {
                 );
             }
         }
+    }
+}
+
+#[test]
+fn written_cameras_section_reads_back_the_same_rig() {
+    for name in ["sunny_single", "itbt_sample"] {
+        let rig = rig(name);
+        let text = omnimvs_camera::config_cameras_yaml(&rig);
+        assert!(text.starts_with("cameras:\n  - cam_id: 1\n"), "{text}");
+        let back = omnimvs_camera::parse_config_rig(Path::new("written.yaml"), &text).unwrap();
+        assert_eq!(back, rig, "{name}");
+    }
+}
+
+#[test]
+fn a_resized_camera_sees_the_same_rays() {
+    let model = &rig("sunny_single").cameras[0].model;
+    let half = model.resized(model.height() / 2, model.width() / 2);
+    assert_eq!((half.width(), half.height()), (400, 384));
+    assert_eq!(model.resized(model.height(), model.width()), *model);
+    for p in [
+        Vector3::new(0.3, -0.2, 1.0),
+        Vector3::new(-1.0, 0.5, 0.2),
+        Vector3::new(0.7, 0.7, -0.3),
+    ] {
+        let (a, b) = (model.project(&p).unwrap(), half.project(&p).unwrap());
+        assert!((b.col - ((a.col + 0.5) / 2.0 - 0.5)).abs() < 1e-9, "{p:?}");
+        assert!((b.row - ((a.row + 0.5) / 2.0 - 0.5)).abs() < 1e-9, "{p:?}");
     }
 }

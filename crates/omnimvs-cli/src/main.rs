@@ -4,8 +4,27 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+/// `println!` for the commands' results: a closed stdout (`omnimvs info DATASET | head -5`)
+/// ends the program quietly instead of panicking (see [`out`]).
+macro_rules! outln {
+    () => {
+        $crate::out::line(format_args!(""))
+    };
+    ($($arg:tt)*) => {
+        $crate::out::line(format_args!($($arg)*))
+    };
+}
+
+/// `print!` with the manners of [`outln!`].
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::out::text(format_args!($($arg)*))
+    };
+}
+
 mod args;
 mod cmd;
+mod out;
 mod pictures;
 mod weights;
 
@@ -57,7 +76,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", out::error_chain(&e));
             ExitCode::FAILURE
         }
     }

@@ -1,4 +1,4 @@
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)]
 //! The `omnimvs` binary end to end: outputs on the real samples, and clear
 //! errors with a non-zero exit for bad input.
 

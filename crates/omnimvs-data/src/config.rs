@@ -2,7 +2,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use omnimvs_camera::yaml::{from_value, parse_yaml};
-use omnimvs_camera::{CameraModel, Rig};
+use omnimvs_camera::{Rig, config_cameras_yaml};
 use serde::Deserialize;
 
 use crate::DataError;
@@ -120,11 +120,6 @@ impl DatasetConfig {
     }
 }
 
-fn list(values: &[f64]) -> String {
-    let items: Vec<String> = values.iter().map(|v| format!("{v:?}")).collect();
-    format!("[{}]", items.join(", "))
-}
-
 /// The text of a reference-layout `config.yaml` for `rig` (the inverse of
 /// [`crate::Dataset::open`]'s reader; numbers are written at full precision,
 /// so reading the file back gives the same rig bit for bit).
@@ -147,26 +142,6 @@ pub fn write_config_yaml(rig: &Rig, config: &DatasetConfig) -> String {
         "  start: {}\n  step: {}\n  end: {}",
         f.start, f.step, f.end
     );
-    let _ = writeln!(s, "cameras:");
-    for cam in &rig.cameras {
-        let CameraModel::Ocam(m) = &cam.model;
-        let mut poly = vec![m.poly.len() as f64];
-        poly.extend(&m.poly);
-        let mut inv = vec![m.inv_poly.len() as f64];
-        inv.extend(&m.inv_poly);
-        let _ = writeln!(s, "  - cam_id: {}", cam.id);
-        let _ = writeln!(s, "    img_dir: {:?}", cam.img_dir);
-        let _ = writeln!(s, "    model: ocam");
-        let _ = writeln!(s, "    poly: {}", list(&poly));
-        let _ = writeln!(s, "    inv_poly: {}", list(&inv));
-        let _ = writeln!(s, "    center: {}", list(&[m.center_row, m.center_col]));
-        let _ = writeln!(s, "    affine: {}", list(&[m.c, m.d, m.e]));
-        let _ = writeln!(s, "    image_size: [{}, {}]", m.height, m.width);
-        if let Some(mask) = &cam.invalid_mask {
-            let _ = writeln!(s, "    invalid_mask: {mask:?}");
-        }
-        let _ = writeln!(s, "    pose: {}", list(&cam.pose.to_array()));
-        let _ = writeln!(s, "    max_fov: {:?}", m.max_fov_deg);
-    }
+    s.push_str(&config_cameras_yaml(rig));
     s
 }

@@ -1,4 +1,4 @@
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)]
 //! Dataset folders, frames, ground-truth encodings and bad input, on the real
 //! samples and on folders made in temporary directories.
 

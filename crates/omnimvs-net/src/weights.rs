@@ -100,9 +100,17 @@ pub fn save_module<M: Module>(net: &M, config: &NetConfig, path: &Path) -> Resul
             source,
         }
     })?;
-    let mut store = SafetensorsStore::from_file(path).overwrite(true);
+    // Serialised in memory, then written by the workspace's one atomic writer.
+    let mut store = SafetensorsStore::from_bytes(None);
     net.save_into(&mut store)
-        .map_err(|e| weights_error(path, e.to_string()))
+        .map_err(|e| weights_error(path, e.to_string()))?;
+    let bytes = store
+        .get_bytes()
+        .map_err(|e| weights_error(path, e.to_string()))?;
+    omnimvs_camera::fs::write_atomic(path, &bytes).map_err(|source| NetError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Applies the safetensors file `path` to `net`, every parameter required.

@@ -1,6 +1,6 @@
 //! Our own weight files: safetensors + configuration JSON, round trip and errors.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)] // test helpers
 
 use burn::tensor::{Device, Distribution, Tensor};
 use omnimvs_net::bench::synthetic_grids;

@@ -1,6 +1,6 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 //! The whole method and its stages at the paper's size: four 768x800
-//! fisheye images of a generated room, a 160x640 output, N = 192.
+//! fisheye images of generated rooms (`omnimvs-synth`), a 160x640 output, N = 192.
 //!
 //! `RAYON_NUM_THREADS=2 cargo bench -p omnimvs-stereo --bench bench_sgm`
 //!
@@ -8,17 +8,21 @@
 //! before the measurements; `examples/full_size.rs` prints it per frame
 //! with the CPU time and peak memory.
 
+#[path = "../tests/support/scenes.rs"]
+mod scenes;
+
 use criterion::{Criterion, criterion_group, criterion_main};
-use omnimvs_stereo::synthetic::{Scene, fixture_rig};
+
 use omnimvs_stereo::{SgmParams, SphericalStereo, SweepStep, winner_take_all};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+use scenes::{Rendered, published_rig, room};
 
 fn bench(c: &mut Criterion) {
-    let rig = fixture_rig(1.0);
+    let rig = published_rig(1.0);
     let grid = EquirectGrid::new(160, 640, 45.0).unwrap();
     let hyps = InvDepthHypotheses::new(192, 1.0).unwrap();
     let stereo = SphericalStereo::new(&rig, grid, hyps, SgmParams::default()).unwrap();
-    let images = Scene::room(2000).render_frame(&rig);
+    let images = Rendered::new(&room(&rig, 2000), &rig).images;
     let t = stereo.compute(&images, None).unwrap().timings;
     eprintln!(
         "stages of one frame ({} threads): warp {:.3} s, cost {:.3} s, aggregation {:.3} s, wta {:.3} s, total {:.3} s",

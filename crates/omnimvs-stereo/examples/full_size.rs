@@ -1,15 +1,19 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-//! The whole method at the paper's size on a generated room, with stage
+//! The whole method at the paper's size on generated rooms (`omnimvs-synth`), with stage
 //! timings, peak memory and metrics.
 //!
 //! `cargo run --release -p omnimvs-stereo --example full_size -- [frames] [scale] [HxW] [N] [every-other]`
 //! (defaults: 2 frames, full-size 768x800 images, 160x640, N = 192).
 
+#[path = "../tests/support/scenes.rs"]
+mod scenes;
+
 use omnimvs_data::gt::ground_truth_index;
 use omnimvs_data::metrics::frame_metrics;
-use omnimvs_stereo::synthetic::{Scene, fixture_rig};
+
 use omnimvs_stereo::{SgmParams, SphericalStereo, SweepStep};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+use scenes::{Rendered, published_rig, room};
 
 fn peak_rss_mb() -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -57,7 +61,7 @@ fn main() {
     } else {
         SweepStep::All
     };
-    let rig = fixture_rig(scale);
+    let rig = published_rig(scale);
     let grid = EquirectGrid::new(h, w, 45.0).unwrap();
     let hyps = InvDepthHypotheses::new(nd, 1.0).unwrap();
     let params = SgmParams {
@@ -73,11 +77,10 @@ fn main() {
     );
     println!("frame | warp s | cost s | aggregation s | wta s | total s | CPU s | MAE | >3 %");
     for k in 0..frames {
-        let scene = Scene::room(2000 + k);
-        let images = scene.render_frame(&rig);
-        let gt = ground_truth_index(&scene.inverse_depth(&grid), &hyps);
+        let frame = Rendered::new(&room(&rig, 2000 + k), &rig);
+        let gt = ground_truth_index(&frame.inverse_depth(&grid), &hyps);
         let cpu0 = cpu_s();
-        let out = stereo.compute(&images, None).unwrap();
+        let out = stereo.compute(&frame.images, None).unwrap();
         let cpu = cpu_s() - cpu0;
         let m = frame_metrics(&out.index.index, &gt, nd).unwrap();
         let t = out.timings;

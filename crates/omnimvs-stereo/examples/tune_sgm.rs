@@ -1,16 +1,20 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-//! Tunes the SGM penalties on generated validation rooms (seeds 1000 and up,
+//! Tunes the SGM penalties on generated validation rooms (`omnimvs-synth` houses) (seeds 1000 and up,
 //! never used by the tests) and prints the metrics of every (P1, P2) pair,
 //! with the best constant guess for comparison.
 //!
 //! `cargo run --release -p omnimvs-stereo --example tune_sgm -- [frames] [scale] [HxW] [N]`
 //! (defaults: 4 frames, images at 0.5 scale, 80x320, N = 96).
 
+#[path = "../tests/support/scenes.rs"]
+mod scenes;
+
 use omnimvs_data::gt::ground_truth_index;
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
-use omnimvs_stereo::synthetic::{Scene, fixture_rig};
+
 use omnimvs_stereo::{SgmParams, SphericalStereo, winner_take_all};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+use scenes::{Rendered, published_rig, room};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -21,16 +25,15 @@ fn main() {
         (a.parse().unwrap(), b.parse().unwrap())
     });
     let nd: usize = args.get(3).map_or(96, |s| s.parse().unwrap());
-    let rig = fixture_rig(scale);
+    let rig = published_rig(scale);
     let grid = EquirectGrid::new(h, w, 45.0).unwrap();
     let hyps = InvDepthHypotheses::new(nd, 1.0).unwrap();
     let base = SphericalStereo::new(&rig, grid, hyps, SgmParams::default()).unwrap();
     let mut data = Vec::new();
     for k in 0..frames {
-        let scene = Scene::room(1000 + k);
-        let images = scene.render_frame(&rig);
-        let gt = ground_truth_index(&scene.inverse_depth(&grid), &hyps);
-        let (cost, t) = base.cost_volume(&images, None).unwrap();
+        let frame = Rendered::new(&room(&rig, 1000 + k), &rig);
+        let gt = ground_truth_index(&frame.inverse_depth(&grid), &hyps);
+        let (cost, t) = base.cost_volume(&frame.images, None).unwrap();
         eprintln!("frame {k}: cost volume in {:.2} s", t.warp_s + t.cost_s);
         data.push((cost, gt));
     }

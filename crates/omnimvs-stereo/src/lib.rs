@@ -12,8 +12,9 @@
 //! * [`Matcher::cost_volume`]: the ZNCC cost volume ([`CostVolume`], 16-bit).
 //! * [`aggregate`]: SGM along 4 or 8 paths that wrap around in longitude.
 //! * [`winner_take_all`]: index with parabola refinement, and confidence.
-//! * [`synthetic`]: analytic textured scenes rendered exactly through a rig,
-//!   with their ground truth, for tests, tuning and benchmarks.
+//!
+//! Tests, examples and benchmarks render their scenes with `omnimvs-synth`
+//! (a dev-dependency; `tests/support/scenes.rs`).
 //!
 //! Frames and units follow `FORMATS.md`: rig frame, inverse depth in 1/m,
 //! hypothesis index `n = (N-1)(d - d_0)/(d_(N-1) - d_0)`.
@@ -24,7 +25,6 @@ pub mod params;
 mod pipeline;
 mod projector;
 mod sgm;
-pub mod synthetic;
 mod view;
 mod wta;
 

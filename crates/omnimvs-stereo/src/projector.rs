@@ -12,7 +12,7 @@
 //! The result matches [`omnimvs_camera::OcamModel::project`] (and hence the
 //! lookup table) to about 1e-3 pixel; see the tests.
 
-use omnimvs_camera::{Camera, CameraModel};
+use omnimvs_camera::Camera;
 use omnimvs_sweep::EquirectGrid;
 
 use crate::StereoError;
@@ -32,7 +32,7 @@ pub struct SphereProjector {
     inv_ds: f32,
     /// `tan(max_fov / 4)`: the largest valid `s`.
     s_max: f32,
-    /// Affine `c, d, e` and centre `(row, col)` of the OCamCalib model.
+    /// Affine `c, d, e` and centre `(row, col)` of the camera's radial projection.
     c: f32,
     d: f32,
     e: f32,
@@ -51,14 +51,14 @@ impl SphereProjector {
         camera_number: usize,
         grid: &EquirectGrid,
     ) -> Result<Self, StereoError> {
-        let CameraModel::Ocam(model) = &camera.model;
-        let half_fov = model.half_fov_rad();
+        let radial = camera.model.radial_projection();
+        let half_fov = radial.half_fov_rad;
         if !(half_fov > 0.0 && half_fov < std::f64::consts::PI) {
             return Err(StereoError::Camera {
                 camera: camera_number,
                 reason: format!(
                     "max_fov {} deg: expected a field of view in (0, 360) degrees",
-                    model.max_fov_deg
+                    camera.model.max_fov_deg()
                 ),
             });
         }
@@ -71,12 +71,7 @@ impl SphereProjector {
                 // g(0) is the limit s -> 0; sample just off zero instead.
                 let s = (k as f64 * ds).max(ds * 1e-3);
                 let alpha = 2.0 * s.atan();
-                let theta = alpha - std::f64::consts::FRAC_PI_2;
-                let rho = model
-                    .inv_poly
-                    .iter()
-                    .rev()
-                    .fold(0.0, |acc, &a| acc * theta + a);
+                let rho = radial.radius_px(alpha);
                 (rho * (1.0 + s * s) / (2.0 * s)) as f32
             })
             .collect();
@@ -102,11 +97,11 @@ impl SphereProjector {
             table,
             inv_ds: (1.0 / ds) as f32,
             s_max: s_max as f32,
-            c: model.c as f32,
-            d: model.d as f32,
-            e: model.e as f32,
-            center_row: model.center_row as f32,
-            center_col: model.center_col as f32,
+            c: radial.c as f32,
+            d: radial.d as f32,
+            e: radial.e as f32,
+            center_row: radial.center.row as f32,
+            center_col: radial.center.col as f32,
         })
     }
 
@@ -214,12 +209,12 @@ impl SphereProjector {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synthetic::fixture_rig;
     use omnimvs_sweep::{InvDepthHypotheses, LookupTable, SphereSet};
 
     #[test]
     fn matches_the_lookup_table() {
-        let rig = fixture_rig(0.25);
+        let preset = omnimvs_synth::rig::preset_rig().unwrap().rig;
+        let rig = omnimvs_synth::rig::resize_rig(&preset, 192, 200).unwrap();
         let grid = EquirectGrid::new(20, 80, 45.0).unwrap();
         let hyps = InvDepthHypotheses::new(16, 0.8).unwrap();
         let lut = LookupTable::build(&rig, &grid, &hyps, SphereSet::All).unwrap();

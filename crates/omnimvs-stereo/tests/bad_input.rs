@@ -1,10 +1,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 //! Bad input gets a clear error, never a panic.
 
+mod support;
+
 use omnimvs_camera::{Rig, ValidityMask};
-use omnimvs_stereo::synthetic::fixture_rig;
 use omnimvs_stereo::{SgmParams, SphericalStereo, StereoError};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+use support::scenes::published_rig;
 
 fn grid() -> EquirectGrid {
     EquirectGrid::new(16, 64, 45.0).unwrap()
@@ -26,7 +28,7 @@ fn images(rig: &Rig) -> Vec<GrayImage> {
 
 #[test]
 fn fewer_than_two_cameras() {
-    let mut rig = fixture_rig(0.1);
+    let mut rig = published_rig(0.1);
     rig.cameras.truncate(1);
     let e = SphericalStereo::new(&rig, grid(), hyps(8), SgmParams::default()).unwrap_err();
     assert!(matches!(e, StereoError::TooFewCameras { found: 1 }));
@@ -35,7 +37,7 @@ fn fewer_than_two_cameras() {
 
 #[test]
 fn odd_or_tiny_ndepth() {
-    let rig = fixture_rig(0.1);
+    let rig = published_rig(0.1);
     for n in [0, 1, 7] {
         let e = SphericalStereo::new(&rig, grid(), hyps(n), SgmParams::default()).unwrap_err();
         assert!(matches!(e, StereoError::NDepth { .. }), "{n}: {e}");
@@ -45,7 +47,7 @@ fn odd_or_tiny_ndepth() {
 
 #[test]
 fn p2_below_p1() {
-    let rig = fixture_rig(0.1);
+    let rig = published_rig(0.1);
     let params = SgmParams {
         p1: 0.5,
         p2: 0.2,
@@ -58,7 +60,7 @@ fn p2_below_p1() {
 
 #[test]
 fn mismatched_images_and_masks() {
-    let rig = fixture_rig(0.1);
+    let rig = published_rig(0.1);
     let stereo = SphericalStereo::new(&rig, grid(), hyps(8), SgmParams::default()).unwrap();
     let mut imgs = images(&rig);
     imgs[2] = GrayImage::zeros(10, 10);

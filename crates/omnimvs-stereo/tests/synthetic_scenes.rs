@@ -1,16 +1,18 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-//! Accuracy on analytic scenes with exact ground truth (seeds below 1000;
-//! the penalties were tuned on seeds 1000 and up).
+//! Accuracy on scenes of `omnimvs-synth` with exact ground truth (seeds below
+//! 1000; `examples/tune_sgm.rs` tunes the penalties on seeds 1000 and up).
+
+mod support;
 
 use omnimvs_data::gt::ground_truth_index;
 use omnimvs_data::metrics::{frame_metrics, mean_metrics};
-use omnimvs_stereo::synthetic::{Scene, fixture_rig};
 use omnimvs_stereo::{SgmParams, SphericalStereo, SweepStep};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+use support::scenes::{Rendered, published_rig, room, textured_sphere};
 
 /// Small enough for CI: quarter-size images, a 64x256 grid, 64 spheres.
 fn small_setup(params: SgmParams) -> (omnimvs_camera::Rig, SphericalStereo) {
-    let rig = fixture_rig(0.25);
+    let rig = published_rig(0.25);
     let grid = EquirectGrid::new(64, 256, 45.0).unwrap();
     let hyps = InvDepthHypotheses::new(64, 1.0).unwrap();
     let stereo = SphericalStereo::new(&rig, grid, hyps, params).unwrap();
@@ -25,9 +27,9 @@ fn small_setup(params: SgmParams) -> (omnimvs_camera::Rig, SphericalStereo) {
 fn textured_sphere_at_known_radius_gives_its_index() {
     let (rig, stereo) = small_setup(SgmParams::default());
     for radius in [2.5, 4.0, 8.0] {
-        let scene = Scene::textured_sphere(radius, 3);
+        let frame = Rendered::new(&textured_sphere(radius, 3), &rig);
         let truth = stereo.hypotheses.index(1.0 / radius) as f32;
-        let out = stereo.compute(&scene.render_frame(&rig), None).unwrap();
+        let out = stereo.compute(&frame.images, None).unwrap();
         let within = out
             .index
             .index
@@ -48,7 +50,7 @@ fn textured_sphere_at_known_radius_gives_its_index() {
 }
 
 #[test]
-fn rooms_are_far_better_than_a_constant_guess() {
+fn things_in_rooms_are_far_better_than_a_constant_guess() {
     for sweep in [SweepStep::All, SweepStep::EveryOther] {
         let params = SgmParams {
             sweep,
@@ -58,9 +60,9 @@ fn rooms_are_far_better_than_a_constant_guess() {
         let nd = stereo.hypotheses.count;
         let (mut ours, mut constant) = (Vec::new(), Vec::new());
         for seed in [1, 2] {
-            let scene = Scene::room(seed);
-            let gt = ground_truth_index(&scene.inverse_depth(&stereo.grid), &stereo.hypotheses);
-            let out = stereo.compute(&scene.render_frame(&rig), None).unwrap();
+            let frame = Rendered::new(&room(&rig, seed), &rig);
+            let gt = ground_truth_index(&frame.inverse_depth(&stereo.grid), &stereo.hypotheses);
+            let out = stereo.compute(&frame.images, None).unwrap();
             ours.push(frame_metrics(&out.index.index, &gt, nd).unwrap());
             // The best constant for this frame: the median true index.
             let mut idx: Vec<f32> = gt.index.clone();
@@ -92,13 +94,18 @@ fn rooms_are_far_better_than_a_constant_guess() {
             m.markdown_row("ZNCC+SGM"),
             c.markdown_row("constant")
         );
+        // OmniThings-like scenes (flat and repetitive textures, thin objects,
+        // occlusions) are harder than the analytic noise rooms this test used
+        // before omnimvs-synth rendered it: measured ratios to the constant guess
+        // are 0.61 (MAE), 0.50 (>3) and 0.48 (>5) with all spheres, 0.62, 0.51
+        // and 0.49 with every other one.
         assert!(
-            m.mae < 0.35 * c.mae,
+            m.mae < 0.7 * c.mae,
             "MAE {:.2} vs constant {:.2}",
             m.mae,
             c.mae
         );
-        assert!(m.over3_pct < 0.35 * c.over3_pct);
-        assert!(m.over5_pct < 0.25 * c.over5_pct);
+        assert!(m.over3_pct < 0.6 * c.over3_pct);
+        assert!(m.over5_pct < 0.6 * c.over5_pct);
     }
 }

@@ -37,6 +37,9 @@ pub use dataset::{
 pub use difficulty::Difficulty;
 pub use error::SynthError;
 pub use generate::{GenParams, generate};
-pub use render::{render_fisheye, render_fisheye_into, render_inverse_depth};
+pub use render::{
+    render_fisheye, render_fisheye_into, render_gray_frame, render_inverse_depth,
+    render_inverse_depth_map,
+};
 pub use scene::{LightSpec, ObjectSpec, Placement, SceneKind, SceneSpec, ShapeSpec, SkySpec};
 pub use tracer::{Hit, MeshLibrary, Tracer};

@@ -415,6 +415,7 @@ fn load_obj(path: &Path) -> Result<TriMesh, String> {
 }
 
 #[cfg(test)]
+#[allow(clippy::disallowed_methods)] // fixtures are written directly
 mod tests {
     use super::*;
 

@@ -4,8 +4,9 @@
 
 use glam::Vec3A;
 use nalgebra::Vector3;
-use omnimvs_camera::{Camera, Pixel};
-use omnimvs_sweep::EquirectGrid;
+use omnimvs_camera::{Camera, Pixel, Rig};
+use omnimvs_data::gt::InvDepthMap;
+use omnimvs_sweep::{EquirectGrid, GrayImage};
 use rayon::prelude::*;
 
 use crate::Tracer;
@@ -62,6 +63,31 @@ pub fn render_fisheye_into(tracer: &Tracer, camera: &Camera, spp: u32, out: &mut
             *px = (sum * inv_n * 255.0 + 0.5).clamp(0.0, 255.0) as u8;
         }
     });
+}
+
+/// The images of every camera of `rig` as the sweep reads them (gray levels
+/// 0..255 as f32): one frame in memory, without a dataset on disk.
+pub fn render_gray_frame(tracer: &Tracer, rig: &Rig, spp: u32) -> Vec<GrayImage> {
+    rig.cameras
+        .iter()
+        .map(|camera| GrayImage {
+            width: camera.model.width() as usize,
+            height: camera.model.height() as usize,
+            data: render_fisheye(tracer, camera, spp)
+                .into_iter()
+                .map(f32::from)
+                .collect(),
+        })
+        .collect()
+}
+
+/// [`render_inverse_depth`] as an [`InvDepthMap`] of `grid`'s size.
+pub fn render_inverse_depth_map(tracer: &Tracer, grid: &EquirectGrid) -> InvDepthMap {
+    InvDepthMap {
+        width: grid.width,
+        height: grid.height,
+        data: render_inverse_depth(tracer, grid),
+    }
 }
 
 /// Ground-truth inverse depth (1/m, from the rig origin; 0 for the sky) on

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use omnimvs_camera::{Camera, CameraModel, OcamModel, Rig, parse_config_rig};
+use omnimvs_camera::{Camera, Rig, parse_config_rig};
 use serde_json::Value;
 
 use crate::SynthError;
@@ -134,9 +134,7 @@ pub fn rig_radius_m(rig: &Rig) -> f64 {
 }
 
 /// The rig with every camera's images resized to `height x width` pixels:
-/// the same rays, at the new resolution. Pixel centres map as
-/// `(p + 0.5) * s - 0.5`; OCamCalib's radius scales with the column factor
-/// and the row/column aspect goes into the affine terms `c`, `d`.
+/// the same rays, at the new resolution ([`omnimvs_camera::CameraModel::resized`]).
 ///
 /// # Errors
 /// [`SynthError::Invalid`] for a zero size.
@@ -151,30 +149,10 @@ pub fn resize_rig(rig: &Rig, height: u32, width: u32) -> Result<Rig, SynthError>
         .cameras
         .iter()
         .map(|cam| {
-            let CameraModel::Ocam(m) = &cam.model;
-            let sr = f64::from(height) / f64::from(m.height);
-            let sc = f64::from(width) / f64::from(m.width);
-            let model = OcamModel {
-                poly: m
-                    .poly
-                    .iter()
-                    .enumerate()
-                    .map(|(i, a)| a * sc.powi(1 - i as i32))
-                    .collect(),
-                inv_poly: m.inv_poly.iter().map(|p| p * sc).collect(),
-                center_row: (m.center_row + 0.5) * sr - 0.5,
-                center_col: (m.center_col + 0.5) * sc - 0.5,
-                c: m.c * sr / sc,
-                d: m.d * sr / sc,
-                e: m.e,
-                width,
-                height,
-                max_fov_deg: m.max_fov_deg,
-            };
             Camera::new(
                 cam.id,
                 cam.img_dir.clone(),
-                CameraModel::Ocam(model),
+                cam.model.resized(height, width),
                 cam.pose,
                 None,
             )
@@ -206,6 +184,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), SynthError> {
 }
 
 #[cfg(test)]
+#[allow(clippy::disallowed_methods)] // fixtures are written directly
 mod tests {
     use omnimvs_camera::Pixel;
     use omnimvs_camera::nalgebra::Vector3;

@@ -1,44 +1,36 @@
-//! A small deterministic random number generator (SplitMix64). Written here
-//! rather than taken from a crate so that a seed gives the same scene with
-//! every future dependency version.
+//! The scene generators' random draws: distributions (ranges, Marsaglia's
+//! sphere points, rotations) over the workspace's one SplitMix64
+//! ([`omnimvs_camera::rng`]).
 
 use nalgebra::{UnitQuaternion, Vector3};
+use omnimvs_camera::rng::{GAMMA, SplitMix64, mix64};
 
-/// SplitMix64: 64 bits of state, full period, passes BigCrush when used as
-/// here (one stream per scene, forked per sub-task).
+/// A SplitMix64 stream seeded through [`mix64`], with the draws the scene
+/// generators need (one stream per scene, forked per sub-task).
 #[derive(Debug, Clone)]
 pub struct Rng {
-    state: u64,
-}
-
-const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
-
-fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    core: SplitMix64,
 }
 
 impl Rng {
     pub fn new(seed: u64) -> Self {
         Self {
-            state: mix64(seed ^ GOLDEN),
+            core: SplitMix64::new(mix64(seed ^ GAMMA)),
         }
     }
 
     /// The stream of one frame of one dataset: independent of every other
     /// frame, so frames can be rendered in any order or on any machine.
     pub fn for_frame(seed: u64, salt: &str, frame: u32) -> Self {
-        let mut h = mix64(seed.wrapping_add(GOLDEN));
+        let mut h = mix64(seed.wrapping_add(GAMMA));
         for b in salt.bytes() {
             h = mix64(h ^ u64::from(b));
         }
-        Self::new(h ^ mix64(u64::from(frame).wrapping_mul(GOLDEN)))
+        Self::new(h ^ mix64(u64::from(frame).wrapping_mul(GAMMA)))
     }
 
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(GOLDEN);
-        mix64(self.state)
+        self.core.next_u64()
     }
 
     /// A child generator with its own stream.
@@ -48,7 +40,7 @@ impl Rng {
 
     /// Uniform in `[0, 1)`.
     pub fn f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+        self.core.next_f64()
     }
 
     /// Uniform in `[lo, hi)`.
@@ -61,7 +53,8 @@ impl Rng {
         (self.range(lo.ln(), hi.ln())).exp()
     }
 
-    /// Uniform integer in `0..n` (`n > 0`).
+    /// Uniform integer in `0..n` (`n > 0`), from the high 32 bits (not
+    /// [`SplitMix64::below`]: every dataset's scenes depend on this mapping).
     pub fn below(&mut self, n: usize) -> usize {
         debug_assert!(n > 0);
         ((self.next_u64() >> 32).wrapping_mul(n as u64) >> 32) as usize

@@ -1,7 +1,7 @@
 //! Writing datasets: the reference layout, byte-identical re-runs, resume,
 //! shards, and clear errors that lose no finished frame.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // helpers of tests
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)] // helpers of tests
 
 use std::collections::BTreeMap;
 use std::path::Path;

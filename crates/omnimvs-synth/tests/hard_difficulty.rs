@@ -2,7 +2,7 @@
 //! truth, camera effects on the images only, recorded in `synth.json` and
 //! checked on resume; `standard` datasets keep their bytes.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // helpers of tests
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)] // helpers of tests
 
 use std::collections::BTreeMap;
 use std::path::Path;

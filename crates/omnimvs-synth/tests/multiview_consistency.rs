@@ -10,7 +10,7 @@ use omnimvs_camera::nalgebra::Vector3;
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthSource, warp_camera_to_panorama};
 use omnimvs_synth::rig::{preset_rig, resize_rig, rig_radius_m};
 use omnimvs_synth::{
-    GenParams, SceneKind, ShapeSpec, Tracer, generate, render_fisheye, render_inverse_depth,
+    GenParams, SceneKind, ShapeSpec, Tracer, generate, render_gray_frame, render_inverse_depth,
 };
 
 /// Whether camera `cam` sees the ground-truth point of panorama pixel `k`
@@ -91,18 +91,7 @@ fn check(kind: SceneKind, want_room: bool) {
         })
         .unwrap();
     let tracer = Tracer::new(&scene, &[]).unwrap();
-    let images: Vec<GrayImage> = rig
-        .cameras
-        .iter()
-        .map(|c| GrayImage {
-            width: c.model.width() as usize,
-            height: c.model.height() as usize,
-            data: render_fisheye(&tracer, c, 4)
-                .into_iter()
-                .map(f32::from)
-                .collect(),
-        })
-        .collect();
+    let images: Vec<GrayImage> = render_gray_frame(&tracer, &rig, 4);
     let grid = EquirectGrid::new(160, 320, 90.0).unwrap();
     let gt = render_inverse_depth(&tracer, &grid);
     let (good, n) = pairwise_mad(&tracer, &rig, &images, &grid, &gt, &gt);

@@ -2,7 +2,7 @@
 //! user meshes are placed and traced, rendering does not depend on the
 //! number of threads.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // helpers of tests
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)] // helpers of tests
 
 use omnimvs_sweep::EquirectGrid;
 use omnimvs_synth::mesh::load_mesh;

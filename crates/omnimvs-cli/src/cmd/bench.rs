@@ -15,6 +15,8 @@ use serde::Serialize;
 
 use crate::args::{BACKEND_HELP, parse_backend, parse_output_file};
 
+/// Time the network's stages, a training step and peak memory on a compute backend.
+///
 /// Time the network on a compute backend: the forward pass per stage (features,
 /// sweep, fusion, cost volume, softargmin; for the cascade features, coarse, half- and
 /// full-resolution stages), a training step (forward, backward, optimiser update), and
@@ -85,7 +87,7 @@ pub fn run(args: &Args) -> Result<()> {
         SweepPlace::Host => false,
         SweepPlace::Device => true,
     };
-    println!(
+    outln!(
         "preset {} (CH {}, N {}, {}x{} output, {} cameras of {}x{}), backend {backend}, sweep on the {}",
         args.preset,
         config.channels,
@@ -103,7 +105,7 @@ pub fn run(args: &Args) -> Result<()> {
         bench_omnimvs(args, &config, device_sweep, &device)?
     };
     if backend.is_gpu() {
-        println!("(peak memory above is host RSS; GPU memory is not measured here)");
+        outln!("(peak memory above is host RSS; GPU memory is not measured here)");
     }
     if let Some(path) = &args.json {
         let report = Report {
@@ -116,7 +118,7 @@ pub fn run(args: &Args) -> Result<()> {
         let text = serde_json::to_string_pretty(&report)?;
         write_atomic(path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        outln!("wrote {}", path.display());
     }
     Ok(())
 }
@@ -134,9 +136,15 @@ fn bench_omnimvs(
         device_sweep,
     };
     let forward = bench_forward_with(config, &options, device).context("forward benchmark")?;
-    println!(
+    outln!(
         "{:<8} {:>9} {:>9} {:>9} {:>9} {:>10} {:>9}",
-        "forward", "features", "sweep", "fusion", "cost", "softargmin", "total"
+        "forward",
+        "features",
+        "sweep",
+        "fusion",
+        "cost",
+        "softargmin",
+        "total"
     );
     let median = forward.median();
     let rows = forward
@@ -145,9 +153,14 @@ fn bench_omnimvs(
         .map(|r| ("run", r))
         .chain(median.as_ref().map(|m| ("median", m)));
     for (label, r) in rows {
-        println!(
+        outln!(
             "{label:<8} {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s {:>9.3}s {:>8.3}s",
-            r.features, r.sweep, r.fusion, r.cost, r.softargmin, r.total
+            r.features,
+            r.sweep,
+            r.fusion,
+            r.cost,
+            r.softargmin,
+            r.total
         );
     }
     print_peak("after the forward passes", forward.peak_rss_bytes);
@@ -177,10 +190,15 @@ fn bench_cascade(
         device,
     )
     .context("forward benchmark")?;
-    println!("{} parameters", forward.params);
-    println!(
+    outln!("{} parameters", forward.params);
+    outln!(
         "{:<8} {:>9} {:>9} {:>9} {:>9} {:>9}",
-        "forward", "features", "coarse", "half", "full", "total"
+        "forward",
+        "features",
+        "coarse",
+        "half",
+        "full",
+        "total"
     );
     let median = forward.median();
     let rows = forward
@@ -189,9 +207,13 @@ fn bench_cascade(
         .map(|r| ("run", r))
         .chain(median.as_ref().map(|m| ("median", m)));
     for (label, r) in rows {
-        println!(
+        outln!(
             "{label:<8} {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s",
-            r.features, r.coarse, r.mid, r.fine, r.total
+            r.features,
+            r.coarse,
+            r.mid,
+            r.fine,
+            r.total
         );
     }
     print_peak("after the forward passes", forward.peak_rss_bytes);
@@ -215,16 +237,16 @@ fn bench_cascade(
 
 fn print_steps(report: &TrainStepReport) {
     for (i, (seconds, loss)) in report.steps.iter().zip(&report.losses).enumerate() {
-        println!("train step {:>2}: {seconds:.3}s (loss {loss:.3})", i + 1);
+        outln!("train step {:>2}: {seconds:.3}s (loss {loss:.3})", i + 1);
     }
     if let Some(m) = report.median() {
-        println!("train step median {m:.3}s ({:.2} steps/s)", 1.0 / m);
+        outln!("train step median {m:.3}s ({:.2} steps/s)", 1.0 / m);
     }
     print_peak("after the training steps", report.peak_rss_bytes);
 }
 
 fn print_peak(when: &str, bytes: Option<u64>) {
     if let Some(bytes) = bytes {
-        println!("peak RSS {when}: {} MiB", bytes / (1 << 20));
+        outln!("peak RSS {when}: {} MiB", bytes / (1 << 20));
     }
 }

@@ -19,6 +19,8 @@ use crate::cmd::{eval, infer, sgm, synth};
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud};
 use crate::weights::Weights;
 
+/// Run the whole pipeline on a rendered scene (no data needed) and print its metrics.
+///
 /// Run the pipeline end to end on a default that needs nothing but this
 /// repository: render a few frames of a synthetic `things` scene with exact
 /// ground truth for the published 4-camera rig, estimate 360-degree depth with
@@ -54,7 +56,7 @@ pub fn run(args: &Args) -> Result<()> {
         .with_context(|| format!("creating {}", args.out.display()))?;
     let t0 = Instant::now();
     let data_dir = args.out.join("things");
-    println!(
+    outln!(
         "[1/5] rendering {} synthetic `things` frames (published rig, 4 x 768x800) into {}",
         args.frames,
         data_dir.display()
@@ -71,9 +73,11 @@ pub fn run(args: &Args) -> Result<()> {
         meshes: Vec::new(),
     })?;
 
-    println!(
+    outln!(
         "[2/5] classical method (ZNCC + SGM), {}x{}, N = {}",
-        args.size.height, args.size.width, args.ndepth
+        args.size.height,
+        args.size.width,
+        args.ndepth
     );
     let sgm_dir = args.out.join("sgm");
     sgm::run(&sgm_args(
@@ -83,7 +87,7 @@ pub fn run(args: &Args) -> Result<()> {
         Some(Frames(1..=args.frames)),
     ))?;
 
-    println!("[3/5] metrics and pictures of the classical method at full size");
+    outln!("[3/5] metrics and pictures of the classical method at full size");
     let ds = Dataset::open(&data_dir)?;
     let grid = EquirectGrid::new(args.size.height, args.size.width, 45.0)?;
     let hyps = ds.hypotheses(args.ndepth)?;
@@ -137,7 +141,7 @@ pub fn run(args: &Args) -> Result<()> {
             &args.out.join(format!("things_{frame:05}_sgm.ply")),
             &point_cloud(&grid, &inv.data, &pano.image.data),
         )?;
-        println!("  wrote {} and its point cloud", path.display());
+        outln!("  wrote {} and its point cloud", path.display());
     }
     let rows: Vec<(String, ProtocolMetrics)> = ProtocolMetrics::mean(&frame_metrics_sgm)
         .map(|mean| ("ZNCC+SGM".to_string(), mean))
@@ -147,7 +151,7 @@ pub fn run(args: &Args) -> Result<()> {
     let md = args.out.join("metrics.md");
     write_atomic(&md, table.as_bytes()).with_context(|| format!("writing {}", md.display()))?;
 
-    println!(
+    outln!(
         "[4/5] bundled network ({}) against the classical method, both scored at {}x{}, N = {} \
          (the network's coarser output upsampled)",
         Weights::bundled(),
@@ -173,20 +177,20 @@ pub fn run(args: &Args) -> Result<()> {
 
     let itbt = args.samples.join("itbt_sample");
     if itbt.join("config.yaml").is_file() {
-        println!("[5/5] real data: itbt_sample frame 1");
+        outln!("[5/5] real data: itbt_sample frame 1");
         let out = args.out.join("itbt_sgm");
         sgm::run(&sgm_args(&itbt, &out, args, Some(Frames(1..=1))))?;
-        println!("  ZNCC+SGM: {}", out.join("00001_invdepth.png").display());
+        outln!("  ZNCC+SGM: {}", out.join("00001_invdepth.png").display());
         let out = args.out.join("itbt_net");
         infer::run(&infer_args(&itbt, &out, 1))?;
-        println!("  network: {}", out.join("00001_vis.png").display());
+        outln!("  network: {}", out.join("00001_vis.png").display());
     } else {
-        println!(
+        outln!(
             "[5/5] {} not found: skipping the real sample",
             itbt.display()
         );
     }
-    println!(
+    outln!(
         "\nClassical method at {}x{}, N = {}, on {} synthetic frames (error in % of N; lower is better):\n\n{}",
         args.size.height,
         args.size.width,
@@ -195,12 +199,12 @@ pub fn run(args: &Args) -> Result<()> {
         table.trim_end()
     );
     if let Some(t) = net_table {
-        println!(
+        outln!(
             "\nNetwork and classical method at the same grid:\n\n{}",
             t.trim_end()
         );
     }
-    println!(
+    outln!(
         "\ndone in {:.1} s: pictures, point clouds and metrics in {}",
         t0.elapsed().as_secs_f64(),
         args.out.display()

@@ -20,7 +20,9 @@ use serde::Serialize;
 use crate::args::{BACKEND_HELP, Frames, Size, parse_backend};
 use crate::weights::{BUNDLED, Weights};
 
-/// Evaluate methods against ground truth with the paper's metrics: per pixel
+/// Evaluate methods against ground truth with the paper's metrics.
+///
+/// Per pixel
 /// E = |n_hat - n*| / N * 100 over scored pixels; the percentages of E > 1, 3, 5, the mean
 /// (MAE) and root mean square (RMS), averaged over frames. Every method runs at its own grid
 /// (the bundled network at 32x128, N = 64; a cascade network at 160x640; SGM at the
@@ -363,9 +365,9 @@ pub fn run(args: &Args) -> Result<()> {
         args.phi_deg,
         protocol_tables(&rows)
     );
-    print!("{table}");
+    out!("{table}");
     for m in &results {
-        println!("{}: {:.3} s/frame", m.method, m.seconds_per_frame);
+        outln!("{}: {:.3} s/frame", m.method, m.seconds_per_frame);
     }
     if let Some(out) = &args.out {
         let report = EvalReport {
@@ -398,7 +400,7 @@ pub fn run(args: &Args) -> Result<()> {
         .with_context(|| format!("writing {}", json.display()))?;
         let md = out.join("eval.md");
         write_atomic(&md, table.as_bytes()).with_context(|| format!("writing {}", md.display()))?;
-        println!("wrote {}", json.display());
+        outln!("wrote {}", json.display());
     }
     Ok(())
 }

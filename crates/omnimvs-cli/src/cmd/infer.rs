@@ -21,7 +21,9 @@ use crate::cmd::eval::protocol_tables;
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 use crate::weights::{BUNDLED, Weights};
 
-/// Estimate 360-degree inverse depth with the OmniMVS network. Writes per frame
+/// Estimate 360-degree inverse depth with the OmniMVS network.
+///
+/// Writes per frame
 /// OUT/%05d.tiff (f32 inverse depth, 1/m), %05d_index.tiff (hypothesis index),
 /// %05d_entropy.tiff, %05d.png (colour-mapped inverse depth), %05d_vis.png
 /// (inputs, panorama, depth, entropy and error when ground truth exists) and
@@ -147,7 +149,7 @@ pub fn run(args: &Args) -> Result<()> {
         .with_context(|| format!("writing {}", path.display()))?;
         if let Some(mean) = mean {
             let c = inference.config();
-            print!(
+            out!(
                 "{}x{}, N = {} (the network's grid)\n\n{}",
                 c.out_height,
                 c.out_width,
@@ -156,7 +158,7 @@ pub fn run(args: &Args) -> Result<()> {
             );
         }
     }
-    println!("wrote {} frames to {}", frames.len(), args.out.display());
+    outln!("wrote {} frames to {}", frames.len(), args.out.display());
     Ok(())
 }
 

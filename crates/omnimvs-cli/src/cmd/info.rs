@@ -6,8 +6,10 @@ use anyhow::Result;
 use omnimvs_camera::Pixel;
 use omnimvs_data::Dataset;
 
-/// Show a dataset's rig (cameras, image sizes, FOV, positions, baselines),
-/// the frames found and whether ground truth exists.
+/// Show a dataset's rig, frames and ground truth.
+///
+/// Prints each camera (image size, FOV, position, optical axis), the baselines
+/// between cameras, the frames found and whether ground truth exists.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Dataset folder (or its config.yaml).
@@ -17,21 +19,21 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     let ds = Dataset::open(&args.dataset)?;
     let cfg = &ds.config;
-    println!("dataset      {}", ds.root.display());
-    println!("config       {}", ds.config_path.display());
-    println!(
+    outln!("dataset      {}", ds.root.display());
+    outln!("config       {}", ds.config_path.display());
+    outln!(
         "min depth    {} m (largest inverse depth {:.3} 1/m)",
         cfg.min_depth_m,
         1.0 / cfg.min_depth_m
     );
-    println!("images       {}", cfg.img_fmt);
-    println!("cameras      {}", ds.rig.len());
+    outln!("images       {}", cfg.img_fmt);
+    outln!("cameras      {}", ds.rig.len());
     for (i, cam) in ds.rig.cameras.iter().enumerate() {
         let m = &cam.model;
         let c = cam.center_in_rig();
         let center_px = Pixel::new(f64::from(m.width()) / 2.0, f64::from(m.height()) / 2.0);
         let axis = cam.ray_in_rig(center_px).unwrap_or_default();
-        println!(
+        outln!(
             "  cam{} (id {}, {}): {}x{} px, FOV {} deg, centre ({:+.3}, {:+.3}, {:+.3}) m, axis ({:+.2}, {:+.2}, {:+.2}), dir {}",
             i + 1,
             cam.id,
@@ -48,13 +50,13 @@ pub fn run(args: &Args) -> Result<()> {
             cam.img_dir
         );
     }
-    println!("baselines");
+    outln!("baselines");
     for (i, j, b) in ds.rig.baselines_m() {
-        println!("  cam{}-cam{}: {b:.3} m", i + 1, j + 1);
+        outln!("  cam{}-cam{}: {b:.3} m", i + 1, j + 1);
     }
     let range = cfg.frames.indices();
     let found = ds.frames_found();
-    println!(
+    outln!(
         "frames       {}..{} step {}: {} listed, {} found{}",
         cfg.frames.start,
         cfg.frames.end,
@@ -73,7 +75,7 @@ pub fn run(args: &Args) -> Result<()> {
         .filter(|&f| ds.gt_path(f).is_some())
         .collect();
     match with_gt.first() {
-        Some(&f) => println!(
+        Some(&f) => outln!(
             "ground truth {} of {} frames (e.g. {})",
             with_gt.len(),
             found.len(),
@@ -81,7 +83,7 @@ pub fn run(args: &Args) -> Result<()> {
                 .map(|p| p.display().to_string())
                 .unwrap_or_default()
         ),
-        None => println!("ground truth none"),
+        None => outln!("ground truth none"),
     }
     Ok(())
 }

@@ -9,8 +9,9 @@ use omnimvs_sweep::{EquirectGrid, LookupTable, SphereSet};
 
 use crate::args::Size;
 
-/// Build the spherical-sweep lookup table of a dataset's rig and write it as
-/// the reference `lt_(h,w,N).hwd` file: raw little-endian f32 of shape
+/// Build the spherical-sweep lookup table of a dataset's rig (the reference `.hwd` file).
+///
+/// The file is the reference `lt_(h,w,N).hwd`: raw little-endian f32 of shape
 /// [cameras, N/2, h, w, 2], sampling positions normalised for
 /// grid_sample(align_corners=True); invalid entries far outside [-1, 1].
 #[derive(Debug, clap::Args)]
@@ -59,7 +60,7 @@ pub fn run(args: &Args) -> Result<()> {
         .chunks_exact(2)
         .filter(|p| p[0] < -2.0 || p[1] < -2.0)
         .count();
-    println!(
+    outln!(
         "wrote {} ({} cameras x {} spheres x {}x{} x 2 f32, {:.1} MB) in {:.2} s build; {:.1}% of entries invalid",
         args.out.display(),
         lut.num_cameras(),

@@ -10,6 +10,8 @@ use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
 
 use crate::args::Size;
 
+/// Compose the equirectangular panorama of one frame at a depth or an inverse-depth map.
+///
 /// Compose the equirectangular panorama of one frame: every pixel is the mean
 /// of the cameras that see the point at the given depth along its ray. Use a
 /// constant depth (--depth) or an inverse-depth map (--invdepth, e.g. a
@@ -79,7 +81,7 @@ pub fn run(args: &Args) -> Result<()> {
         .with_context(|| format!("writing {}", args.out.display()))?;
     let seen = pano.count.iter().filter(|&&c| c > 0).count();
     let multi = pano.count.iter().filter(|&&c| c > 1).count();
-    println!(
+    outln!(
         "wrote {} ({}x{}, +-{} deg): {:.1}% of pixels seen, {:.1}% by two or more cameras",
         args.out.display(),
         grid.height,

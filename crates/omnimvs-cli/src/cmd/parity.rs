@@ -14,6 +14,8 @@ use serde::Serialize;
 use crate::args::{parse_backend, parse_output_file};
 use crate::weights::{BUNDLED, Weights};
 
+/// Check that compute backends give the same network output on a real frame.
+///
 /// Check that compute backends agree: run the same weights on the same frame on every
 /// backend of --backends, with the sweep on the host and on the device, and report the
 /// largest difference of the hypothesis index (0..N-1) from the first backend's host-sweep
@@ -112,7 +114,7 @@ pub fn run(args: &Args) -> Result<()> {
             args.tolerance
         );
     }
-    println!(
+    outln!(
         "all backends agree within {:.1e} (worst {worst:.2e})",
         args.tolerance
     );
@@ -138,9 +140,13 @@ fn compare(
     let mut reference: Option<Vec<f32>> = None;
     let mut rows = Vec::new();
     let mut shape = (0, 0, 0);
-    println!(
+    outln!(
         "{:<18} {:<7} {:>9} {:>13} {:>13}",
-        "backend", "sweep", "seconds", "max |diff|", "mean |diff|"
+        "backend",
+        "sweep",
+        "seconds",
+        "max |diff|",
+        "mean |diff|"
     );
     for &backend in &args.backends {
         let device = backend.device()?;
@@ -185,7 +191,7 @@ fn compare(
                 .fold(0.0f32, f32::max);
             let mean_abs_diff = diffs.iter().sum::<f32>() / diffs.len().max(1) as f32;
             let sweep = if device_sweep { "device" } else { "host" };
-            println!(
+            outln!(
                 "{:<18} {sweep:<7} {seconds:>8.3}s {max_abs_diff:>13.3e} {mean_abs_diff:>13.3e}",
                 backend.to_string()
             );
@@ -201,9 +207,12 @@ fn compare(
     let reference = reference.unwrap_or_default();
     let spread = reference.iter().copied().fold(f32::MIN, f32::max)
         - reference.iter().copied().fold(f32::MAX, f32::min);
-    println!(
+    outln!(
         "reference: {} (host sweep), {}x{} output, N = {}, index spread {spread:.2}",
-        args.backends[0], shape.0, shape.1, shape.2
+        args.backends[0],
+        shape.0,
+        shape.1,
+        shape.2
     );
     if spread < 1.0 {
         eprintln!(

@@ -19,6 +19,8 @@ use serde::Serialize;
 use crate::args::{Frames, Size};
 use crate::cmd::eval::protocol_tables;
 
+/// Depth by the classical method, ZNCC + SGM (no network, no GPU).
+///
 /// Depth by the classical method of the paper's Table 3 ("ZNCC+SGM"):
 /// every camera's gray image is swept over N spheres, 9x9 ZNCC between all
 /// camera pairs that see a point gives the matching cost, and semi-global
@@ -140,7 +142,7 @@ pub fn run(args: &Args) -> Result<()> {
     let masks = ds.masks()?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
-    println!(
+    outln!(
         "ZNCC+SGM: {} cameras, {h}x{w} (+-{} deg), N = {}, min depth {} m, P1 = {}, P2 = {}, {} paths, {:?} spheres",
         ds.rig.len(),
         args.phi_deg,
@@ -185,7 +187,7 @@ pub fn run(args: &Args) -> Result<()> {
             }
         };
         let t = out.timings;
-        println!(
+        outln!(
             "frame {frame:5}: warp {:.2} s, cost {:.2} s, aggregation {:.2} s, wta {:.2} s, total {:.2} s{}",
             t.warp_s,
             t.cost_s,
@@ -236,7 +238,7 @@ pub fn run(args: &Args) -> Result<()> {
             args.ndepth,
             protocol_tables(&rows)
         );
-        print!("{table}");
+        out!("{table}");
         let md = args.out.join("metrics.md");
         write_atomic(&md, table.as_bytes()).with_context(|| format!("writing {}", md.display()))?;
     }
@@ -257,6 +259,6 @@ pub fn run(args: &Args) -> Result<()> {
     let json = args.out.join("sgm.json");
     write_atomic(&json, serde_json::to_string_pretty(&summary)?.as_bytes())
         .with_context(|| format!("writing {}", json.display()))?;
-    println!("wrote {} frames to {}", records.len(), args.out.display());
+    outln!("wrote {} frames to {}", records.len(), args.out.display());
     Ok(())
 }

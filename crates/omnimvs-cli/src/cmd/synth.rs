@@ -11,6 +11,8 @@ use omnimvs_synth::{DatasetWriter, Difficulty, FrameEvent, SceneKind, Shard, Syn
 
 use crate::args::{Frames, Size};
 
+/// Render a synthetic dataset (OmniThings / OmniHouse style) with exact ground truth.
+///
 /// Render a synthetic dataset (OmniThings / OmniHouse style) for a rig:
 /// OUT/config.yaml, OUT/camN/%05d.png (8-bit gray fisheyes),
 /// OUT/omnidepth_gt_640/%05d.tiff (f32 inverse depth, 1/m, 320x640, +-90
@@ -145,7 +147,7 @@ pub fn run(args: &Args) -> Result<()> {
         )
     })?;
     let secs = t0.elapsed().as_secs_f64();
-    println!(
+    outln!(
         "{}: {rendered} frame(s) rendered in {secs:.1} s ({:.2} s/frame), {skipped} already complete; shard {}/{} of frames {}..{}",
         args.out.display(),
         secs / rendered.max(1) as f64,

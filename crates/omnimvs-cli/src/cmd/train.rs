@@ -14,6 +14,8 @@ use omnimvs_net::{CascadeNet, Family, NetConfig, OmniMvsNet};
 
 use crate::args::{BACKEND_HELP, Frames, parse_backend};
 
+/// Train a network (the paper's or the cascade) end to end, resumably.
+///
 /// Train a network end to end: the paper's (`--preset tiny|paper`, sections 3.3 and 5.1: L1
 /// loss between the predicted and the rounded ground-truth index over valid pixels) or the
 /// cascade (`--preset cascade`: L1 of each of its three stages against the exact index on
@@ -114,9 +116,14 @@ fn print_epoch(r: &EpochRecord) {
         ),
         _ => "no validation frames".into(),
     };
-    println!(
+    outln!(
         "epoch {:3}  lr {:.0e}  train loss {:.3}  {} steps  {:.3} steps/s (loader wait {:.1} s)  {val}",
-        r.epoch, r.lr, r.train_loss, r.steps, r.steps_per_second, r.loader_wait_seconds
+        r.epoch,
+        r.lr,
+        r.train_loss,
+        r.steps,
+        r.steps_per_second,
+        r.loader_wait_seconds
     );
 }
 
@@ -216,7 +223,7 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         .splits
         .iter()
         .fold((0, 0), |acc, (t, v)| (acc.0 + t.len(), acc.1 + v.len()));
-    println!(
+    outln!(
         "{}: {} training and {} validation frames from {} dataset(s); epochs {}..{} of {}; \
          {} rotations up to {} deg; camera permutation {}; photometric augmentation {}",
         trainer.run_dir.display(),
@@ -263,7 +270,7 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         bar.suspend(|| print_epoch(&record));
     }
     bar.finish_and_clear();
-    println!(
+    outln!(
         "{} epoch(s) in {:.1} s; weights {}; best {}",
         trainer.state.epochs_done,
         started.elapsed().as_secs_f64(),
