@@ -1,7 +1,7 @@
 //! Where a command's network comes from: the bundled model (compiled into the binary, so it
 //! works from any folder), a weights file, or a random initialisation.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::bail;
 use anyhow::{Context, Result};
