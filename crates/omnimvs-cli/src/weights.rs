@@ -113,7 +113,7 @@ impl Weights {
 impl std::fmt::Display for Weights {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Self::Bundled(model) => write!(f, "{model} ({})", model.label()),
+            Self::Bundled(model) => write!(f, "{BUNDLED} {model} ({})", model.label()),
             Self::Random => f.write_str(RANDOM),
             Self::File(path) => write!(f, "{}", path.display()),
         }

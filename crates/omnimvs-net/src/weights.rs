@@ -208,6 +208,26 @@ impl AnyNet {
             AnyNet::Cascade(net) => &net.config,
         }
     }
+
+    /// Feeds the network images of `[rows, cols]` from now on (the images are resized to it).
+    /// Both families are fully convolutional and sample their features at normalised image
+    /// positions, so any size runs; the reference runs its checkpoints at each camera's
+    /// native size, and a model answers best at the size it was trained at.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] for a size the network cannot take.
+    pub fn set_input_size(&mut self, [rows, cols]: [usize; 2]) -> Result<(), NetError> {
+        let config = match self {
+            AnyNet::OmniMvs(net) => &mut net.config,
+            AnyNet::Cascade(net) => &mut net.config,
+        };
+        let mut changed = config.clone();
+        changed.input_height = rows;
+        changed.input_width = cols;
+        changed.validate()?;
+        *config = changed;
+        Ok(())
+    }
 }
 
 /// Loads in-memory files of either family (the configuration's `family` decides).

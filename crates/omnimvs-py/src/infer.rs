@@ -67,7 +67,27 @@ pub fn infer<'py>(
     let backend: Backend = backend.parse().map_err(|e| bad_argument("backend", e))?;
     let result = detached(py, || {
         let device = backend.device().py_err()?;
-        let net = load_network(weights.as_deref(), preset, &device)?;
+        let mut net = load_network(weights.as_deref(), preset, &device)?;
+        // A reference checkpoint runs at the cameras' own image size, as the reference runs
+        // it (and as `omnimvs infer` does by default).
+        let is_pytorch = weights
+            .as_deref()
+            .and_then(Path::extension)
+            .is_some_and(|e| e == "pt" || e == "pth");
+        if is_pytorch && let Some(camera) = ds.rig.cameras.first() {
+            let size = [
+                camera.model.height() as usize,
+                camera.model.width() as usize,
+            ];
+            if ds
+                .rig
+                .cameras
+                .iter()
+                .all(|c| [c.model.height() as usize, c.model.width() as usize] == size)
+            {
+                net.set_input_size(size).py_err()?;
+            }
+        }
         let (estimator, _status) = NetEstimator::new(
             net,
             &ds,

@@ -222,6 +222,7 @@ fn infer_args(dataset: &Path, out: &Path, frames: u32) -> infer::Args {
         backend: omnimvs_net::Backend::Cpu,
         ply: true,
         order: None,
+        input_size: None,
     }
 }
 

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::Dataset;
@@ -16,7 +16,7 @@ use omnimvs_net::NetEstimator;
 use omnimvs_net::infer::FrameResult;
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
-use crate::args::{BACKEND_HELP, Frames, parse_backend};
+use crate::args::{BACKEND_HELP, Frames, Size, parse_backend};
 use crate::cmd::eval::protocol_tables;
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 use crate::weights::{BUNDLED, Weights};
@@ -59,12 +59,105 @@ pub struct Args {
     /// Camera concatenation order, e.g. 0,1,2,3 (default: the rig's order).
     #[arg(long, value_delimiter = ',')]
     pub order: Option<Vec<usize>>,
+    /// Size the images are fed to the network at: `model` (the size the model's
+    /// configuration names, e.g. 768x800, what our models were trained at), `native` (each
+    /// camera's own image size, as the reference implementation runs its checkpoints) or
+    /// HEIGHTxWIDTH. Default: `native` for a reference PyTorch checkpoint, `model` otherwise.
+    /// infer.json records the size used.
+    #[arg(long)]
+    pub input_size: Option<InputSize>,
+}
+
+/// `--input-size` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputSize {
+    /// The model configuration's size.
+    Model,
+    /// The cameras' own image size.
+    Native,
+    /// A given size.
+    Fixed(Size),
+}
+
+impl std::str::FromStr for InputSize {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "model" => Ok(Self::Model),
+            "native" => Ok(Self::Native),
+            size => size
+                .parse()
+                .map(Self::Fixed)
+                .map_err(|e: String| format!("expected `model`, `native` or HEIGHTxWIDTH: {e}")),
+        }
+    }
+}
+
+impl std::fmt::Display for InputSize {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Model => f.write_str("model"),
+            Self::Native => f.write_str("native"),
+            Self::Fixed(size) => write!(f, "{size}"),
+        }
+    }
+}
+
+/// The input size `--input-size` asks for with these weights (`None`: the model's own).
+///
+/// # Errors
+/// `native` on a rig whose cameras have different image sizes.
+pub fn input_size(
+    asked: Option<InputSize>,
+    weights: &Weights,
+    ds: &Dataset,
+) -> Result<Option<[usize; 2]>> {
+    let is_pytorch = matches!(weights, Weights::File(p)
+        if p.extension().is_some_and(|e| e == "pt" || e == "pth"));
+    let asked = asked.unwrap_or(if is_pytorch {
+        InputSize::Native
+    } else {
+        InputSize::Model
+    });
+    Ok(match asked {
+        InputSize::Model => None,
+        InputSize::Fixed(size) => Some([size.height, size.width]),
+        InputSize::Native => {
+            let sizes: Vec<[usize; 2]> = ds
+                .rig
+                .cameras
+                .iter()
+                .map(|c| [c.model.height() as usize, c.model.width() as usize])
+                .collect();
+            let Some(&first) = sizes.first() else {
+                bail!("{}: the rig has no camera", ds.config_path.display());
+            };
+            if let Some(other) = sizes.iter().position(|s| *s != first) {
+                bail!(
+                    "{}: --input-size native needs one image size for every camera; camera 1 \
+                     is {}x{}, camera {} is {}x{} (give --input-size HEIGHTxWIDTH)",
+                    ds.config_path.display(),
+                    first[0],
+                    first[1],
+                    other + 1,
+                    sizes[other][0],
+                    sizes[other][1]
+                );
+            }
+            Some(first)
+        }
+    })
 }
 
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
     let ds = Dataset::open(&args.dataset)?;
-    let net = args.weights.load_family(&args.preset, &device)?;
+    let mut net = args.weights.load_family(&args.preset, &device)?;
+    if let Some(size) = input_size(args.input_size, &args.weights, &ds)? {
+        net.set_input_size(size)
+            .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
+    }
     let config = net.config().clone();
     let (mut inference, status) = NetEstimator::new(
         net,
@@ -92,6 +185,7 @@ pub fn run(args: &Args) -> Result<()> {
         "dataset": args.dataset,
         "weights": args.weights,
         "network": config,
+        "input_size": [config.input_height, config.input_width],
         "order": inference.order(),
         "backend": args.backend.to_string(),
     });
