@@ -62,3 +62,12 @@ def test_bad_input(itbt, tmp_path):
     images = itbt.images(1)
     with pytest.raises(ValueError, match=r"images\[2\].*uint16"):
         omnimvs.infer([*images[:2], images[2].astype(np.uint16), images[3]], rig=itbt.rig)
+
+
+def test_bundled_models_by_name(itbt, itbt_net):
+    # The default bundled model is `tiny`; both bundled models can be named.
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, weights="tiny"), itbt_net)
+    cascade = omnimvs.infer(itbt, 1, weights="cascade")
+    assert cascade.dtype == np.float32 and cascade.shape == (160, 640)
+    assert np.isfinite(cascade).all() and cascade.min() >= 0
+    assert cascade.max() <= 1 / itbt.min_depth + 1e-6
