@@ -16,11 +16,75 @@ pub struct FrameRange {
 }
 
 impl FrameRange {
+    /// The frames `start..=end`, step 1.
+    pub fn inclusive(start: u32, end: u32) -> Self {
+        Self {
+            start,
+            step: 1,
+            end,
+        }
+    }
+
     /// The indices of the range.
     pub fn indices(&self) -> Vec<u32> {
         (self.start..=self.end)
             .step_by(self.step.max(1) as usize)
             .collect()
+    }
+
+    /// Whether `frame` is one of the range's indices.
+    pub fn contains(&self, frame: u32) -> bool {
+        (self.start..=self.end).contains(&frame) && (frame - self.start) % self.step.max(1) == 0
+    }
+}
+
+/// Reads a frame range as the published splits write it: `A..B` (inclusive), `A..=B`, `A-B`
+/// or a single frame `A` (step 1).
+///
+/// # Errors
+/// [`DataError::FrameRange`] naming the text: not two frame numbers, or a range whose end is
+/// before its start.
+impl std::str::FromStr for FrameRange {
+    type Err = DataError;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let bad = |message: String| DataError::FrameRange {
+            text: text.to_string(),
+            message,
+        };
+        let t = text.trim();
+        let (a, b) = if let Some((a, b)) = t.split_once("..=") {
+            (a, b)
+        } else if let Some((a, b)) = t.split_once("..") {
+            (a, b)
+        } else if let Some((a, b)) = t.split_once('-') {
+            (a, b)
+        } else {
+            (t, t)
+        };
+        let number = |x: &str| {
+            x.trim().parse::<u32>().map_err(|_| {
+                bad("expected FIRST..LAST (inclusive) such as 1..10, or a single frame".into())
+            })
+        };
+        let (start, end) = (number(a)?, number(b)?);
+        if end < start {
+            return Err(bad(format!(
+                "the range is reversed: the last frame ({end}) is before the first ({start})"
+            )));
+        }
+        Ok(Self::inclusive(start, end))
+    }
+}
+
+/// `A..B` (inclusive), with `/STEP` when the step is not 1.
+impl std::fmt::Display for FrameRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}..{}", self.start, self.end)?;
+        if self.step != 1 {
+            write!(f, "/{}", self.step)?;
+        }
+        Ok(())
     }
 }
 

@@ -32,7 +32,7 @@ mod tracer;
 
 pub use camera_effects::CameraEffects;
 pub use dataset::{
-    DatasetWriter, Frame, FrameEvent, Shard, SynthOptions, SynthSettings, parse_frames,
+    DatasetWriter, Frame, FrameEvent, Shard, SynthOptions, SynthSettings,
 };
 pub use difficulty::Difficulty;
 pub use error::SynthError;

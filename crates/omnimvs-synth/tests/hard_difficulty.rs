@@ -9,7 +9,7 @@ use std::path::Path;
 
 use omnimvs_sweep::EquirectGrid;
 use omnimvs_synth::camera_effects::apply_all;
-use omnimvs_synth::dataset::{GT_HEIGHT, GT_PHI_DEG, GT_WIDTH, parse_frames, render_scene};
+use omnimvs_synth::dataset::{GT_HEIGHT, GT_PHI_DEG, GT_WIDTH, render_scene};
 use omnimvs_synth::rig::{RigSource, preset_rig, resize_rig, rig_radius_m};
 use omnimvs_synth::texture::TextureSpec;
 use omnimvs_synth::{
@@ -34,7 +34,7 @@ fn writer(
         difficulty,
         ..SynthOptions::new(kind, 5)
     };
-    DatasetWriter::create_with(out, &small_rig(), &options, &parse_frames("1..3").unwrap())
+    DatasetWriter::create_with(out, &small_rig(), &options, &"1..3".parse::<omnimvs_data::FrameRange>().unwrap())
 }
 
 /// Every file under `dir` (relative path -> bytes).

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_camera::fs::write_atomic;
-use omnimvs_data::Dataset;
+use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
@@ -16,7 +16,7 @@ use omnimvs_net::NetEstimator;
 use omnimvs_net::infer::FrameResult;
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
-use crate::args::{BACKEND_HELP, Frames, parse_backend};
+use crate::args::{BACKEND_HELP, Preset, parse_backend};
 use crate::cmd::eval::protocol_tables;
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 use crate::weights::{BUNDLED, Weights};
@@ -43,11 +43,11 @@ pub struct Args {
     pub weights: Weights,
     /// Architecture sizes for a PyTorch checkpoint or `--weights random`: paper, tiny or
     /// cascade.
-    #[arg(long, default_value = "paper")]
-    pub preset: String,
+    #[arg(long, value_enum, default_value_t = Preset::Paper)]
+    pub preset: Preset,
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
-    pub frames: Frames,
+    pub frames: FrameRange,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
@@ -64,7 +64,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
     let ds = Dataset::open(&args.dataset)?;
-    let net = args.weights.load_family(&args.preset, &device)?;
+    let net = args.weights.load_family(args.preset.name(), &device)?;
     let config = net.config().clone();
     let (mut inference, status) = NetEstimator::new(
         net,
@@ -102,7 +102,7 @@ pub fn run(args: &Args) -> Result<()> {
     )
     .with_context(|| format!("writing {}", path.display()))?;
 
-    let frames: Vec<u32> = args.frames.0.clone().collect();
+    let frames: Vec<u32> = args.frames.indices();
     let bar = ProgressBar::new(frames.len() as u64);
     bar.set_style(
         ProgressStyle::with_template(
