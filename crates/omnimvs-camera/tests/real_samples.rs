@@ -2,14 +2,14 @@
 //! The camera model and the readers on the two real samples of the reference
 //! implementation (`../shared/data/omnimvs-samples`).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use omnimvs_camera::nalgebra::Vector3;
 use omnimvs_camera::{CameraModel, Pixel, Rig, ValidityMask, read_config_rig, read_ocam_txt_rig};
 
-fn samples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/omnimvs-samples")
-}
+#[path = "support/samples.rs"]
+mod samples;
+use samples::samples;
 
 fn rig(name: &str) -> Rig {
     read_config_rig(&samples().join(name).join("config.yaml")).unwrap()

@@ -34,7 +34,8 @@ impl FrameRange {
 
     /// Whether `frame` is one of the range's indices.
     pub fn contains(&self, frame: u32) -> bool {
-        (self.start..=self.end).contains(&frame) && (frame - self.start) % self.step.max(1) == 0
+        (self.start..=self.end).contains(&frame)
+            && (frame - self.start).is_multiple_of(self.step.max(1))
     }
 }
 

@@ -2,16 +2,14 @@
 //! Dataset folders, frames, ground-truth encodings and bad input, on the real
 //! samples and on folders made in temporary directories.
 
-use std::path::{Path, PathBuf};
-
 use omnimvs_data::gt::{GT_WIDTH, InvDepthMap, read_inv_depth, write_inv_depth_tiff};
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::{DataError, Dataset, DatasetConfig, FrameRange, write_config_yaml};
 use omnimvs_sweep::EquirectGrid;
 
-fn samples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/omnimvs-samples")
-}
+#[path = "../../omnimvs-camera/tests/support/samples.rs"]
+mod samples;
+use samples::samples;
 
 /// A dataset folder with the sunny rig and `img_fmt`, but no images yet.
 fn temp_dataset(img_fmt: &str) -> (tempfile::TempDir, Dataset) {

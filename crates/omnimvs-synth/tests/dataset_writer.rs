@@ -155,7 +155,8 @@ fn bad_input_gives_clear_errors_and_keeps_finished_frames() {
     assert!(err.contains("/no/such/rig.yaml"), "{err}");
     // Reversed range.
     assert!(
-        "9..3".parse::<omnimvs_data::FrameRange>()
+        "9..3"
+            .parse::<omnimvs_data::FrameRange>()
             .unwrap_err()
             .to_string()
             .contains("reversed")

@@ -34,7 +34,12 @@ fn writer(
         difficulty,
         ..SynthOptions::new(kind, 5)
     };
-    DatasetWriter::create_with(out, &small_rig(), &options, &"1..3".parse::<omnimvs_data::FrameRange>().unwrap())
+    DatasetWriter::create_with(
+        out,
+        &small_rig(),
+        &options,
+        &"1..3".parse::<omnimvs_data::FrameRange>().unwrap(),
+    )
 }
 
 /// Every file under `dir` (relative path -> bytes).

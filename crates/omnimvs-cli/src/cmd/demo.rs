@@ -5,12 +5,12 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use omnimvs_camera::fs::write_atomic;
-use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::read_inv_depth;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{ProtocolMetrics, eval_metrics};
 use omnimvs_data::ply::write_ply;
+use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
 
 use crate::args::{Kind, Method, Preset, RigArg, Size};
@@ -180,7 +180,12 @@ pub fn run(args: &Args) -> Result<()> {
     if itbt.join("config.yaml").is_file() {
         outln!("[5/5] real data: itbt_sample frame 1");
         let out = args.out.join("itbt_sgm");
-        sgm::run(&sgm_args(&itbt, &out, args, Some(FrameRange::inclusive(1, 1))))?;
+        sgm::run(&sgm_args(
+            &itbt,
+            &out,
+            args,
+            Some(FrameRange::inclusive(1, 1)),
+        ))?;
         outln!("  ZNCC+SGM: {}", out.join("00001_invdepth.png").display());
         let out = args.out.join("itbt_net");
         infer::run(&infer_args(&itbt, &out, 1))?;

@@ -5,11 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use omnimvs_camera::fs::write_atomic;
-use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics};
+use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_stereo::{
     DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SphericalStereo, StageTimings, SweepStep,
 };
