@@ -2,7 +2,6 @@
 //! The `omnimvs` binary end to end: outputs on the real samples, and clear
 //! errors with a non-zero exit for bad input.
 
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 #[path = "../../omnimvs-sweep/tests/support/golden.rs"]

@@ -2,7 +2,6 @@
 //! The command line behaves like the tools people know: a closed pipe ends it
 //! quietly, `--help` gives one line per command, an error is said once.
 
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]

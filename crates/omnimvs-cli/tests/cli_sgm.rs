@@ -7,19 +7,9 @@ mod support;
 
 use omnimvs_data::Dataset;
 use omnimvs_data::gt::read_inv_depth;
-use omnimvs_data::metrics::{Protocol, eval_metrics};
+use omnimvs_data::metrics::eval_metrics;
 use omnimvs_sweep::EquirectGrid;
-use support::{png_size, read_json, run_ok, synth_dataset};
-
-/// The mean absolute error (in % of N) of the best constant answer (the median index) over
-/// the pixels the reference protocol scores: what a method that ignores the images gets.
-fn constant_guess_mae(scored: &[f32], ndepth: usize) -> f64 {
-    let mut sorted = scored.to_vec();
-    sorted.sort_by(f32::total_cmp);
-    let median = sorted[sorted.len() / 2];
-    let sum: f64 = scored.iter().map(|&g| f64::from((g - median).abs())).sum();
-    sum / scored.len() as f64 / ndepth as f64 * 100.0
-}
+use support::{constant_guess_mae, png_size, read_json, run_ok, synth_dataset};
 
 #[test]
 fn sgm_writes_every_output_and_finds_the_depth() {
@@ -98,11 +88,7 @@ fn sgm_writes_every_output_and_finds_the_depth() {
         // constant's error (measured: 8.6 and 9.4 against 16.9 and 16.6, % of N, with these
         // small 192x200 cameras), and inside the measured range (a broken matcher is at the
         // constant's error or worse).
-        let scored: Vec<f32> = (0..truth.gt.index.len())
-            .filter(|&i| truth.scored(i, Protocol::Reference))
-            .map(|i| truth.gt.index[i])
-            .collect();
-        let constant = constant_guess_mae(&scored, ndepth);
+        let constant = constant_guess_mae(&truth, ndepth);
         println!("frame {frame}: SGM MAE {mae:.2}, best constant {constant:.2}");
         assert!(
             mae < 2.0 / 3.0 * constant,

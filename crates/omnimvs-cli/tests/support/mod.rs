@@ -6,6 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use omnimvs_data::gt::EvalTruth;
+use omnimvs_data::metrics::Protocol;
+
 /// Runs `omnimvs args` with its lookup-table cache in `cache`.
 pub fn omnimvs(args: &[&str], cache: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_omnimvs"))
@@ -64,4 +67,17 @@ pub fn read_json(path: &Path) -> serde_json::Value {
 /// Width and height of a PNG file.
 pub fn png_size(path: &Path) -> (u32, u32) {
     image::image_dimensions(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The mean absolute error (in % of N) of the best constant answer (the median index) over
+/// the pixels the reference protocol scores: what a method that ignores the images gets.
+pub fn constant_guess_mae(truth: &EvalTruth, ndepth: usize) -> f64 {
+    let mut scored: Vec<f32> = (0..truth.gt.index.len())
+        .filter(|&i| truth.scored(i, Protocol::Reference))
+        .map(|i| truth.gt.index[i])
+        .collect();
+    scored.sort_by(f32::total_cmp);
+    let median = scored[scored.len() / 2];
+    let sum: f64 = scored.iter().map(|&g| f64::from((g - median).abs())).sum();
+    sum / scored.len() as f64 / ndepth as f64 * 100.0
 }
