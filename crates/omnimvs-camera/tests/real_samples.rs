@@ -185,7 +185,7 @@ fn ocam_txt_files_give_the_same_rig() {
 fn written_cameras_section_reads_back_the_same_rig() {
     for name in ["sunny_single", "itbt_sample"] {
         let rig = rig(name);
-        let text = omnimvs_camera::config_cameras_yaml(&rig);
+        let text = omnimvs_camera::config_cameras_yaml(&rig).unwrap();
         assert!(text.starts_with("cameras:\n  - cam_id: 1\n"), "{text}");
         let back = omnimvs_camera::parse_config_rig(Path::new("written.yaml"), &text).unwrap();
         assert_eq!(back, rig, "{name}");

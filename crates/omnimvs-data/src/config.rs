@@ -1,9 +1,9 @@
-use std::fmt::Write as _;
 use std::path::Path;
 
-use omnimvs_camera::yaml::{from_value, parse_yaml};
-use omnimvs_camera::{Rig, config_cameras_yaml};
-use serde::Deserialize;
+use omnimvs_camera::yaml::{from_value, parse_yaml, to_yaml};
+use omnimvs_camera::{ConfigCamera, Rig};
+use serde::{Deserialize, Serialize};
+use serde_saphyr::DoubleQuoted;
 
 use crate::DataError;
 
@@ -185,28 +185,51 @@ impl DatasetConfig {
     }
 }
 
+/// `config.yaml` as [`write_config_yaml`] writes it: the sections in the reference's order.
+#[derive(Serialize)]
+struct ConfigFile<'a> {
+    config: ConfigSectionOut,
+    dataset: DatasetSectionOut<'a>,
+    cameras: Vec<ConfigCamera>,
+}
+
+#[derive(Serialize)]
+struct ConfigSectionOut {
+    omnimvs_sweep_min_depth: f64,
+}
+
+#[derive(Serialize)]
+struct DatasetSectionOut<'a> {
+    img_fmt: DoubleQuoted<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gt_fmt: Option<DoubleQuoted<&'a str>>,
+    start: u32,
+    step: u32,
+    end: u32,
+}
+
 /// The text of a reference-layout `config.yaml` for `rig` (the inverse of
 /// [`crate::Dataset::open`]'s reader; numbers are written at full precision,
 /// so reading the file back gives the same rig bit for bit).
-pub fn write_config_yaml(rig: &Rig, config: &DatasetConfig) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "# written by omnimvs");
-    let _ = writeln!(
-        s,
-        "config:\n  omnimvs_sweep_min_depth: {:?}",
-        config.min_depth_m
-    );
-    let _ = writeln!(s, "dataset:");
-    let _ = writeln!(s, "  img_fmt: {:?}", config.img_fmt);
-    if let Some(g) = &config.gt_fmt {
-        let _ = writeln!(s, "  gt_fmt: {g:?}");
-    }
-    let f = config.frames;
-    let _ = writeln!(
-        s,
-        "  start: {}\n  step: {}\n  end: {}",
-        f.start, f.step, f.end
-    );
-    s.push_str(&config_cameras_yaml(rig));
-    s
+///
+/// # Errors
+/// [`DataError::Camera`] if the serialiser fails (it does not for a valid rig).
+pub fn write_config_yaml(rig: &Rig, config: &DatasetConfig) -> Result<String, DataError> {
+    let file = ConfigFile {
+        config: ConfigSectionOut {
+            omnimvs_sweep_min_depth: config.min_depth_m,
+        },
+        dataset: DatasetSectionOut {
+            img_fmt: DoubleQuoted(&config.img_fmt),
+            gt_fmt: config.gt_fmt.as_deref().map(DoubleQuoted),
+            start: config.frames.start,
+            step: config.frames.step,
+            end: config.frames.end,
+        },
+        cameras: ConfigCamera::of_rig(rig),
+    };
+    Ok(format!(
+        "# written by omnimvs\n{}",
+        to_yaml("a dataset's config.yaml", &file)?
+    ))
 }

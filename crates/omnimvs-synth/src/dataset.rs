@@ -319,11 +319,9 @@ impl DatasetWriter {
             frames: covered_frames(&config_path, frames)?,
             gt_fmt: Some(GT_FMT.to_string()),
         };
-        omnimvs_camera::fs::write_atomic(
-            &config_path,
-            write_config_yaml(&rig.rig, &config).as_bytes(),
-        )
-        .map_err(io(&config_path, "cannot write"))?;
+        let text = write_config_yaml(&rig.rig, &config)?;
+        omnimvs_camera::fs::write_atomic(&config_path, text.as_bytes())
+            .map_err(io(&config_path, "cannot write"))?;
         Ok(Self {
             out: out.to_path_buf(),
             rig: rig.rig.clone(),
