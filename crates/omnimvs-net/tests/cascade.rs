@@ -4,8 +4,6 @@
 //! `../shared/data/omnimvs-samples`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::PathBuf;
-
 use burn::module::Module;
 use burn::optim::GradientsParams;
 use burn::tensor::Device;
