@@ -1,31 +1,74 @@
 //! Reader and writer for the reference `config.yaml` (the `cameras:` list).
 
-use std::fmt::Write as _;
 use std::path::Path;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
+use serde_saphyr::{DoubleQuoted, FlowSeq};
 
 use crate::{Camera, CameraError, CameraModel, OcamModel, Pose, Rig};
 
-/// One entry of `cameras:` as written by the reference implementation.
-#[derive(Debug, Deserialize)]
-struct CameraEntry {
+/// One entry of `cameras:` of a reference `config.yaml`, read by [`parse_config_rig`] and
+/// written by [`config_cameras_yaml`] (lists in flow style and folder names quoted, as the
+/// reference writes them; the wrappers are transparent when reading).
+#[derive(Debug, Serialize, Deserialize)]
+pub struct ConfigCamera {
     cam_id: Option<u32>,
-    img_dir: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    img_dir: Option<DoubleQuoted<String>>,
     model: Option<String>,
-    poly: Vec<f64>,
-    inv_poly: Vec<f64>,
-    center: [f64; 2],
-    affine: [f64; 3],
-    image_size: [u32; 2],
-    invalid_mask: Option<String>,
-    pose: [f64; 6],
+    /// `[count, a0, a1, ...]`.
+    poly: FlowSeq<Vec<f64>>,
+    /// `[count, a0, a1, ...]`.
+    inv_poly: FlowSeq<Vec<f64>>,
+    /// `[row, col]`.
+    center: FlowSeq<[f64; 2]>,
+    /// `[c, d, e]`.
+    affine: FlowSeq<[f64; 3]>,
+    /// `[height, width]`.
+    image_size: FlowSeq<[u32; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    invalid_mask: Option<DoubleQuoted<String>>,
+    /// `[rx, ry, rz, tx, ty, tz]`.
+    pose: FlowSeq<[f64; 6]>,
+    /// Degrees.
     max_fov: f64,
 }
 
-#[derive(Debug, Deserialize)]
+impl ConfigCamera {
+    /// The entry of `cam`: every number at full precision, so that reading it back gives
+    /// the same camera bit for bit.
+    pub fn of(cam: &Camera) -> Self {
+        let CameraModel::Ocam(m) = &cam.model;
+        let counted = |coeffs: &[f64]| {
+            let mut v = vec![coeffs.len() as f64];
+            v.extend(coeffs);
+            FlowSeq(v)
+        };
+        Self {
+            cam_id: Some(cam.id),
+            img_dir: Some(DoubleQuoted(cam.img_dir.clone())),
+            model: Some("ocam".into()),
+            poly: counted(&m.poly),
+            inv_poly: counted(&m.inv_poly),
+            center: FlowSeq([m.center_row, m.center_col]),
+            affine: FlowSeq([m.c, m.d, m.e]),
+            image_size: FlowSeq([m.height, m.width]),
+            invalid_mask: cam.invalid_mask.clone().map(DoubleQuoted),
+            pose: FlowSeq(cam.pose.to_array()),
+            max_fov: m.max_fov_deg,
+        }
+    }
+
+    /// The entries of every camera of `rig`, in order.
+    pub fn of_rig(rig: &Rig) -> Vec<Self> {
+        rig.cameras.iter().map(Self::of).collect()
+    }
+}
+
+/// The `cameras:` section.
+#[derive(Debug, Serialize, Deserialize)]
 struct CamerasSection {
-    cameras: Vec<CameraEntry>,
+    cameras: Vec<ConfigCamera>,
 }
 
 /// Reads the rig from a reference `config.yaml`.
@@ -144,7 +187,11 @@ pub(crate) fn validate_ocam(path: &Path, prefix: &str, m: &OcamModel) -> Result<
     Ok(())
 }
 
-fn camera_from_entry(path: &Path, index: usize, entry: CameraEntry) -> Result<Camera, CameraError> {
+fn camera_from_entry(
+    path: &Path,
+    index: usize,
+    entry: ConfigCamera,
+) -> Result<Camera, CameraError> {
     let prefix = format!("cameras[{index}].");
     let model_name = entry.model.as_deref().unwrap_or("ocam");
     if model_name != "ocam" {
@@ -154,11 +201,11 @@ fn camera_from_entry(path: &Path, index: usize, entry: CameraEntry) -> Result<Ca
             format!("unknown camera model {model_name:?}, expected \"ocam\""),
         ));
     }
-    let poly = split_counted_poly(path, &format!("{prefix}poly"), &entry.poly)?;
-    let inv_poly = split_counted_poly(path, &format!("{prefix}inv_poly"), &entry.inv_poly)?;
-    let [center_row, center_col] = entry.center;
-    let [c, d, e] = entry.affine;
-    let [height, width] = entry.image_size;
+    let poly = split_counted_poly(path, &format!("{prefix}poly"), &entry.poly.0)?;
+    let inv_poly = split_counted_poly(path, &format!("{prefix}inv_poly"), &entry.inv_poly.0)?;
+    let [center_row, center_col] = entry.center.0;
+    let [c, d, e] = entry.affine.0;
+    let [height, width] = entry.image_size.0;
     let model = OcamModel {
         poly,
         inv_poly,
@@ -172,16 +219,18 @@ fn camera_from_entry(path: &Path, index: usize, entry: CameraEntry) -> Result<Ca
         max_fov_deg: entry.max_fov,
     };
     validate_ocam(path, &prefix, &model)?;
-    if entry.pose.iter().any(|v| !v.is_finite()) {
+    if entry.pose.0.iter().any(|v| !v.is_finite()) {
         return Err(CameraError::field(
             path,
             format!("{prefix}pose"),
             "expected six finite numbers",
         ));
     }
-    let [rx, ry, rz, tx, ty, tz] = entry.pose;
+    let [rx, ry, rz, tx, ty, tz] = entry.pose.0;
     let id = entry.cam_id.unwrap_or(index as u32 + 1);
-    let img_dir = entry.img_dir.unwrap_or_else(|| format!("cam{id}"));
+    let img_dir = entry
+        .img_dir
+        .map_or_else(|| format!("cam{id}"), |dir| dir.0);
     Ok(Camera::new(
         id,
         img_dir,
@@ -190,40 +239,21 @@ fn camera_from_entry(path: &Path, index: usize, entry: CameraEntry) -> Result<Ca
             rvec: [rx, ry, rz],
             t_m: [tx, ty, tz],
         },
-        entry.invalid_mask,
+        entry.invalid_mask.map(|mask| mask.0),
     ))
 }
 
 /// The `cameras:` section of a reference `config.yaml` for `rig`, the inverse
 /// of [`parse_config_rig`]: numbers are written at full precision, so reading
 /// the text back gives the same rig bit for bit.
-pub fn config_cameras_yaml(rig: &Rig) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "cameras:");
-    for cam in &rig.cameras {
-        let CameraModel::Ocam(m) = &cam.model;
-        let mut poly = vec![m.poly.len() as f64];
-        poly.extend(&m.poly);
-        let mut inv = vec![m.inv_poly.len() as f64];
-        inv.extend(&m.inv_poly);
-        let _ = writeln!(s, "  - cam_id: {}", cam.id);
-        let _ = writeln!(s, "    img_dir: {:?}", cam.img_dir);
-        let _ = writeln!(s, "    model: ocam");
-        let _ = writeln!(s, "    poly: {}", list(&poly));
-        let _ = writeln!(s, "    inv_poly: {}", list(&inv));
-        let _ = writeln!(s, "    center: {}", list(&[m.center_row, m.center_col]));
-        let _ = writeln!(s, "    affine: {}", list(&[m.c, m.d, m.e]));
-        let _ = writeln!(s, "    image_size: [{}, {}]", m.height, m.width);
-        if let Some(mask) = &cam.invalid_mask {
-            let _ = writeln!(s, "    invalid_mask: {mask:?}");
-        }
-        let _ = writeln!(s, "    pose: {}", list(&cam.pose.to_array()));
-        let _ = writeln!(s, "    max_fov: {:?}", m.max_fov_deg);
-    }
-    s
-}
-
-fn list(values: &[f64]) -> String {
-    let items: Vec<String> = values.iter().map(|v| format!("{v:?}")).collect();
-    format!("[{}]", items.join(", "))
+///
+/// # Errors
+/// [`CameraError::YamlWrite`] if the serialiser fails (it does not for a valid rig).
+pub fn config_cameras_yaml(rig: &Rig) -> Result<String, CameraError> {
+    crate::yaml::to_yaml(
+        "the cameras of a config.yaml",
+        &CamerasSection {
+            cameras: ConfigCamera::of_rig(rig),
+        },
+    )
 }

@@ -12,6 +12,8 @@ pub enum CameraError {
     },
     #[error("{path}: not valid YAML: {message}")]
     Yaml { path: PathBuf, message: String },
+    #[error("cannot write {what} as YAML: {message}")]
+    YamlWrite { what: String, message: String },
     #[error("{path}: field `{field}`: {message}")]
     Field {
         path: PathBuf,

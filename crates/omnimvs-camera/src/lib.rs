@@ -26,7 +26,7 @@ mod rig;
 pub mod rng;
 pub mod yaml;
 
-pub use config_yaml::{config_cameras_yaml, parse_config_rig, read_config_rig};
+pub use config_yaml::{ConfigCamera, config_cameras_yaml, parse_config_rig, read_config_rig};
 pub use error::CameraError;
 pub use mask::ValidityMask;
 pub use model::CameraModel;

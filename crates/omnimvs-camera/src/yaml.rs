@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use crate::CameraError;
@@ -41,5 +42,21 @@ pub fn from_value<T: DeserializeOwned>(
             field
         };
         CameraError::field(path, field, e.into_inner().to_string())
+    })
+}
+
+/// Writes a value as block-style YAML with the reference's layout: two-space indents, list
+/// items indented under their key (`cameras:\n  - cam_id: 1`); lists and strings as the
+/// value's types ask (e.g. `serde_saphyr::FlowSeq`, `DoubleQuoted`).
+///
+/// # Errors
+/// [`CameraError::YamlWrite`] naming `what` if the serialiser refuses the value.
+pub fn to_yaml<T: Serialize>(what: &str, value: &T) -> Result<String, CameraError> {
+    let mut options = serde_saphyr::SerializerOptions::default();
+    options.indent_step = 2;
+    options.compact_list_indent = false;
+    serde_saphyr::to_string_with_options(value, options).map_err(|e| CameraError::YamlWrite {
+        what: what.to_string(),
+        message: e.to_string(),
     })
 }

@@ -1,6 +1,11 @@
 //! Parsers for argument values shared by several subcommands.
 
-use std::ops::RangeInclusive;
+use std::path::PathBuf;
+
+use omnimvs_net::NetConfig;
+use omnimvs_synth::SceneKind;
+use omnimvs_synth::SynthError;
+use omnimvs_synth::rig::{PRESET_NAME, RigSource, preset_rig, rig_from_config};
 
 /// `HxW`, e.g. `160x640`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -30,31 +35,106 @@ impl std::fmt::Display for Size {
     }
 }
 
-/// A frame range `A..B` (inclusive) or a single frame `A`.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Frames(pub RangeInclusive<u32>);
+/// `--preset`: the architecture sizes of a network ([`NetConfig`]'s presets).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Preset {
+    /// The paper's OmniMVS network (CH 32, N 192, 160x640 output).
+    Paper,
+    /// The paper's network at a quarter of its input size (the bundled model's sizes).
+    Tiny,
+    /// The coarse-to-fine network for CPUs at the paper's output grid.
+    Cascade,
+}
 
-impl std::str::FromStr for Frames {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let bad = || {
-            format!(
-                "expected a frame range such as 1..10 (inclusive) or a single frame, found {s:?}"
-            )
-        };
-        let (a, b) = match s.split_once("..") {
-            Some((a, b)) => (a, b.trim_start_matches('=')),
-            None => (s, s),
-        };
-        let a: u32 = a.trim().parse().map_err(|_| bad())?;
-        let b: u32 = b.trim().parse().map_err(|_| bad())?;
-        if b < a {
-            return Err(format!(
-                "frame range {s:?} is reversed: the end ({b}) is before the start ({a})"
-            ));
+impl Preset {
+    /// The name on the command line and in `NetConfig::preset`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Paper => "paper",
+            Self::Tiny => "tiny",
+            Self::Cascade => "cascade",
         }
-        Ok(Self(a..=b))
+    }
+
+    /// The network configuration of the preset.
+    pub fn config(self) -> NetConfig {
+        match self {
+            Self::Paper => NetConfig::paper(),
+            Self::Tiny => NetConfig::tiny(),
+            Self::Cascade => NetConfig::cascade(),
+        }
+    }
+}
+
+impl std::fmt::Display for Preset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// `--method` of `eval`: a depth estimator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// A network (`--weights`).
+    Net,
+    /// The classical method, ZNCC + SGM.
+    Sgm,
+}
+
+/// `--kind` of `synth`: the kinds of scene a dataset can hold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Kind {
+    /// Random objects in a room or under a sky (OmniThings-like).
+    Things,
+    /// Furnished rooms (OmniHouse-like).
+    House,
+}
+
+impl From<Kind> for SceneKind {
+    fn from(kind: Kind) -> Self {
+        match kind {
+            Kind::Things => Self::Things,
+            Kind::House => Self::House,
+        }
+    }
+}
+
+/// `--rig` of `synth`: the published rig or a reference `config.yaml`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum RigArg {
+    /// The published 4-camera rig (`sunny`).
+    Published,
+    /// A reference `config.yaml` (its `config.omnimvs_sweep_min_depth` is the minimum depth).
+    Config(PathBuf),
+}
+
+impl RigArg {
+    /// Reads a `--rig` value: `sunny` (or its older name `preset`) or a path.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        Ok(match text {
+            PRESET_NAME | "preset" => Self::Published,
+            path => Self::Config(PathBuf::from(path)),
+        })
+    }
+
+    /// Loads the rig and its minimum depth.
+    ///
+    /// # Errors
+    /// The published rig cannot fail; a file that cannot be read or lacks a field.
+    pub fn load(&self) -> Result<RigSource, SynthError> {
+        match self {
+            Self::Published => preset_rig(),
+            Self::Config(path) => rig_from_config(path),
+        }
+    }
+}
+
+impl std::fmt::Display for RigArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Published => f.write_str(PRESET_NAME),
+            Self::Config(path) => write!(f, "{}", path.display()),
+        }
     }
 }
 
@@ -92,7 +172,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn parses_sizes_and_ranges() {
+    fn parses_sizes() {
         assert_eq!(
             "160x640".parse::<Size>().unwrap(),
             Size {
@@ -102,8 +182,24 @@ mod tests {
         );
         assert!("160".parse::<Size>().is_err());
         assert!("0x640".parse::<Size>().is_err());
-        assert_eq!("1..3".parse::<Frames>().unwrap().0, 1..=3);
-        assert_eq!("7".parse::<Frames>().unwrap().0, 7..=7);
-        assert!("5..2".parse::<Frames>().unwrap_err().contains("reversed"));
+    }
+
+    #[test]
+    fn presets_keep_their_names() {
+        use clap::ValueEnum;
+        for preset in Preset::value_variants() {
+            let name = preset.to_possible_value().unwrap().get_name().to_string();
+            assert_eq!(name, preset.name());
+            assert_eq!(NetConfig::preset(&name).unwrap(), preset.config());
+        }
+    }
+
+    #[test]
+    fn rigs_parse() {
+        assert_eq!(RigArg::parse("sunny").unwrap(), RigArg::Published);
+        assert_eq!(
+            RigArg::parse("a/config.yaml").unwrap(),
+            RigArg::Config("a/config.yaml".into())
+        );
     }
 }

@@ -2,15 +2,14 @@
 //! The `omnimvs` binary end to end: outputs on the real samples, and clear
 //! errors with a non-zero exit for bad input.
 
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 #[path = "../../omnimvs-sweep/tests/support/golden.rs"]
 mod golden;
 
-fn samples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/omnimvs-samples")
-}
+#[path = "../../omnimvs-camera/tests/support/samples.rs"]
+mod samples;
+use samples::samples;
 
 fn omnimvs(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_omnimvs"))

@@ -2,12 +2,11 @@
 //! The command line behaves like the tools people know: a closed pipe ends it
 //! quietly, `--help` gives one line per command, an error is said once.
 
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-fn samples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/omnimvs-samples")
-}
+#[path = "../../omnimvs-camera/tests/support/samples.rs"]
+mod samples;
+use samples::samples;
 
 fn omnimvs() -> Command {
     Command::new(env!("CARGO_BIN_EXE_omnimvs"))

@@ -1,9 +1,9 @@
-use std::fmt::Write as _;
 use std::path::Path;
 
-use omnimvs_camera::yaml::{from_value, parse_yaml};
-use omnimvs_camera::{Rig, config_cameras_yaml};
-use serde::Deserialize;
+use omnimvs_camera::yaml::{from_value, parse_yaml, to_yaml};
+use omnimvs_camera::{ConfigCamera, Rig};
+use serde::{Deserialize, Serialize};
+use serde_saphyr::DoubleQuoted;
 
 use crate::DataError;
 
@@ -16,11 +16,76 @@ pub struct FrameRange {
 }
 
 impl FrameRange {
+    /// The frames `start..=end`, step 1.
+    pub fn inclusive(start: u32, end: u32) -> Self {
+        Self {
+            start,
+            step: 1,
+            end,
+        }
+    }
+
     /// The indices of the range.
     pub fn indices(&self) -> Vec<u32> {
         (self.start..=self.end)
             .step_by(self.step.max(1) as usize)
             .collect()
+    }
+
+    /// Whether `frame` is one of the range's indices.
+    pub fn contains(&self, frame: u32) -> bool {
+        (self.start..=self.end).contains(&frame)
+            && (frame - self.start).is_multiple_of(self.step.max(1))
+    }
+}
+
+/// Reads a frame range as the published splits write it: `A..B` (inclusive), `A..=B`, `A-B`
+/// or a single frame `A` (step 1).
+///
+/// # Errors
+/// [`DataError::FrameRange`] naming the text: not two frame numbers, or a range whose end is
+/// before its start.
+impl std::str::FromStr for FrameRange {
+    type Err = DataError;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let bad = |message: String| DataError::FrameRange {
+            text: text.to_string(),
+            message,
+        };
+        let t = text.trim();
+        let (a, b) = if let Some((a, b)) = t.split_once("..=") {
+            (a, b)
+        } else if let Some((a, b)) = t.split_once("..") {
+            (a, b)
+        } else if let Some((a, b)) = t.split_once('-') {
+            (a, b)
+        } else {
+            (t, t)
+        };
+        let number = |x: &str| {
+            x.trim().parse::<u32>().map_err(|_| {
+                bad("expected FIRST..LAST (inclusive) such as 1..10, or a single frame".into())
+            })
+        };
+        let (start, end) = (number(a)?, number(b)?);
+        if end < start {
+            return Err(bad(format!(
+                "the range is reversed: the last frame ({end}) is before the first ({start})"
+            )));
+        }
+        Ok(Self::inclusive(start, end))
+    }
+}
+
+/// `A..B` (inclusive), with `/STEP` when the step is not 1.
+impl std::fmt::Display for FrameRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}..{}", self.start, self.end)?;
+        if self.step != 1 {
+            write!(f, "/{}", self.step)?;
+        }
+        Ok(())
     }
 }
 
@@ -120,28 +185,51 @@ impl DatasetConfig {
     }
 }
 
+/// `config.yaml` as [`write_config_yaml`] writes it: the sections in the reference's order.
+#[derive(Serialize)]
+struct ConfigFile<'a> {
+    config: ConfigSectionOut,
+    dataset: DatasetSectionOut<'a>,
+    cameras: Vec<ConfigCamera>,
+}
+
+#[derive(Serialize)]
+struct ConfigSectionOut {
+    omnimvs_sweep_min_depth: f64,
+}
+
+#[derive(Serialize)]
+struct DatasetSectionOut<'a> {
+    img_fmt: DoubleQuoted<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gt_fmt: Option<DoubleQuoted<&'a str>>,
+    start: u32,
+    step: u32,
+    end: u32,
+}
+
 /// The text of a reference-layout `config.yaml` for `rig` (the inverse of
 /// [`crate::Dataset::open`]'s reader; numbers are written at full precision,
 /// so reading the file back gives the same rig bit for bit).
-pub fn write_config_yaml(rig: &Rig, config: &DatasetConfig) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "# written by omnimvs");
-    let _ = writeln!(
-        s,
-        "config:\n  omnimvs_sweep_min_depth: {:?}",
-        config.min_depth_m
-    );
-    let _ = writeln!(s, "dataset:");
-    let _ = writeln!(s, "  img_fmt: {:?}", config.img_fmt);
-    if let Some(g) = &config.gt_fmt {
-        let _ = writeln!(s, "  gt_fmt: {g:?}");
-    }
-    let f = config.frames;
-    let _ = writeln!(
-        s,
-        "  start: {}\n  step: {}\n  end: {}",
-        f.start, f.step, f.end
-    );
-    s.push_str(&config_cameras_yaml(rig));
-    s
+///
+/// # Errors
+/// [`DataError::Camera`] if the serialiser fails (it does not for a valid rig).
+pub fn write_config_yaml(rig: &Rig, config: &DatasetConfig) -> Result<String, DataError> {
+    let file = ConfigFile {
+        config: ConfigSectionOut {
+            omnimvs_sweep_min_depth: config.min_depth_m,
+        },
+        dataset: DatasetSectionOut {
+            img_fmt: DoubleQuoted(&config.img_fmt),
+            gt_fmt: config.gt_fmt.as_deref().map(DoubleQuoted),
+            start: config.frames.start,
+            step: config.frames.step,
+            end: config.frames.end,
+        },
+        cameras: ConfigCamera::of_rig(rig),
+    };
+    Ok(format!(
+        "# written by omnimvs\n{}",
+        to_yaml("a dataset's config.yaml", &file)?
+    ))
 }

@@ -46,6 +46,8 @@ pub enum DataError {
         field: String,
         message: String,
     },
+    #[error("frame range {text:?}: {message}")]
+    FrameRange { text: String, message: String },
     #[error("{what}: expected {expected}, found {found}")]
     Mismatch {
         what: String,

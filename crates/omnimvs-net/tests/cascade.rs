@@ -4,8 +4,6 @@
 //! `../shared/data/omnimvs-samples`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::PathBuf;
-
 use burn::module::Module;
 use burn::optim::GradientsParams;
 use burn::tensor::Device;
@@ -18,18 +16,9 @@ use omnimvs_net::train::{Learner, Optimizer, Sample, TrainConfig, Trainable};
 use omnimvs_net::{CascadeNet, NetConfig, weights};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LookupTable, SphereSet};
 
-fn sample_dir(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/omnimvs-samples")
-        .join(name);
-    assert!(
-        dir.join("config.yaml").exists(),
-        "{} is missing: these tests read the real samples from ../shared/data/omnimvs-samples \
-         beside the repository",
-        dir.display()
-    );
-    dir
-}
+#[path = "../../omnimvs-camera/tests/support/samples.rs"]
+mod samples;
+use samples::sample as sample_dir;
 
 fn sunny_rig() -> (Rig, InvDepthHypotheses) {
     let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();

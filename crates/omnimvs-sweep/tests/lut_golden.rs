@@ -3,17 +3,15 @@
 //! `FORMATS.md` by `scripts/lut_golden/make_lut_golden.py` (numpy), on both
 //! real sample rigs.
 
-use std::path::{Path, PathBuf};
-
 #[path = "support/golden.rs"]
 mod golden;
 
 use golden::{Golden, compare};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LookupTable, SphereSet};
 
-fn samples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/omnimvs-samples")
-}
+#[path = "../../omnimvs-camera/tests/support/samples.rs"]
+mod samples;
+use samples::samples;
 
 #[test]
 fn lut_matches_independent_golden_values_on_both_samples() {

@@ -3,7 +3,8 @@
 //! sampling position and the align-corners convention, a constant image the
 //! zero padding outside.
 
-use std::path::Path;
+#[path = "../../omnimvs-camera/tests/support/samples.rs"]
+mod samples;
 
 use omnimvs_sweep::{
     EquirectGrid, InvDepthHypotheses, LookupTable, SphereSet, warp_camera_onto_spheres,
@@ -11,8 +12,7 @@ use omnimvs_sweep::{
 
 #[test]
 fn ramp_images_sample_at_the_table_positions() {
-    let cfg = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/omnimvs-samples/itbt_sample/config.yaml");
+    let cfg = samples::sample_config("itbt_sample");
     let rig = omnimvs_camera::read_config_rig(&cfg).unwrap();
     let grid = EquirectGrid::new(16, 64, 45.0).unwrap();
     let hyps = InvDepthHypotheses::new(8, 0.5).unwrap();
@@ -71,8 +71,7 @@ fn ramp_images_sample_at_the_table_positions() {
 
 #[test]
 fn warp_rejects_wrong_sizes() {
-    let cfg = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/omnimvs-samples/sunny_single/config.yaml");
+    let cfg = samples::sample_config("sunny_single");
     let rig = omnimvs_camera::read_config_rig(&cfg).unwrap();
     let grid = EquirectGrid::new(4, 8, 45.0).unwrap();
     let hyps = InvDepthHypotheses::new(4, 1.0).unwrap();

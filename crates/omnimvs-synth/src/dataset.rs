@@ -101,11 +101,11 @@ impl Shard {
     /// Parses `i/n`, `1 <= i <= n`.
     ///
     /// # Errors
-    /// [`SynthError::Invalid`] naming `--shard`.
+    /// [`SynthError::Invalid`] naming the shard and the text.
     pub fn parse(s: &str) -> Result<Self, SynthError> {
         let bad = || {
             SynthError::invalid(
-                "--shard",
+                "shard",
                 format!("expected i/n with 1 <= i <= n, such as 2/4, found {s:?}"),
             )
         };
@@ -130,42 +130,6 @@ impl Shard {
             .map(|(_, f)| f)
             .collect()
     }
-}
-
-/// Parses `--frames`: `a..b` (inclusive, as the published splits are
-/// written), `a..=b`, `a-b` or a single `a`.
-///
-/// # Errors
-/// [`SynthError::Invalid`] naming `--frames`, for malformed text or a
-/// reversed range.
-pub fn parse_frames(s: &str) -> Result<FrameRange, SynthError> {
-    let bad = |m: String| SynthError::invalid("--frames", m);
-    let t = s.trim();
-    let (a, b) = if let Some((a, b)) = t.split_once("..=") {
-        (a, b)
-    } else if let Some((a, b)) = t.split_once("..") {
-        (a, b)
-    } else if let Some((a, b)) = t.split_once('-') {
-        (a, b)
-    } else {
-        (t, t)
-    };
-    let num = |x: &str| {
-        x.trim()
-            .parse::<u32>()
-            .map_err(|_| bad(format!("expected FIRST..LAST such as 1..1000, found {s:?}")))
-    };
-    let (start, end) = (num(a)?, num(b)?);
-    if end < start {
-        return Err(bad(format!(
-            "the range {s:?} is reversed: the last frame {end} is before the first {start}"
-        )));
-    }
-    Ok(FrameRange {
-        start,
-        step: 1,
-        end,
-    })
 }
 
 /// The files of one frame.
@@ -280,11 +244,14 @@ impl DatasetWriter {
             difficulty,
         } = *options;
         if kind == SceneKind::Custom {
-            return Err(SynthError::invalid("--kind", "expected things or house"));
+            return Err(SynthError::invalid(
+                "scene kind",
+                "expected things or house (a custom scene cannot fill a dataset)",
+            ));
         }
         if spp == 0 || spp > 4096 {
             return Err(SynthError::invalid(
-                "--spp",
+                "samples per pixel (spp)",
                 format!("expected 1 to 4096 samples per pixel, found {spp}"),
             ));
         }
@@ -352,11 +319,9 @@ impl DatasetWriter {
             frames: covered_frames(&config_path, frames)?,
             gt_fmt: Some(GT_FMT.to_string()),
         };
-        omnimvs_camera::fs::write_atomic(
-            &config_path,
-            write_config_yaml(&rig.rig, &config).as_bytes(),
-        )
-        .map_err(io(&config_path, "cannot write"))?;
+        let text = write_config_yaml(&rig.rig, &config)?;
+        omnimvs_camera::fs::write_atomic(&config_path, text.as_bytes())
+            .map_err(io(&config_path, "cannot write"))?;
         Ok(Self {
             out: out.to_path_buf(),
             rig: rig.rig.clone(),
@@ -546,7 +511,7 @@ mod tests {
     #[test]
     fn frames_and_shards_parse() {
         assert_eq!(
-            parse_frames("1..1000").unwrap(),
+            "1..1000".parse::<FrameRange>().unwrap(),
             FrameRange {
                 start: 1,
                 step: 1,
@@ -554,21 +519,18 @@ mod tests {
             }
         );
         assert_eq!(
-            parse_frames("5").unwrap(),
+            "5".parse::<FrameRange>().unwrap(),
             FrameRange {
                 start: 5,
                 step: 1,
                 end: 5
             }
         );
-        assert_eq!(parse_frames("3..=4").unwrap().end, 4);
-        let err = parse_frames("10..2").unwrap_err().to_string();
-        assert!(
-            err.contains("--frames") && err.contains("reversed"),
-            "{err}"
-        );
-        assert!(parse_frames("a..b").is_err());
-        let range = parse_frames("1..10").unwrap();
+        assert_eq!("3..=4".parse::<FrameRange>().unwrap().end, 4);
+        let err = "10..2".parse::<FrameRange>().unwrap_err().to_string();
+        assert!(err.contains("10..2") && err.contains("reversed"), "{err}");
+        assert!("a..b".parse::<FrameRange>().is_err());
+        let range: FrameRange = "1..10".parse().unwrap();
         let s = Shard::parse("2/3").unwrap();
         assert_eq!(s.frames(&range), vec![2, 5, 8]);
         let all: Vec<u32> = (1..=3)

@@ -29,7 +29,7 @@ pub enum SynthError {
     Encode { path: PathBuf, message: String },
     #[error(
         "{path}: the folder holds a dataset made with other settings ({message}); \
-         use another --out folder or the same settings to resume"
+         write to another folder, or use the same settings to resume"
     )]
     SettingsMismatch { path: PathBuf, message: String },
 }

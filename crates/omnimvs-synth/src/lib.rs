@@ -31,9 +31,7 @@ pub mod things;
 mod tracer;
 
 pub use camera_effects::CameraEffects;
-pub use dataset::{
-    DatasetWriter, Frame, FrameEvent, Shard, SynthOptions, SynthSettings, parse_frames,
-};
+pub use dataset::{DatasetWriter, Frame, FrameEvent, Shard, SynthOptions, SynthSettings};
 pub use difficulty::Difficulty;
 pub use error::SynthError;
 pub use generate::{GenParams, generate};

@@ -98,7 +98,16 @@ pub fn load_rig(arg: &str) -> Result<RigSource, SynthError> {
     if arg == PRESET_NAME || arg == "preset" {
         return preset_rig();
     }
-    let path = Path::new(arg);
+    rig_from_config(Path::new(arg))
+}
+
+/// The rig of a reference `config.yaml` and its minimum depth
+/// (`config.omnimvs_sweep_min_depth`).
+///
+/// # Errors
+/// [`SynthError`] naming the file and field: unreadable file, invalid YAML
+/// or camera fields, a missing or non-positive minimum depth.
+pub fn rig_from_config(path: &Path) -> Result<RigSource, SynthError> {
     let rig = omnimvs_camera::read_config_rig(path)?;
     let text =
         std::fs::read_to_string(path).map_err(|e| SynthError::io(path, "cannot read rig", e))?;
@@ -141,7 +150,7 @@ pub fn rig_radius_m(rig: &Rig) -> f64 {
 pub fn resize_rig(rig: &Rig, height: u32, width: u32) -> Result<Rig, SynthError> {
     if height == 0 || width == 0 {
         return Err(SynthError::invalid(
-            "--size",
+            "image size",
             format!("expected a positive HxW, found {height}x{width}"),
         ));
     }
@@ -164,11 +173,11 @@ pub fn resize_rig(rig: &Rig, height: u32, width: u32) -> Result<Rig, SynthError>
 /// Parses `HxW` (e.g. `384x400`).
 ///
 /// # Errors
-/// [`SynthError::Invalid`] naming the option.
+/// [`SynthError::Invalid`] naming the image size and the text.
 pub fn parse_size(s: &str) -> Result<(u32, u32), SynthError> {
     let bad = || {
         SynthError::invalid(
-            "--size",
+            "image size",
             format!("expected HxW such as 768x800, found {s:?}"),
         )
     };

@@ -6,7 +6,6 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use omnimvs_synth::dataset::parse_frames;
 use omnimvs_synth::rig::{RigSource, preset_rig, resize_rig};
 use omnimvs_synth::{DatasetWriter, FrameEvent, SceneKind, SceneSpec, Shard, SynthError, Tracer};
 
@@ -26,7 +25,7 @@ fn writer(out: &Path, kind: SceneKind, seed: u64) -> Result<DatasetWriter, Synth
         seed,
         1,
         &[],
-        &parse_frames("1..3").unwrap(),
+        &"1..3".parse::<omnimvs_data::FrameRange>().unwrap(),
     )
 }
 
@@ -97,7 +96,7 @@ fn rerun_resumes_and_shards_cover_the_range() {
     w.run(
         &Shard::parse("1/2")
             .unwrap()
-            .frames(&parse_frames("1..3").unwrap()),
+            .frames(&"1..3".parse::<omnimvs_data::FrameRange>().unwrap()),
         |_| {},
     )
     .unwrap();
@@ -133,7 +132,7 @@ fn a_dataset_filled_in_several_runs_announces_every_frame() {
             4,
             1,
             &[],
-            &parse_frames(frames).unwrap(),
+            &frames.parse::<omnimvs_data::FrameRange>().unwrap(),
         )
         .unwrap()
     };
@@ -156,7 +155,8 @@ fn bad_input_gives_clear_errors_and_keeps_finished_frames() {
     assert!(err.contains("/no/such/rig.yaml"), "{err}");
     // Reversed range.
     assert!(
-        parse_frames("9..3")
+        "9..3"
+            .parse::<omnimvs_data::FrameRange>()
             .unwrap_err()
             .to_string()
             .contains("reversed")

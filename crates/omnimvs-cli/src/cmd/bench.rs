@@ -13,7 +13,7 @@ use omnimvs_net::{Backend, Family, NetConfig};
 use omnimvs_synth::rig::preset_rig;
 use serde::Serialize;
 
-use crate::args::{BACKEND_HELP, parse_backend, parse_output_file};
+use crate::args::{BACKEND_HELP, Preset, parse_backend, parse_output_file};
 
 /// Time the network's stages, a training step and peak memory on a compute backend.
 ///
@@ -26,8 +26,8 @@ use crate::args::{BACKEND_HELP, parse_backend, parse_output_file};
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Network: tiny, paper or cascade.
-    #[arg(long, default_value = "tiny")]
-    pub preset: String,
+    #[arg(long, value_enum, default_value_t = Preset::Tiny)]
+    pub preset: Preset,
     #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
     pub backend: Backend,
     /// Measured forward passes.
@@ -81,7 +81,7 @@ enum Forward {
 pub fn run(args: &Args) -> Result<()> {
     let backend = args.backend;
     let device = backend.device()?;
-    let config = NetConfig::preset(&args.preset)?;
+    let config = args.preset.config();
     let device_sweep = match args.sweep {
         SweepPlace::Auto => backend.is_gpu(),
         SweepPlace::Host => false,
@@ -110,7 +110,7 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(path) = &args.json {
         let report = Report {
             backend: backend.to_string(),
-            preset: args.preset.clone(),
+            preset: args.preset.name().to_string(),
             device_sweep,
             forward,
             train_step,

@@ -5,15 +5,15 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use omnimvs_camera::fs::write_atomic;
-use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::read_inv_depth;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{ProtocolMetrics, eval_metrics};
 use omnimvs_data::ply::write_ply;
+use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
 
-use crate::args::{Frames, Size};
+use crate::args::{Kind, Method, Preset, RigArg, Size};
 use crate::cmd::eval::protocol_tables;
 use crate::cmd::{eval, infer, sgm, synth};
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud};
@@ -62,9 +62,9 @@ pub fn run(args: &Args) -> Result<()> {
         data_dir.display()
     );
     synth::run(&synth::Args {
-        kind: "things".into(),
-        rig: "sunny".into(),
-        frames: Frames(1..=args.frames),
+        kind: Kind::Things.into(),
+        rig: RigArg::Published,
+        frames: FrameRange::inclusive(1, args.frames),
         out: data_dir.clone(),
         seed: args.seed,
         size: None,
@@ -84,7 +84,7 @@ pub fn run(args: &Args) -> Result<()> {
         &data_dir,
         &sgm_dir,
         args,
-        Some(Frames(1..=args.frames)),
+        Some(FrameRange::inclusive(1, args.frames)),
     ))?;
 
     outln!("[3/5] metrics and pictures of the classical method at full size");
@@ -162,9 +162,10 @@ pub fn run(args: &Args) -> Result<()> {
     let eval_dir = args.out.join("eval");
     eval::run(&eval::Args {
         data: data_dir.clone(),
-        method: vec!["net".into(), "sgm".into()],
+        method: vec![Method::Net, Method::Sgm],
         weights: vec![Weights::bundled()],
-        frames: Frames(1..=args.frames),
+        frames: FrameRange::inclusive(1, args.frames),
+        preset: Preset::Tiny,
         size: args.size,
         ndepth: args.ndepth,
         phi_deg: 45.0,
@@ -179,7 +180,12 @@ pub fn run(args: &Args) -> Result<()> {
     if itbt.join("config.yaml").is_file() {
         outln!("[5/5] real data: itbt_sample frame 1");
         let out = args.out.join("itbt_sgm");
-        sgm::run(&sgm_args(&itbt, &out, args, Some(Frames(1..=1))))?;
+        sgm::run(&sgm_args(
+            &itbt,
+            &out,
+            args,
+            Some(FrameRange::inclusive(1, 1)),
+        ))?;
         outln!("  ZNCC+SGM: {}", out.join("00001_invdepth.png").display());
         let out = args.out.join("itbt_net");
         infer::run(&infer_args(&itbt, &out, 1))?;
@@ -216,8 +222,8 @@ fn infer_args(dataset: &Path, out: &Path, frames: u32) -> infer::Args {
     infer::Args {
         dataset: dataset.to_path_buf(),
         weights: Weights::bundled(),
-        preset: "tiny".into(),
-        frames: Frames(1..=frames),
+        preset: Preset::Tiny,
+        frames: FrameRange::inclusive(1, frames),
         out: out.to_path_buf(),
         backend: omnimvs_net::Backend::Cpu,
         ply: true,
@@ -226,7 +232,7 @@ fn infer_args(dataset: &Path, out: &Path, frames: u32) -> infer::Args {
     }
 }
 
-fn sgm_args(dataset: &Path, out: &Path, args: &Args, frames: Option<Frames>) -> sgm::Args {
+fn sgm_args(dataset: &Path, out: &Path, args: &Args, frames: Option<FrameRange>) -> sgm::Args {
     sgm::Args {
         dataset: dataset.to_path_buf(),
         frames,

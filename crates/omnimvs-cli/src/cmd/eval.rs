@@ -7,17 +7,17 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_camera::fs::write_atomic;
-use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics, index_on_eval_grid};
+use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_net::NetEstimator;
 use omnimvs_stereo::{SgmParams, SphericalStereo};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LutCache};
 use serde::Serialize;
 
-use crate::args::{BACKEND_HELP, Frames, Size, parse_backend};
+use crate::args::{BACKEND_HELP, Method, Preset, Size, parse_backend};
 use crate::weights::{BUNDLED, Weights};
 
 /// Evaluate methods against ground truth with the paper's metrics.
@@ -42,15 +42,19 @@ pub struct Args {
     #[arg(long)]
     pub data: PathBuf,
     /// Methods, comma-separated: net, sgm.
-    #[arg(long, value_delimiter = ',', default_value = "net,sgm")]
-    pub method: Vec<String>,
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "net,sgm")]
+    pub method: Vec<Method>,
     /// Network weights, comma-separated for several rows: `bundled` (the model compiled
     /// into the binary, the default), our .safetensors files or reference checkpoints.
     #[arg(long, value_delimiter = ',', default_value = BUNDLED, value_parser = Weights::parse)]
     pub weights: Vec<Weights>,
+    /// Architecture sizes of a reference PyTorch checkpoint or `--weights random`: paper,
+    /// tiny or cascade (our .safetensors files and the bundled models carry their own).
+    #[arg(long, value_enum, default_value_t = Preset::Paper)]
+    pub preset: Preset,
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
-    pub frames: Frames,
+    pub frames: FrameRange,
     /// Evaluation grid HxW: every output is resampled to it before it is scored; SGM runs
     /// at it.
     #[arg(long, default_value = "160x640")]
@@ -182,7 +186,7 @@ fn write_index_png(
 
 /// A method to evaluate: its row name, picture file stem, native grid and hypotheses, and
 /// how it answers a frame (hypothesis indices on its native grid).
-struct Method<'a> {
+struct Row<'a> {
     name: String,
     file: String,
     grid: EquirectGrid,
@@ -194,14 +198,14 @@ pub fn run(args: &Args) -> Result<()> {
     let ds = Dataset::open(&args.data)?;
     let frames: Vec<u32> = args
         .frames
-        .0
-        .clone()
+        .indices()
+        .into_iter()
         .filter(|&f| ds.gt_path(f).is_some())
         .collect();
     if frames.is_empty() {
         bail!(
-            "no frame of {:?} has ground truth in {}",
-            args.frames.0,
+            "no frame of {} has ground truth in {}",
+            args.frames,
             ds.root.display()
         );
     }
@@ -231,12 +235,12 @@ pub fn run(args: &Args) -> Result<()> {
         }
     }
 
-    let mut methods: Vec<Method<'_>> = Vec::new();
+    let mut methods: Vec<Row<'_>> = Vec::new();
     for method in &args.method {
-        match method.as_str() {
-            "net" => {
+        match method {
+            Method::Net => {
                 for weights in &args.weights {
-                    let net = weights.load_family("tiny", &device)?;
+                    let net = weights.load_family(args.preset.name(), &device)?;
                     let (inference, _) = NetEstimator::new(
                         net,
                         &ds,
@@ -251,7 +255,7 @@ pub fn run(args: &Args) -> Result<()> {
                         "net".into()
                     };
                     let ds = &ds;
-                    methods.push(Method {
+                    methods.push(Row {
                         name,
                         file: format!("net_{stem}"),
                         grid: *inference.grid(),
@@ -263,10 +267,10 @@ pub fn run(args: &Args) -> Result<()> {
                     });
                 }
             }
-            "sgm" => {
+            Method::Sgm => {
                 let stereo = SphericalStereo::new(&ds.rig, grid, hyps, SgmParams::default())?;
                 let (ds, masks) = (&ds, &masks);
-                methods.push(Method {
+                methods.push(Row {
                     name: "ZNCC+SGM".into(),
                     file: "sgm".into(),
                     grid,
@@ -277,7 +281,6 @@ pub fn run(args: &Args) -> Result<()> {
                     }),
                 });
             }
-            other => bail!("--method {other}: expected net or sgm"),
         }
     }
 

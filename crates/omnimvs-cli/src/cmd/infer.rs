@@ -5,18 +5,18 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_camera::fs::write_atomic;
-use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Protocol, ProtocolMetrics, eval_metrics};
 use omnimvs_data::ply::write_ply;
+use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_net::Backend;
 use omnimvs_net::NetEstimator;
 use omnimvs_net::infer::FrameResult;
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
-use crate::args::{BACKEND_HELP, Frames, Size, parse_backend};
+use crate::args::{BACKEND_HELP, Preset, Size, parse_backend};
 use crate::cmd::eval::protocol_tables;
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 use crate::weights::{BUNDLED, Weights};
@@ -43,11 +43,11 @@ pub struct Args {
     pub weights: Weights,
     /// Architecture sizes for a PyTorch checkpoint or `--weights random`: paper, tiny or
     /// cascade.
-    #[arg(long, default_value = "paper")]
-    pub preset: String,
+    #[arg(long, value_enum, default_value_t = Preset::Paper)]
+    pub preset: Preset,
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
-    pub frames: Frames,
+    pub frames: FrameRange,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
@@ -153,7 +153,7 @@ pub fn input_size(
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
     let ds = Dataset::open(&args.dataset)?;
-    let mut net = args.weights.load_family(&args.preset, &device)?;
+    let mut net = args.weights.load_family(args.preset.name(), &device)?;
     if let Some(size) = input_size(args.input_size, &args.weights, &ds)? {
         net.set_input_size(size)
             .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
@@ -196,7 +196,7 @@ pub fn run(args: &Args) -> Result<()> {
     )
     .with_context(|| format!("writing {}", path.display()))?;
 
-    let frames: Vec<u32> = args.frames.0.clone().collect();
+    let frames: Vec<u32> = args.frames.indices();
     let bar = ProgressBar::new(frames.len() as u64);
     bar.set_style(
         ProgressStyle::with_template(

@@ -11,7 +11,7 @@ use omnimvs_net::infer::Inference;
 use omnimvs_sweep::LutCache;
 use serde::Serialize;
 
-use crate::args::{parse_backend, parse_output_file};
+use crate::args::{Preset, parse_backend, parse_output_file};
 use crate::weights::{BUNDLED, Weights};
 
 /// Check that compute backends give the same network output on a real frame.
@@ -36,8 +36,8 @@ pub struct Args {
     #[arg(long, default_value = BUNDLED, value_parser = Weights::parse)]
     pub weights: Weights,
     /// Architecture sizes for a PyTorch checkpoint or `--weights random`: paper or tiny.
-    #[arg(long, default_value = "paper")]
-    pub preset: String,
+    #[arg(long, value_enum, default_value_t = Preset::Paper)]
+    pub preset: Preset,
     /// Multiply the final cost by this factor on every backend (a softmax temperature): a
     /// random network's softargmin is nearly flat, and 100 or so makes it as structured as a
     /// trained one's, so that kernel differences show.
@@ -85,7 +85,7 @@ pub fn run(args: &Args) -> Result<()> {
     let result = (|| {
         let weights = match &scratch {
             Some(dir) => {
-                let net = Weights::Random.load(&args.preset, &Backend::Cpu.device()?)?;
+                let net = Weights::Random.load(args.preset.name(), &Backend::Cpu.device()?)?;
                 let path = dir.join("random.safetensors");
                 omnimvs_net::weights::save(&net, &path)?;
                 Weights::File(path)
@@ -150,7 +150,7 @@ fn compare(
     );
     for &backend in &args.backends {
         let device = backend.device()?;
-        let mut net = weights.load(&args.preset, &device)?.fold_batch_norm();
+        let mut net = weights.load(args.preset.name(), &device)?.fold_batch_norm();
         if args.cost_scale != 1.0 {
             net = net.scale_cost(args.cost_scale);
         }

@@ -5,18 +5,18 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use omnimvs_camera::fs::write_atomic;
-use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics};
+use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_stereo::{
     DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SphericalStereo, StageTimings, SweepStep,
 };
 use omnimvs_sweep::EquirectGrid;
 use serde::Serialize;
 
-use crate::args::{Frames, Size};
+use crate::args::Size;
 use crate::cmd::eval::protocol_tables;
 
 /// Depth by the classical method, ZNCC + SGM (no network, no GPU).
@@ -42,7 +42,7 @@ pub struct Args {
     pub dataset: PathBuf,
     /// Frames, A..B (inclusive) or a single frame (default: all frames found).
     #[arg(long)]
-    pub frames: Option<Frames>,
+    pub frames: Option<FrameRange>,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
@@ -114,7 +114,7 @@ fn quantile(values: &[f32], q: f64) -> f32 {
 pub fn run(args: &Args) -> Result<()> {
     let ds = Dataset::open(&args.dataset)?;
     let frames: Vec<u32> = match &args.frames {
-        Some(Frames(r)) => r.clone().collect(),
+        Some(range) => range.indices(),
         None => ds.frames_found(),
     };
     if frames.is_empty() {

@@ -6,10 +6,10 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::FrameRange;
-use omnimvs_synth::rig::{load_rig, resize_rig};
-use omnimvs_synth::{DatasetWriter, Difficulty, FrameEvent, SceneKind, Shard, SynthOptions};
+use omnimvs_synth::rig::resize_rig;
+use omnimvs_synth::{DatasetWriter, Difficulty, FrameEvent, Shard, SynthOptions};
 
-use crate::args::{Frames, Size};
+use crate::args::{Kind, RigArg, Size};
 
 /// Render a synthetic dataset (OmniThings / OmniHouse style) with exact ground truth.
 ///
@@ -21,17 +21,17 @@ use crate::args::{Frames, Size};
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// `--kind` and `--difficulty` (grouped so that callers building these
-    /// arguments in code, like `demo`, write `kind: "things".into()` and get
+    /// arguments in code, like `demo`, write `kind: Kind::Things.into()` and get
     /// the `standard` difficulty).
     #[command(flatten)]
     pub kind: SceneArgs,
     /// The rig: `sunny` (the published rig) or a reference config.yaml
     /// (its `config.omnimvs_sweep_min_depth` is the minimum depth).
-    #[arg(long, default_value = "sunny")]
-    pub rig: String,
+    #[arg(long, default_value = "sunny", value_parser = RigArg::parse)]
+    pub rig: RigArg,
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
-    pub frames: Frames,
+    pub frames: FrameRange,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
@@ -59,8 +59,8 @@ pub struct Args {
 pub struct SceneArgs {
     /// Scene kind: `things` (random objects in a room or under a sky) or
     /// `house` (furnished rooms).
-    #[arg(long)]
-    pub kind: String,
+    #[arg(long, value_enum)]
+    pub kind: Kind,
     /// `standard`: rich textures, mostly convex shapes, even light, ideal
     /// cameras (the datasets made before this option). `hard`: flat,
     /// repetitive and dark textures, thin and concave shapes, several
@@ -70,11 +70,11 @@ pub struct SceneArgs {
     pub difficulty: DifficultyArg,
 }
 
-impl From<&str> for SceneArgs {
+impl From<Kind> for SceneArgs {
     /// A kind at the `standard` difficulty.
-    fn from(kind: &str) -> Self {
+    fn from(kind: Kind) -> Self {
         Self {
-            kind: kind.to_string(),
+            kind,
             difficulty: DifficultyArg::Standard,
         }
     }
@@ -97,19 +97,17 @@ impl From<DifficultyArg> for Difficulty {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let kind: SceneKind = args.kind.kind.parse()?;
-    let mut source = load_rig(&args.rig).with_context(|| format!("--rig {}", args.rig))?;
+    let mut source = args
+        .rig
+        .load()
+        .with_context(|| format!("--rig {}", args.rig))?;
     if let Some(size) = args.size {
         let (h, w) = (u32::try_from(size.height)?, u32::try_from(size.width)?);
-        source.rig = resize_rig(&source.rig, h, w)?;
+        source.rig = resize_rig(&source.rig, h, w).context("--size")?;
     }
-    let range = FrameRange {
-        start: *args.frames.0.start(),
-        step: 1,
-        end: *args.frames.0.end(),
-    };
+    let range = args.frames;
     let shard = match &args.shard {
-        Some(s) => Shard::parse(s)?,
+        Some(s) => Shard::parse(s).context("--shard")?,
         None => Shard::ALL,
     };
     let frames = shard.frames(&range);
@@ -122,7 +120,7 @@ pub fn run(args: &Args) -> Result<()> {
         spp: args.spp,
         meshes,
         difficulty: args.kind.difficulty.into(),
-        ..SynthOptions::new(kind, args.seed)
+        ..SynthOptions::new(args.kind.kind.into(), args.seed)
     };
     let writer = DatasetWriter::create_with(&args.out, &source, &options, &range)?;
 

@@ -6,13 +6,14 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use burn::tensor::Device;
 use indicatif::{ProgressBar, ProgressStyle};
+use omnimvs_data::FrameRange;
 use omnimvs_net::train::trainer::read_run_config;
 use omnimvs_net::train::{
     EpochRecord, Optimizer, PhotometricAugment, StepInfo, TrainConfig, Trainable, Trainer,
 };
-use omnimvs_net::{CascadeNet, Family, NetConfig, OmniMvsNet};
+use omnimvs_net::{CascadeNet, Family, OmniMvsNet};
 
-use crate::args::{BACKEND_HELP, Frames, parse_backend};
+use crate::args::{BACKEND_HELP, Preset, parse_backend};
 
 /// Train a network (the paper's or the cascade) end to end, resumably.
 ///
@@ -35,8 +36,8 @@ pub struct Args {
     pub data: Vec<PathBuf>,
     /// Network: tiny or paper (the paper's network), or cascade (the coarse-to-fine
     /// network at the paper's output grid).
-    #[arg(long, default_value = "tiny")]
-    pub preset: String,
+    #[arg(long, value_enum, default_value_t = Preset::Tiny)]
+    pub preset: Preset,
     /// Optimiser: sgd (the paper's, with --momentum) or adam (--momentum is its beta 1).
     #[arg(long, value_enum, default_value = "sgd")]
     pub optimizer: OptimizerArg,
@@ -71,10 +72,10 @@ pub struct Args {
     pub seed: u64,
     /// Training frames, A..B (default: every frame outside the validation frames).
     #[arg(long)]
-    pub train_frames: Option<Frames>,
+    pub train_frames: Option<FrameRange>,
     /// Validation frames, A..B (default: the last 10% of each dataset's frames).
     #[arg(long)]
-    pub val_frames: Option<Frames>,
+    pub val_frames: Option<FrameRange>,
     /// Precomputed rig rotations for augmentation, identity included (1: off).
     #[arg(long, default_value_t = 8)]
     pub rotations: usize,
@@ -154,7 +155,7 @@ pub fn run(args: &Args) -> Result<()> {
                 .net
                 .family
         }
-        None => NetConfig::preset(&args.preset)?.family,
+        None => args.preset.config().family,
     };
     match family {
         Family::OmniMvs => train::<OmniMvsNet>(args, &device),
@@ -186,13 +187,10 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 bail!("--out RUN_DIR is required for a new run");
             };
             let config = TrainConfig {
-                net: NetConfig::preset(&args.preset)?,
+                net: args.preset.config(),
                 data: args.data.clone(),
-                train_frames: args
-                    .train_frames
-                    .as_ref()
-                    .map(|f| (*f.0.start(), *f.0.end())),
-                val_frames: args.val_frames.as_ref().map(|f| (*f.0.start(), *f.0.end())),
+                train_frames: args.train_frames.map(|f| (f.start, f.end)),
+                val_frames: args.val_frames.map(|f| (f.start, f.end)),
                 epochs: args.epochs.unwrap_or(30),
                 lr: args.lr,
                 lr_low: args.lr_low,

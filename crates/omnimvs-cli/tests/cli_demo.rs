@@ -1,0 +1,102 @@
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+//! `omnimvs demo` end to end on one synthetic frame at the paper's grid (160x640, N = 192; about
+//! 10 s in a debug build): the figures it reports are those of its outputs against ground
+//! truth, and they are in the range measured for both methods, far below what an answer that
+//! ignores the images gets.
+
+mod support;
+
+use omnimvs_data::Dataset;
+use omnimvs_data::gt::read_inv_depth;
+use omnimvs_data::metrics::eval_metrics;
+use omnimvs_sweep::EquirectGrid;
+use support::{constant_guess_mae, png_size, read_json, run_ok};
+
+/// The MAE column of the row that starts with `| {method} |` in the last table of the
+/// `reference` protocol (the paper's figures) in `text` that has one.
+fn printed_mae(text: &str, method: &str) -> f64 {
+    let row = text
+        .split("Protocol `")
+        .filter(|section| section.starts_with("reference`"))
+        .flat_map(str::lines)
+        .filter(|l| l.starts_with(&format!("| {method} |")))
+        .last()
+        .unwrap_or_else(|| panic!("no row `{method}` in a `reference` table of {text}"));
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    // "", method, >1, >3, >5, MAE, RMS, ""
+    cells[5].parse().unwrap()
+}
+
+#[test]
+fn demo_reports_figures_of_its_outputs_in_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let out = dir.path().join("demo");
+    // No reference samples: the synthetic part only.
+    let none = dir.path().join("no-samples");
+    let stdout = run_ok(
+        &[
+            "demo",
+            "--out",
+            out.to_str().unwrap(),
+            "--frames",
+            "1",
+            "--samples",
+            none.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    assert!(stdout.contains("skipping the real sample"), "{stdout}");
+
+    // The classical method's figure, as printed, is its index map's against ground truth.
+    let (height, width, ndepth) = (160, 640, 192);
+    let ds = Dataset::open(&out.join("things")).unwrap();
+    let grid = EquirectGrid::new(height, width, 45.0).unwrap();
+    let hyps = ds.hypotheses(ndepth).unwrap();
+    let truth = ds.eval_truth(1, &grid, &hyps).unwrap().unwrap();
+    let index = read_inv_depth(&out.join("sgm/00001_index.tiff")).unwrap();
+    assert_eq!((index.width, index.height), (width, height));
+    let sgm = eval_metrics(&index.data, &truth, ndepth).unwrap().reference;
+    let printed = printed_mae(&stdout, "ZNCC+SGM");
+    assert!(
+        (printed - sgm.mae).abs() < 0.006,
+        "printed {printed}, {sgm:?}"
+    );
+    let table = std::fs::read_to_string(out.join("metrics.md")).unwrap();
+    assert!((printed_mae(&table, "ZNCC+SGM") - sgm.mae).abs() < 0.006);
+
+    // Both methods in the measured range (MAE 5.6 for SGM and 5.8 for the bundled network,
+    // % of N, seed 2026) and far below the best constant answer's error.
+    let constant = constant_guess_mae(&truth, ndepth);
+    let report = read_json(&out.join("eval/eval.json"));
+    let methods = report["methods"].as_array().unwrap();
+    assert_eq!(methods.len(), 2, "{report}");
+    for m in methods {
+        let mae = m["metrics"]["mae"].as_f64().unwrap();
+        println!("{}: MAE {mae:.2}, best constant {constant:.2}", m["method"]);
+        assert!(
+            mae < 8.0 && mae < 0.5 * constant,
+            "{m}, constant {constant}"
+        );
+        let name = m["method"].as_str().unwrap();
+        let row = if name == "net" {
+            "net, native 32x128, N = 64"
+        } else {
+            "ZNCC+SGM, native 160x640, N = 192"
+        };
+        assert!(
+            (printed_mae(&stdout, row) - mae).abs() < 0.006,
+            "{row}: {stdout}"
+        );
+    }
+    assert!((methods[1]["metrics"]["mae"].as_f64().unwrap() - sgm.mae).abs() < 1e-9);
+
+    // The pictures and point clouds.
+    let (w, h) = png_size(&out.join("things_00001.png"));
+    assert!(w == 640 && h > 4 * 160, "{w}x{h}");
+    for ply in ["things_00001_sgm.ply", "net/00001.ply"] {
+        let text = std::fs::read(out.join(ply)).unwrap();
+        assert!(text.starts_with(b"ply\n"), "{ply}");
+    }
+    assert_eq!(png_size(&out.join("eval/00001_sgm.png")), (640, 160));
+}

@@ -1,0 +1,132 @@
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+//! `omnimvs train` end to end, a few steps of the `tiny` preset on a small generated dataset:
+//! a run stopped after one epoch and continued with `--resume` ends with the same weights and
+//! losses as the run made in one go, and `infer --weights RUN/model.safetensors` reads the
+//! weights back and scores the validation frame as the trainer's validation did.
+
+mod support;
+
+use std::path::Path;
+
+use omnimvs_data::gt::read_inv_depth;
+use support::{read_json, run_ok, synth_dataset};
+
+/// The tensor bytes of a `.safetensors` file (after its 8-byte length and JSON header, whose
+/// metadata keys come in no fixed order).
+fn tensor_bytes(path: &Path) -> Vec<u8> {
+    let bytes = std::fs::read(path).unwrap();
+    let header = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    bytes[8 + header..].to_vec()
+}
+
+/// Each epoch's record of metrics.jsonl without its timings.
+fn epochs(run: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(run.join("metrics.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|line| {
+            let v: serde_json::Value = serde_json::from_str(line).unwrap();
+            serde_json::json!({
+                "epoch": v["epoch"], "lr": v["lr"], "train_loss": v["train_loss"],
+                "steps": v["steps"], "val_loss": v["val_loss"], "val": v["val"],
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn train_resumes_exactly_and_infer_reads_the_weights() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let data = synth_dataset(dir.path(), "things", "1..3", "96x100", 7);
+    let data_s = data.to_str().unwrap();
+    let train = |run: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "train",
+            "--data",
+            data_s,
+            "--preset",
+            "tiny",
+            "--out",
+            run.to_str().unwrap(),
+            "--epochs",
+            "2",
+            "--max-steps",
+            "2",
+            "--max-val-frames",
+            "1",
+            "--rotations",
+            "1",
+            "--train-frames",
+            "1..2",
+            "--val-frames",
+            "3",
+        ];
+        args.extend(extra);
+        run_ok(&args, &cache)
+    };
+
+    // One epoch, then --resume to the end.
+    let resumed = dir.path().join("resumed");
+    let stdout = train(&resumed, &["--stop-after", "1"]);
+    assert!(stdout.contains("epochs 1..2 of 2"), "{stdout}");
+    assert_eq!(epochs(&resumed).len(), 1);
+    let config = read_json(&resumed.join("train_config.json"));
+    assert_eq!(
+        (
+            config["net"]["out_height"].as_u64(),
+            config["net"]["out_width"].as_u64()
+        ),
+        (Some(32), Some(128)),
+        "the tiny preset's grid: {config}"
+    );
+    let stdout = run_ok(&["train", "--resume", resumed.to_str().unwrap()], &cache);
+    assert!(stdout.contains("epochs 2..2 of 2"), "{stdout}");
+
+    // The same run in one go.
+    let straight = dir.path().join("straight");
+    train(&straight, &[]);
+    let (a, b) = (epochs(&resumed), epochs(&straight));
+    assert_eq!(a.len(), 2);
+    assert_eq!(
+        a, b,
+        "the resumed run's losses differ from the straight run's"
+    );
+    assert!(a[1]["train_loss"].as_f64().unwrap().is_finite());
+    assert!(
+        tensor_bytes(&resumed.join("model.safetensors"))
+            == tensor_bytes(&straight.join("model.safetensors")),
+        "the resumed run's weights differ from the straight run's"
+    );
+
+    // infer reads the weights back: the tiny grid, and the validation frame's MAE as the
+    // trainer measured it after the last epoch.
+    let out = dir.path().join("infer");
+    let weights = resumed.join("model.safetensors");
+    run_ok(
+        &[
+            "infer",
+            data_s,
+            "--weights",
+            weights.to_str().unwrap(),
+            "--frames",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    for file in ["00003.tiff", "00003_index.tiff", "00003_entropy.tiff"] {
+        let map = read_inv_depth(&out.join(file)).unwrap();
+        assert_eq!((map.width, map.height), (128, 32), "{file}");
+        assert!(map.data.iter().all(|v| v.is_finite()), "{file}");
+    }
+    let infer_mae = read_json(&out.join("metrics.json"))["mean"]["mae"]
+        .as_f64()
+        .unwrap();
+    let val_mae = a[1]["val"]["mae"].as_f64().unwrap();
+    assert!(
+        (infer_mae - val_mae).abs() < 1e-3,
+        "infer MAE {infer_mae}, the trainer's validation MAE {val_mae}"
+    );
+}
