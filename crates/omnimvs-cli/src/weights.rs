@@ -41,11 +41,6 @@ impl Weights {
         })
     }
 
-    /// The default: the default bundled model.
-    pub fn bundled() -> Self {
-        Self::Bundled(BundledModel::DEFAULT)
-    }
-
     /// A short name for tables and file names: the file stem, the bundled model's name or
     /// `random`.
     pub fn stem(&self) -> String {

@@ -65,36 +65,44 @@ fn demo_reports_figures_of_its_outputs_in_range() {
     let table = std::fs::read_to_string(out.join("metrics.md")).unwrap();
     assert!((printed_mae(&table, "ZNCC+SGM") - sgm.mae).abs() < 0.006);
 
-    // Both methods in the measured range (MAE 5.6 for SGM and 5.8 for the bundled network,
-    // % of N, seed 2026) and far below the best constant answer's error.
+    // Every method in the range measured for it (% of N, seed 2026) and below the best
+    // constant answer's error: SGM MAE 5.6 and the bundled `tiny` 5.8, far below (under half);
+    // the bundled cascade (training in progress, see models/training/) must at least beat it.
     let constant = constant_guess_mae(&truth, ndepth);
     let report = read_json(&out.join("eval/eval.json"));
     let methods = report["methods"].as_array().unwrap();
-    assert_eq!(methods.len(), 2, "{report}");
+    assert_eq!(methods.len(), 3, "{report}");
     for m in methods {
         let mae = m["metrics"]["mae"].as_f64().unwrap();
-        println!("{}: MAE {mae:.2}, best constant {constant:.2}", m["method"]);
-        assert!(
-            mae < 8.0 && mae < 0.5 * constant,
-            "{m}, constant {constant}"
-        );
         let name = m["method"].as_str().unwrap();
-        let row = if name == "net" {
-            "net, native 32x128, N = 64"
-        } else {
-            "ZNCC+SGM, native 160x640, N = 192"
+        println!("{name}: MAE {mae:.2}, best constant {constant:.2}");
+        let (row, bound) = match name {
+            "net (tiny)" => (
+                "net (tiny), native 32x128, N = 64",
+                8.0f64.min(0.5 * constant),
+            ),
+            "net (cascade)" => ("net (cascade), native 160x640, N = 192", constant),
+            _ => (
+                "ZNCC+SGM, native 160x640, N = 192",
+                8.0f64.min(0.5 * constant),
+            ),
         };
+        assert!(mae.is_finite() && mae < bound, "{m}, constant {constant}");
         assert!(
             (printed_mae(&stdout, row) - mae).abs() < 0.006,
             "{row}: {stdout}"
         );
     }
-    assert!((methods[1]["metrics"]["mae"].as_f64().unwrap() - sgm.mae).abs() < 1e-9);
+    assert!((methods[2]["metrics"]["mae"].as_f64().unwrap() - sgm.mae).abs() < 1e-9);
 
     // The pictures and point clouds.
     let (w, h) = png_size(&out.join("things_00001.png"));
     assert!(w == 640 && h > 4 * 160, "{w}x{h}");
-    for ply in ["things_00001_sgm.ply", "net/00001.ply"] {
+    for ply in [
+        "things_00001_sgm.ply",
+        "net_tiny/00001.ply",
+        "net_cascade/00001.ply",
+    ] {
         let text = std::fs::read(out.join(ply)).unwrap();
         assert!(text.starts_with(b"ply\n"), "{ply}");
     }

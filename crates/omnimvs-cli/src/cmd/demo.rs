@@ -18,6 +18,7 @@ use crate::cmd::eval::protocol_tables;
 use crate::cmd::{eval, infer, sgm, synth};
 use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud};
 use crate::weights::Weights;
+use omnimvs_net::BundledModel;
 
 /// Run the whole pipeline on a rendered scene (no data needed) and print its metrics.
 ///
@@ -151,10 +152,24 @@ pub fn run(args: &Args) -> Result<()> {
     let md = args.out.join("metrics.md");
     write_atomic(&md, table.as_bytes()).with_context(|| format!("writing {}", md.display()))?;
 
+    // Every bundled network, the default first: `tiny` answers at 32x128, the cascade at the
+    // full 160x640.
+    let networks: Vec<Weights> = std::iter::once(BundledModel::DEFAULT)
+        .chain(
+            BundledModel::ALL
+                .into_iter()
+                .filter(|m| *m != BundledModel::DEFAULT),
+        )
+        .map(Weights::Bundled)
+        .collect();
     outln!(
-        "[4/5] bundled network ({}) against the classical method, both scored at {}x{}, N = {} \
-         (the network's coarser output upsampled)",
-        Weights::bundled(),
+        "[4/5] bundled networks ({}) against the classical method, all scored at {}x{}, N = {} \
+         (a coarser output upsampled)",
+        networks
+            .iter()
+            .map(Weights::stem)
+            .collect::<Vec<_>>()
+            .join(", "),
         args.size.height,
         args.size.width,
         args.ndepth
@@ -163,7 +178,7 @@ pub fn run(args: &Args) -> Result<()> {
     eval::run(&eval::Args {
         data: data_dir.clone(),
         method: vec![Method::Net, Method::Sgm],
-        weights: vec![Weights::bundled()],
+        weights: networks.clone(),
         frames: FrameRange::inclusive(1, args.frames),
         preset: Preset::Tiny,
         size: args.size,
@@ -174,7 +189,10 @@ pub fn run(args: &Args) -> Result<()> {
         backend: omnimvs_net::Backend::Cpu,
     })?;
     let net_table = std::fs::read_to_string(eval_dir.join("eval.md")).ok();
-    infer::run(&infer_args(&data_dir, &args.out.join("net"), args.frames))?;
+    for weights in &networks {
+        let out = args.out.join(format!("net_{}", weights.stem()));
+        infer::run(&infer_args(&data_dir, &out, args.frames, weights))?;
+    }
 
     let itbt = args.samples.join("itbt_sample");
     if itbt.join("config.yaml").is_file() {
@@ -187,9 +205,15 @@ pub fn run(args: &Args) -> Result<()> {
             Some(FrameRange::inclusive(1, 1)),
         ))?;
         outln!("  ZNCC+SGM: {}", out.join("00001_invdepth.png").display());
-        let out = args.out.join("itbt_net");
-        infer::run(&infer_args(&itbt, &out, 1))?;
-        outln!("  network: {}", out.join("00001_vis.png").display());
+        for weights in &networks {
+            let out = args.out.join(format!("itbt_net_{}", weights.stem()));
+            infer::run(&infer_args(&itbt, &out, 1, weights))?;
+            outln!(
+                "  network `{}`: {}",
+                weights.stem(),
+                out.join("00001_vis.png").display()
+            );
+        }
     } else {
         outln!(
             "[5/5] {} not found: skipping the real sample",
@@ -218,10 +242,10 @@ pub fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
-fn infer_args(dataset: &Path, out: &Path, frames: u32) -> infer::Args {
+fn infer_args(dataset: &Path, out: &Path, frames: u32, weights: &Weights) -> infer::Args {
     infer::Args {
         dataset: dataset.to_path_buf(),
-        weights: Weights::bundled(),
+        weights: weights.clone(),
         preset: Preset::Tiny,
         frames: FrameRange::inclusive(1, frames),
         out: out.to_path_buf(),
