@@ -187,6 +187,51 @@ pub fn write_f32_tiff(
     omnimvs_camera::fs::write_atomic(path, buf.get_ref()).map_err(|e| DataError::io(path, e))
 }
 
+/// Writes a ground-truth inverse-depth panorama (1/m) the way the released datasets store it,
+/// which is what the reference implementation's reader expects: a two-page TIFF, page 0 an
+/// 8-bit RGB picture of the map (turbo colour map, 0 to the largest value), page 1 the `f32`
+/// values (deflate-compressed). Readers take the floating-point page ([`read_inv_depth`]).
+///
+/// # Errors
+/// [`DataError`] naming the file.
+pub fn write_gt_tiff(
+    path: &Path,
+    width: usize,
+    height: usize,
+    data: &[f32],
+) -> Result<(), DataError> {
+    if data.len() != width * height {
+        return Err(DataError::mismatch(
+            format!("{}: map length", path.display()),
+            width * height,
+            data.len(),
+        ));
+    }
+    let max = data
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0f32, f32::max);
+    let picture = crate::colormap::colorize(
+        data,
+        0.0,
+        if max > 0.0 { f64::from(max) } else { 1.0 },
+        crate::colormap::Colormap::Turbo,
+        None,
+    );
+    let mut buf = Cursor::new(Vec::new());
+    let bad = |e: tiff::TiffError| DataError::format(path, format!("cannot encode TIFF: {e}"));
+    let mut encoder = TiffEncoder::new(&mut buf).map_err(bad)?;
+    encoder
+        .write_image::<colortype::RGB8>(width as u32, height as u32, &picture)
+        .map_err(bad)?;
+    let mut encoder = encoder.with_compression(Compression::Deflate(DeflateLevel::Balanced));
+    encoder
+        .write_image::<colortype::Gray32Float>(width as u32, height as u32, data)
+        .map_err(bad)?;
+    omnimvs_camera::fs::write_atomic(path, buf.get_ref()).map_err(|e| DataError::io(path, e))
+}
+
 /// Writes an inverse-depth map (1/m) as an f32 TIFF, atomically.
 ///
 /// # Errors
@@ -412,6 +457,26 @@ pub fn binary_closing_5x5(mask: &[bool], w: usize, h: usize) -> Vec<bool> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn ground_truth_tiff_has_the_released_two_pages() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("gt.tiff");
+        let data: Vec<f32> = (0..6 * 4).map(|i| i as f32 * 0.01).collect();
+        write_gt_tiff(&path, 6, 4, &data).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let mut dec = tiff::decoder::Decoder::new(std::io::Cursor::new(bytes)).unwrap();
+        assert_eq!(dec.colortype().unwrap(), tiff::ColorType::RGB(8));
+        assert_eq!(dec.dimensions().unwrap(), (6, 4));
+        assert!(dec.more_images());
+        dec.next_image().unwrap();
+        assert_eq!(dec.colortype().unwrap(), tiff::ColorType::Gray(32));
+        assert!(!dec.more_images());
+        let map = read_inv_depth(&path).unwrap();
+        assert_eq!((map.width, map.height), (6, 4));
+        assert_eq!(map.data, data);
+    }
+
     use super::*;
 
     #[test]

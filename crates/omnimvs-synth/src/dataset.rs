@@ -2,9 +2,11 @@
 //!
 //! ```text
 //! <out>/config.yaml                      the rig, min depth, img_fmt, frames
+//! <out>/mask1.png ... maskN.png           each camera's `invalid_mask` (non-zero outside the FOV)
 //! <out>/synth.json                       generator settings (checked on resume)
 //! <out>/cam1/00001.png ... camN/         8-bit gray fisheye images
-//! <out>/omnidepth_gt_640/00001.tiff      f32 inverse depth, 320x640, +-90 deg
+//! <out>/omnidepth_gt_640/00001.tiff      f32 inverse depth, 320x640, +-90 deg (two pages: an
+//!                                         RGB picture, then the f32 values, as released)
 //! <out>/scene/00001.json                 the scene, enough to render it again
 //! ```
 //!
@@ -319,7 +321,28 @@ impl DatasetWriter {
             frames: covered_frames(&config_path, frames)?,
             gt_fmt: Some(GT_FMT.to_string()),
         };
-        let text = write_config_yaml(&rig.rig, &config)?;
+        // Every camera names its `invalid_mask` (the reference's reader needs the field) and
+        // the mask is written: non-zero outside the field of view, what a reader derives
+        // from `max_fov` alone anyway.
+        let mut rig_with_masks = rig.rig.clone();
+        for (i, camera) in rig_with_masks.cameras.iter_mut().enumerate() {
+            let name = format!("mask{}.png", i + 1);
+            let mask = omnimvs_camera::ValidityMask::from_fov(&camera.model);
+            let pixels: Vec<u8> = mask
+                .valid
+                .iter()
+                .map(|&v| if v { 0 } else { 255 })
+                .collect();
+            omnimvs_data::image_io::write_png_u8(
+                &out.join(&name),
+                mask.width as usize,
+                mask.height as usize,
+                1,
+                &pixels,
+            )?;
+            camera.invalid_mask = Some(name);
+        }
+        let text = write_config_yaml(&rig_with_masks, &config)?;
         omnimvs_camera::fs::write_atomic(&config_path, text.as_bytes())
             .map_err(io(&config_path, "cannot write"))?;
         Ok(Self {
@@ -407,7 +430,7 @@ impl DatasetWriter {
                 let (w, h) = (cam.model.width() as usize, cam.model.height() as usize);
                 omnimvs_data::image_io::write_png_u8(path, w, h, 1, img).map_err(SynthError::from)
             })?;
-        omnimvs_data::gt::write_f32_tiff(&paths.gt, GT_WIDTH, GT_HEIGHT, &data.inv_depth)?;
+        omnimvs_data::gt::write_gt_tiff(&paths.gt, GT_WIDTH, GT_HEIGHT, &data.inv_depth)?;
         Ok(())
     }
 

@@ -57,9 +57,11 @@ fn same_seed_gives_byte_identical_datasets_in_the_reference_layout() {
         }
     }
     let (fa, fb) = (files(a.path()), files(b.path()));
+    // Per dataset: config.yaml, synth.json, 4 masks, then per frame 4 images, the ground
+    // truth and the scene.
     assert_eq!(
         fa.len(),
-        2 * (2 + 2 * 6),
+        2 * (2 + 4 + 2 * 6),
         "{:?}",
         fa.keys().collect::<Vec<_>>()
     );
@@ -67,6 +69,7 @@ fn same_seed_gives_byte_identical_datasets_in_the_reference_layout() {
     assert_eq!(fa, fb);
     assert!(fa.contains_key("things/cam4/00002.png"));
     assert!(fa.contains_key("house/omnidepth_gt_640/00001.tiff"));
+    assert!(fa.contains_key("house/mask4.png"));
     assert_ne!(fa["things/cam1/00001.png"], fa["things/cam1/00002.png"]);
 
     // The foundation's reader opens it: images, ground truth, rig.
