@@ -174,3 +174,53 @@ pub fn read_ocam_txt_rig(dir: &Path, max_fov_deg: f64) -> Result<Rig, CameraErro
         .collect();
     Ok(Rig::new(cameras))
 }
+/// Writes `rig` in the released datasets' layout into `dir`: `ocam1.txt`, `ocam2.txt`, ...
+/// (OCamCalib's text form) and `poses.txt` (camera-to-rig, translation in centimetres), each
+/// file atomically. [`read_ocam_txt_rig`] reads them back as the same rig (up to the last bit
+/// of the centimetre conversion).
+///
+/// # Errors
+/// [`CameraError::Io`] naming a file that cannot be written.
+pub fn write_ocam_txt_rig(rig: &Rig, dir: &Path) -> Result<(), CameraError> {
+    let write = |name: String, text: String| {
+        let path = dir.join(name);
+        crate::fs::write_atomic(&path, text.as_bytes())
+            .map_err(|source| CameraError::Io { path, source })
+    };
+    let join = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:e}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let mut poses = String::from("# rx ry rz tx ty tz (camera to rig; rad, cm)\n");
+    for (i, cam) in rig.cameras.iter().enumerate() {
+        let CameraModel::Ocam(m) = &cam.model;
+        let text = format!(
+            "#polynomial coefficients for the DIRECT mapping function\n\n{} {}\n\n\
+             #polynomial coefficients for the inverse mapping function\n\n{} {}\n\n\
+             #center: \"row\" and \"column\"\n\n{:e} {:e}\n\n#affine parameters\n\n{:e} {:e} {:e}\n\n\
+             #image size: \"height\" and \"width\"\n\n{} {}\n",
+            m.poly.len(),
+            join(&m.poly),
+            m.inv_poly.len(),
+            join(&m.inv_poly),
+            m.center_row,
+            m.center_col,
+            m.c,
+            m.d,
+            m.e,
+            m.height,
+            m.width
+        );
+        write(format!("ocam{}.txt", i + 1), text)?;
+        let [rx, ry, rz, tx, ty, tz] = cam.pose.to_array();
+        poses += &format!(
+            "{rx:e} {ry:e} {rz:e} {:e} {:e} {:e}\n",
+            tx * 100.0,
+            ty * 100.0,
+            tz * 100.0
+        );
+    }
+    write("poses.txt".into(), poses)
+}

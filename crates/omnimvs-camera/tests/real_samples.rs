@@ -120,51 +120,12 @@ fn fov_mask_without_mask_file_and_nothing_written() {
 }
 
 /// Writes the rig as released-dataset files (`ocamK.txt`, `poses.txt` in cm).
-fn write_ocam_txt(rig: &Rig, dir: &Path) {
-    let mut poses = String::from("# rx ry rz tx ty tz (cm)\n");
-    for (i, cam) in rig.cameras.iter().enumerate() {
-        let CameraModel::Ocam(m) = &cam.model;
-        let join = |v: &[f64]| {
-            v.iter()
-                .map(|x| format!("{x:e}"))
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
-        let text = format!(
-            "#polynomial coefficients for the DIRECT mapping function\n\n{} {}\n\n\
-             #polynomial coefficients for the inverse mapping function\n\n{} {}\n\n\
-             #center: \"row\" and \"column\"\n\n{:e} {:e}\n\n#affine parameters\n\n{:e} {:e} {:e}\n\n\
-             #image size: \"height\" and \"width\"\n\n{} {}\n",
-            m.poly.len(),
-            join(&m.poly),
-            m.inv_poly.len(),
-            join(&m.inv_poly),
-            m.center_row,
-            m.center_col,
-            m.c,
-            m.d,
-            m.e,
-            m.height,
-            m.width
-        );
-        std::fs::write(dir.join(format!("ocam{}.txt", i + 1)), text).unwrap();
-        let [rx, ry, rz, tx, ty, tz] = cam.pose.to_array();
-        poses += &format!(
-            "{rx:e} {ry:e} {rz:e} {:e} {:e} {:e}\n",
-            tx * 100.0,
-            ty * 100.0,
-            tz * 100.0
-        );
-    }
-    std::fs::write(dir.join("poses.txt"), poses).unwrap();
-}
-
 #[test]
 fn ocam_txt_files_give_the_same_rig() {
     for name in ["sunny_single", "itbt_sample"] {
         let from_yaml = rig(name);
         let dir = tempfile::tempdir().unwrap();
-        write_ocam_txt(&from_yaml, dir.path());
+        omnimvs_camera::write_ocam_txt_rig(&from_yaml, dir.path()).unwrap();
         let from_txt = read_ocam_txt_rig(dir.path(), 220.0).unwrap();
         assert_eq!(from_txt.len(), from_yaml.len());
         for (a, b) in from_txt.cameras.iter().zip(&from_yaml.cameras) {

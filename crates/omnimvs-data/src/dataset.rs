@@ -22,12 +22,24 @@ pub struct Dataset {
 const GT_DIRS: [&str; 2] = ["omnidepth_gt_640", "depth_train_640"];
 const GT_EXTS: [&str; 5] = ["tiff", "tif", "png", "bin", "raw"];
 
+/// Minimum depth of the released datasets (OmniThings, OmniHouse, the urban sets), metres: their
+/// 16-bit ground truth encodes inverse depth relative to `1 / 0.55`.
+pub const RELEASED_MIN_DEPTH_M: f64 = 0.55;
+
+/// Field of view of the released rigs' cameras, degrees (their text files do not carry it).
+pub const RELEASED_MAX_FOV_DEG: f64 = 220.0;
+
 impl Dataset {
-    /// Opens a dataset from its folder or its `config.yaml`.
+    /// Opens a dataset from its folder or its `config.yaml`. A folder without `config.yaml`
+    /// but with `ocam1.txt` is read in the released datasets' layout (see
+    /// [`Dataset::open_released`]).
     ///
     /// # Errors
     /// [`DataError`] naming `config.yaml` and the field that is wrong.
     pub fn open(path: &Path) -> Result<Self, DataError> {
+        if path.is_dir() && !path.join("config.yaml").exists() && path.join("ocam1.txt").is_file() {
+            return Self::open_released(path);
+        }
         let (root, config_path) = if path.is_dir() {
             (path.to_path_buf(), path.join("config.yaml"))
         } else {
@@ -42,6 +54,66 @@ impl Dataset {
             root,
             config_path,
             config,
+            rig,
+        })
+    }
+
+    /// Opens a folder in the layout the released datasets were published in: `ocam1.txt` ...
+    /// `ocamN.txt` (OCamCalib's text form) and `poses.txt` (translation in centimetres) for the
+    /// rig, the cameras' fields of view [`RELEASED_MAX_FOV_DEG`], the images in `cam1/` ...
+    /// (`00001.png` or `0001.png`, any image extension; the frames are those found in
+    /// `cam1/`), ground truth in `omnidepth_gt_640/` or `depth_train_640/` when present, and
+    /// the minimum depth [`RELEASED_MIN_DEPTH_M`]. Nothing is written into the folder.
+    ///
+    /// # Errors
+    /// [`DataError`] naming the file: a missing or malformed `ocamK.txt` or `poses.txt`, or a
+    /// `cam1/` folder without numbered images.
+    pub fn open_released(dir: &Path) -> Result<Self, DataError> {
+        let rig = omnimvs_camera::read_ocam_txt_rig(dir, RELEASED_MAX_FOV_DEG)?;
+        let cam_dir = dir.join("cam1");
+        let entries = std::fs::read_dir(&cam_dir).map_err(|e| DataError::io(&cam_dir, e))?;
+        // (digits, extension) -> frames found with that naming.
+        let mut namings: std::collections::BTreeMap<(usize, String), Vec<u32>> =
+            std::collections::BTreeMap::new();
+        for entry in entries {
+            let path = entry.map_err(|e| DataError::io(&cam_dir, e))?.path();
+            let (Some(stem), Some(ext)) = (
+                path.file_stem().and_then(|s| s.to_str()),
+                path.extension().and_then(|s| s.to_str()),
+            ) else {
+                continue;
+            };
+            let image = ["png", "jpg", "jpeg", "bmp", "tif", "tiff"]
+                .contains(&ext.to_ascii_lowercase().as_str());
+            if let (true, true, Ok(frame)) = (
+                image,
+                stem.bytes().all(|b| b.is_ascii_digit()),
+                stem.parse::<u32>(),
+            ) {
+                namings
+                    .entry((stem.len(), ext.to_string()))
+                    .or_default()
+                    .push(frame);
+            }
+        }
+        let Some(((digits, ext), frames)) = namings.into_iter().max_by_key(|(_, f)| f.len()) else {
+            return Err(DataError::format(
+                &cam_dir,
+                "no numbered images (such as 00001.png) in the first camera's folder",
+            ));
+        };
+        let (first, last) = frames
+            .iter()
+            .fold((u32::MAX, 0), |(a, b), &f| (a.min(f), b.max(f)));
+        Ok(Self {
+            root: dir.to_path_buf(),
+            config_path: dir.join("poses.txt"),
+            config: DatasetConfig {
+                min_depth_m: RELEASED_MIN_DEPTH_M,
+                img_fmt: format!("cam%d/%0{digits}d.{ext}"),
+                frames: crate::FrameRange::inclusive(first, last),
+                gt_fmt: None,
+            },
             rig,
         })
     }

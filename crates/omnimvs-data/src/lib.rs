@@ -20,6 +20,6 @@ pub mod metrics;
 pub mod ply;
 
 pub use config::{DatasetConfig, FrameRange, write_config_yaml};
-pub use dataset::Dataset;
+pub use dataset::{Dataset, RELEASED_MAX_FOV_DEG, RELEASED_MIN_DEPTH_M};
 pub use error::DataError;
 pub use format::format_printf;

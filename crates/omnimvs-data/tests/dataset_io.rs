@@ -287,3 +287,51 @@ fn written_config_reads_back_the_same_dataset() {
         }
     }
 }
+
+/// A folder in the released datasets' layout (`ocamK.txt` + `poses.txt`, no `config.yaml`)
+/// opens as the same rig and frames as the sample it was made from.
+#[test]
+fn released_layout_opens_without_config_yaml() {
+    let sunny = Dataset::open(&samples().join("sunny_single")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    omnimvs_camera::write_ocam_txt_rig(&sunny.rig, dir.path()).unwrap();
+    for camera in 1..=sunny.rig.len() {
+        let from = sunny.image_path(camera - 1, 1).unwrap();
+        std::fs::create_dir_all(dir.path().join(format!("cam{camera}"))).unwrap();
+        std::fs::copy(&from, dir.path().join(format!("cam{camera}/0001.png"))).unwrap();
+    }
+    // A file that is not a numbered image does not count.
+    std::fs::write(dir.path().join("cam1/notes.txt"), "x").unwrap();
+
+    let released = Dataset::open(dir.path()).unwrap();
+    assert_eq!(released.config.img_fmt, "cam%d/%04d.png");
+    assert_eq!(released.config.frames, FrameRange::inclusive(1, 1));
+    assert_eq!(
+        released.config.min_depth_m,
+        omnimvs_data::RELEASED_MIN_DEPTH_M
+    );
+    assert_eq!(released.rig.len(), sunny.rig.len());
+    for (a, b) in released.rig.cameras.iter().zip(&sunny.rig.cameras) {
+        assert_eq!(a.model, b.model);
+        let (pa, pb) = (a.pose.to_array(), b.pose.to_array());
+        assert!(
+            pa.iter().zip(pb).all(|(x, y)| (x - y).abs() < 1e-12),
+            "{pa:?} {pb:?}"
+        );
+    }
+    assert_eq!(released.frames_found(), vec![1]);
+    assert_eq!(
+        released.read_frame(1).unwrap(),
+        sunny.read_frame(1).unwrap()
+    );
+
+    // Without numbered images the error names the folder.
+    let empty = tempfile::tempdir().unwrap();
+    omnimvs_camera::write_ocam_txt_rig(&sunny.rig, empty.path()).unwrap();
+    std::fs::create_dir_all(empty.path().join("cam1")).unwrap();
+    let err = Dataset::open(empty.path()).unwrap_err().to_string();
+    assert!(
+        err.contains("cam1") && err.contains("numbered images"),
+        "{err}"
+    );
+}
