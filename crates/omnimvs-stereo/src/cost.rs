@@ -97,8 +97,6 @@ struct Scratch {
     colsum: Vec<f32>,
     /// `[quantity][col]`: full window sums of the current row.
     boxsum: Vec<f32>,
-    /// `[quantity]`: the running window sum along the row.
-    window: Vec<f32>,
     /// `[cam][col]`: window mean and `1 / std` of each camera.
     mean: Vec<f32>,
     inv_std: Vec<f32>,
@@ -119,6 +117,8 @@ impl Scratch {
                 pairs.push((a, b));
             }
         }
+        // Quantities per column: per camera sum, sum of squares, missing
+        // count; per pair the sum of products.
         let q = 3 * ncam + pairs.len();
         Self {
             ncam,
@@ -129,7 +129,6 @@ impl Scratch {
             missing: vec![0.0; ncam * patch * width],
             colsum: vec![0.0; q * width],
             boxsum: vec![0.0; q * width],
-            window: vec![0.0; q],
             mean: vec![0.0; ncam * width],
             inv_std: vec![0.0; ncam * width],
             cost_sum: vec![0.0; width],
@@ -138,12 +137,6 @@ impl Scratch {
             pos_row: vec![0.0; width],
             table_pos: vec![0.0; width],
         }
-    }
-
-    /// Quantities per column: per camera sum, sum of squares, missing count;
-    /// per pair the sum of products.
-    fn quantities(&self) -> usize {
-        3 * self.ncam + self.pairs.len()
     }
 
     fn row_slice(&self, cam: usize, slot: usize) -> std::ops::Range<usize> {
@@ -185,6 +178,83 @@ impl Scratch {
     }
 }
 
+/// Quantities whose running sums advance side by side in
+/// [`row_window_sums`]: independent additions that hide each other's latency.
+const LANES: usize = 4;
+
+/// Window sums along one grid row for every quantity: `boxsum[j][x]` is the
+/// sum of `colsum[j][x - r ..= x + r]`, columns taken round the ring.
+/// `colsum` and `boxsum` are `[quantity][col]` with rows of `w`, `w > 2 r + 1`.
+///
+/// Each quantity is one running sum from column 0, in exactly the order of
+/// [`row_window_sums_reference`] (so the results are bit-identical), but the
+/// columns entering and leaving the window are read from contiguous slices:
+/// the row splits into three runs where neither index wraps.
+#[inline(always)]
+fn row_window_sums(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
+    debug_assert!(w > 2 * r + 1 && colsum.len() == boxsum.len() && colsum.len() % w == 0);
+    // (first column, first entering column, first leaving column, length).
+    let runs = [
+        (0, r + 1, w - r, r),
+        (r, 2 * r + 1, 0, w - 2 * r - 1),
+        (w - r - 1, 0, w - 2 * r - 1, r + 1),
+    ];
+    let mut rows = colsum.chunks_exact(w).zip(boxsum.chunks_exact_mut(w));
+    loop {
+        let mut c: [&[f32]; LANES] = [&[]; LANES];
+        let mut b: [&mut [f32]; LANES] = Default::default();
+        let mut lanes = 0;
+        for (cj, bj) in rows.by_ref().take(LANES) {
+            c[lanes] = cj;
+            b[lanes] = bj;
+            lanes += 1;
+        }
+        if lanes == 0 {
+            break;
+        }
+        let mut acc = [0f32; LANES];
+        for k in 0..2 * r + 1 {
+            let x = (k + w - r) % w;
+            for l in 0..lanes {
+                acc[l] += c[l][x];
+            }
+        }
+        for &(x0, enter, leave, len) in &runs {
+            for l in 0..lanes {
+                let (bl, cl) = (&mut b[l][x0..x0 + len], c[l]);
+                let (e, v) = (&cl[enter..enter + len], &cl[leave..leave + len]);
+                let mut a = acc[l];
+                for ((o, &ein), &out) in bl.iter_mut().zip(e).zip(v) {
+                    *o = a;
+                    a += ein - out;
+                }
+                acc[l] = a;
+            }
+        }
+    }
+}
+
+/// [`row_window_sums`] written plainly (the reference of its tests):
+/// every quantity's running sum, indices taken modulo the width.
+#[cfg(test)]
+fn row_window_sums_reference(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
+    let mut window = vec![0f32; colsum.len() / w];
+    for k in 0..2 * r + 1 {
+        let x = (k + w - r) % w;
+        for (j, acc) in window.iter_mut().enumerate() {
+            *acc += colsum[j * w + x];
+        }
+    }
+    for x in 0..w {
+        let enter = (x + r + 1) % w;
+        let leave = (x + w - r) % w;
+        for (j, acc) in window.iter_mut().enumerate() {
+            boxsum[j * w + x] = *acc;
+            *acc += colsum[j * w + enter] - colsum[j * w + leave];
+        }
+    }
+}
+
 impl Matcher<'_> {
     fn patch(&self) -> usize {
         2 * self.radius + 1
@@ -217,26 +287,8 @@ impl Matcher<'_> {
     /// longitude.
     fn cost_row(&self, s: &mut Scratch, row: usize, out: &mut [u16]) {
         let (w, h, r) = (self.grid.width, self.grid.height, self.radius);
-        let q = s.quantities();
         let ncam = s.ncam;
-        // Window sums along the row: one running sum per quantity, the
-        // quantities interleaved so that the additions are independent.
-        s.window.fill(0.0);
-        for k in 0..self.patch() {
-            let x = (k + w - r) % w;
-            for (j, acc) in s.window.iter_mut().enumerate() {
-                *acc += s.colsum[j * w + x];
-            }
-        }
-        for x in 0..w {
-            let enter = (x + r + 1) % w;
-            let leave = (x + w - r) % w;
-            for (j, acc) in s.window.iter_mut().enumerate() {
-                s.boxsum[j * w + x] = *acc;
-                *acc += s.colsum[j * w + enter] - s.colsum[j * w + leave];
-            }
-        }
-        let _ = q;
+        row_window_sums(&s.colsum, &mut s.boxsum, w, r);
         // ZNCC, vectorised along the row.
         let rows = (row + r).min(h - 1) - row.saturating_sub(r) + 1;
         let inv_n = 1.0 / (rows * self.patch()) as f32;
@@ -454,5 +506,44 @@ impl Matcher<'_> {
                 cost: total - warp,
             },
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use omnimvs_camera::rng::SplitMix64;
+
+    #[test]
+    fn row_window_sums_equal_the_plain_running_sums_bit_for_bit() {
+        let mut rng = SplitMix64::new(15);
+        // Widths from the smallest allowed (2r + 2) up, radii 0..=4, and
+        // quantity counts that leave 0..3 lanes over (18 is four cameras).
+        for (w, r, q) in [
+            (2, 0, 1),
+            (4, 1, 3),
+            (10, 4, 18),
+            (11, 4, 5),
+            (64, 2, 7),
+            (640, 4, 18),
+        ] {
+            let colsum: Vec<f32> = (0..q * w)
+                .map(|_| (rng.next_f64() * 200.0 - 100.0) as f32)
+                .collect();
+            let (mut fast, mut plain) = (vec![f32::NAN; q * w], vec![f32::NAN; q * w]);
+            row_window_sums(&colsum, &mut fast, w, r);
+            row_window_sums_reference(&colsum, &mut plain, w, r);
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast), bits(&plain), "w {w} r {r} q {q}");
+            // And they are window sums round the ring (to rounding).
+            for j in 0..q {
+                for x in 0..w {
+                    let exact: f64 = (0..2 * r + 1)
+                        .map(|k| f64::from(colsum[j * w + (x + w + k - r) % w]))
+                        .sum();
+                    assert!((f64::from(fast[j * w + x]) - exact).abs() < 1e-2);
+                }
+            }
+        }
     }
 }
