@@ -180,7 +180,7 @@ impl Scratch {
 
 /// Quantities whose running sums advance side by side in
 /// [`row_window_sums`]: independent additions that hide each other's latency.
-const LANES: usize = 4;
+const LANES: usize = 6;
 
 /// Window sums along one grid row for every quantity: `boxsum[j][x]` is the
 /// sum of `colsum[j][x - r ..= x + r]`, columns taken round the ring.
@@ -220,6 +220,19 @@ fn row_window_sums(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
             }
         }
         for &(x0, enter, leave, len) in &runs {
+            if lanes == LANES {
+                // The common case: all lanes' chains in one loop body.
+                let e: [&[f32]; LANES] = std::array::from_fn(|l| &c[l][enter..enter + len]);
+                let v: [&[f32]; LANES] = std::array::from_fn(|l| &c[l][leave..leave + len]);
+                let o = b.each_mut().map(|bl| &mut bl[x0..x0 + len]);
+                for i in 0..len {
+                    for l in 0..LANES {
+                        o[l][i] = acc[l];
+                        acc[l] += e[l][i] - v[l][i];
+                    }
+                }
+                continue;
+            }
             for l in 0..lanes {
                 let (bl, cl) = (&mut b[l][x0..x0 + len], c[l]);
                 let (e, v) = (&cl[enter..enter + len], &cl[leave..leave + len]);
