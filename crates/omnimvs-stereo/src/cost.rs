@@ -86,10 +86,13 @@ pub struct Matcher<'a> {
 /// Per-thread buffers of one sphere's computation.
 struct Scratch {
     ncam: usize,
-    patch: usize,
     width: usize,
+    /// Rows in the ring of samples: the window's `patch` and the one that
+    /// is leaving it, so that a new row can be warped before the old one is
+    /// subtracted and both happen in one pass ([`Self::update`]).
+    slots: usize,
     pairs: Vec<(usize, usize)>,
-    /// `[cam][slot][col]`: sampled values of the last `patch` rows.
+    /// `[cam][slot][col]`: sampled values of the last `slots` rows.
     values: Vec<f32>,
     /// Same layout: 1 where the sample is missing.
     missing: Vec<f32>,
@@ -122,11 +125,11 @@ impl Scratch {
         let q = 3 * ncam + pairs.len();
         Self {
             ncam,
-            patch,
             width,
             pairs,
-            values: vec![0.0; ncam * patch * width],
-            missing: vec![0.0; ncam * patch * width],
+            slots: patch + 1,
+            values: vec![0.0; ncam * (patch + 1) * width],
+            missing: vec![0.0; ncam * (patch + 1) * width],
             colsum: vec![0.0; q * width],
             boxsum: vec![0.0; q * width],
             mean: vec![0.0; ncam * width],
@@ -140,12 +143,63 @@ impl Scratch {
     }
 
     fn row_slice(&self, cam: usize, slot: usize) -> std::ops::Range<usize> {
-        let start = (cam * self.patch + slot) * self.width;
+        let start = (cam * self.slots + slot) * self.width;
         start..start + self.width
     }
 
     fn quantity(&self, q: usize) -> std::ops::Range<usize> {
         q * self.width..(q + 1) * self.width
+    }
+
+    /// Removes the row in slot `remove` from the column sums and adds the
+    /// row in slot `add`.
+    fn update(&mut self, remove: Option<usize>, add: Option<usize>) {
+        match (remove, add) {
+            (Some(old), Some(new)) => self.replace(old, new),
+            (Some(old), None) => self.accumulate(old, -1.0),
+            (None, Some(new)) => self.accumulate(new, 1.0),
+            (None, None) => {}
+        }
+    }
+
+    /// `accumulate(old, -1.0)` then `accumulate(new, 1.0)` in one pass over
+    /// the column sums: per element the same operations in the same order,
+    /// so the sums are bit-identical.
+    fn replace(&mut self, old: usize, new: usize) {
+        let (ncam, w) = (self.ncam, self.width);
+        for cam in 0..ncam {
+            let (ro, rn) = (self.row_slice(cam, old), self.row_slice(cam, new));
+            let (vo, mo) = (&self.values[ro.clone()], &self.missing[ro]);
+            let (vn, mn) = (&self.values[rn.clone()], &self.missing[rn]);
+            let (s1, rest) = self.colsum.split_at_mut((ncam + cam) * w);
+            let sum = &mut s1[cam * w..(cam + 1) * w];
+            let (s2, s3) = rest.split_at_mut(ncam * w);
+            let (sq, ms) = (&mut s2[..w], &mut s3[..w]);
+            for i in 0..w {
+                sum[i] += -1.0 * vo[i];
+                sum[i] += 1.0 * vn[i];
+                sq[i] += -1.0 * vo[i] * vo[i];
+                sq[i] += 1.0 * vn[i] * vn[i];
+                ms[i] += -1.0 * mo[i];
+                ms[i] += 1.0 * mn[i];
+            }
+        }
+        for (k, &(a, b)) in self.pairs.iter().enumerate() {
+            let (ao, bo) = (
+                &self.values[self.row_slice(a, old)],
+                &self.values[self.row_slice(b, old)],
+            );
+            let (an, bn) = (
+                &self.values[self.row_slice(a, new)],
+                &self.values[self.row_slice(b, new)],
+            );
+            let r = (3 * ncam + k) * w;
+            let col = &mut self.colsum[r..r + w];
+            for i in 0..w {
+                col[i] += -1.0 * ao[i] * bo[i];
+                col[i] += 1.0 * an[i] * bn[i];
+            }
+        }
     }
 
     /// Adds (`sign = 1`) or removes (`-1`) the row in `slot` from the column sums.
@@ -277,7 +331,7 @@ impl Matcher<'_> {
     /// into the ring slot of that row.
     fn warp_row(&self, s: &mut Scratch, cam: usize, row: usize, inv_depth: f32) {
         let w = self.grid.width;
-        let slot = row % s.patch;
+        let slot = row % s.slots;
         let view = &self.views[cam];
         self.projectors[cam].project_run(
             row * w,
@@ -384,33 +438,28 @@ impl Matcher<'_> {
             warp_rows(scratch, row);
             let t1 = Instant::now();
             for s in scratch.iter_mut() {
-                s.accumulate(row % s.patch, 1.0);
+                s.accumulate(row % s.slots, 1.0);
             }
             warp += t1 - t0;
             cost += t1.elapsed();
         }
         for row in 0..h {
+            // The ring has a slot more than the window, so the new row is
+            // warped before the leaving one is subtracted.
             let t0 = Instant::now();
-            if row > r {
-                for s in scratch.iter_mut() {
-                    s.accumulate((row - r - 1) % s.patch, -1.0);
-                }
-            }
-            let t1 = Instant::now();
             let add = row + r;
             if add < h {
                 warp_rows(scratch, add);
             }
-            let t2 = Instant::now();
+            let t1 = Instant::now();
             for (g, s) in scratch.iter_mut().enumerate() {
-                if add < h {
-                    s.accumulate(add % s.patch, 1.0);
-                }
+                let leave = (row > r).then(|| (row - r - 1) % s.slots);
+                s.update(leave, (add < h).then(|| add % s.slots));
                 let dst = g * plane + row * w;
                 self.cost_row(s, row, &mut out[dst..dst + w]);
             }
-            warp += t2 - t1;
-            cost += (t1 - t0) + t2.elapsed();
+            warp += t1 - t0;
+            cost += t1.elapsed();
         }
         (warp, cost)
     }
@@ -556,6 +605,39 @@ mod tests {
                         .sum();
                     assert!((f64::from(fast[j * w + x]) - exact).abs() < 1e-2);
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn replacing_a_row_equals_removing_then_adding_it_bit_for_bit() {
+        let mut rng = SplitMix64::new(16);
+        for ncam in [2, 3, 4] {
+            let (patch, w) = (3, 37);
+            let mut fused = Scratch::new(ncam, patch, w);
+            for (v, m) in fused.values.iter_mut().zip(fused.missing.iter_mut()) {
+                // Normalised samples, some of them missing (0 with a 1 flag).
+                let missing = rng.below(5) == 0;
+                *v = if missing {
+                    0.0
+                } else {
+                    (rng.next_f64() * 6.0 - 3.0) as f32
+                };
+                *m = if missing { 1.0 } else { 0.0 };
+            }
+            for c in fused.colsum.iter_mut() {
+                *c = (rng.next_f64() * 50.0 - 25.0) as f32;
+            }
+            let mut plain = Scratch::new(ncam, patch, w);
+            plain.values.clone_from(&fused.values);
+            plain.missing.clone_from(&fused.missing);
+            plain.colsum.clone_from(&fused.colsum);
+            for (old, new) in [(0, 3), (1, 0), (3, 2)] {
+                fused.update(Some(old), Some(new));
+                plain.accumulate(old, -1.0);
+                plain.accumulate(new, 1.0);
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fused.colsum), bits(&plain.colsum), "{ncam} cameras");
             }
         }
     }
