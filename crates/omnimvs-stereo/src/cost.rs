@@ -163,8 +163,8 @@ impl Scratch {
     }
 
     /// `accumulate(old, -1.0)` then `accumulate(new, 1.0)` in one pass over
-    /// the column sums: per element the same operations in the same order,
-    /// so the sums are bit-identical.
+    /// the column sums: per element the same operations in the same order
+    /// (`-1 * v` is `-v` exactly), so the sums are bit-identical.
     fn replace(&mut self, old: usize, new: usize) {
         let (ncam, w) = (self.ncam, self.width);
         for cam in 0..ncam {
@@ -176,12 +176,12 @@ impl Scratch {
             let (s2, s3) = rest.split_at_mut(ncam * w);
             let (sq, ms) = (&mut s2[..w], &mut s3[..w]);
             for i in 0..w {
-                sum[i] += -1.0 * vo[i];
-                sum[i] += 1.0 * vn[i];
-                sq[i] += -1.0 * vo[i] * vo[i];
-                sq[i] += 1.0 * vn[i] * vn[i];
-                ms[i] += -1.0 * mo[i];
-                ms[i] += 1.0 * mn[i];
+                sum[i] += -vo[i];
+                sum[i] += vn[i];
+                sq[i] += -vo[i] * vo[i];
+                sq[i] += vn[i] * vn[i];
+                ms[i] += -mo[i];
+                ms[i] += mn[i];
             }
         }
         for (k, &(a, b)) in self.pairs.iter().enumerate() {
@@ -196,8 +196,8 @@ impl Scratch {
             let r = (3 * ncam + k) * w;
             let col = &mut self.colsum[r..r + w];
             for i in 0..w {
-                col[i] += -1.0 * ao[i] * bo[i];
-                col[i] += 1.0 * an[i] * bn[i];
+                col[i] += -ao[i] * bo[i];
+                col[i] += an[i] * bn[i];
             }
         }
     }
@@ -246,7 +246,7 @@ const LANES: usize = 6;
 /// the row splits into three runs where neither index wraps.
 #[inline(always)]
 fn row_window_sums(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
-    debug_assert!(w > 2 * r + 1 && colsum.len() == boxsum.len() && colsum.len() % w == 0);
+    debug_assert!(w > 2 * r + 1 && colsum.len() == boxsum.len() && colsum.len().is_multiple_of(w));
     // (first column, first entering column, first leaving column, length).
     let runs = [
         (0, r + 1, w - r, r),
