@@ -4,7 +4,11 @@
 //!
 //! `RAYON_NUM_THREADS=2 cargo bench -p omnimvs-stereo --bench bench_sgm`
 //!
-//! The stage split (warp / cost / aggregation / WTA) of one frame is printed
+//! One benchmark per stage: `warp` (projecting every grid pixel of every
+//! sphere into every camera and sampling it, the way the matcher does),
+//! `warp_and_cost` (the matcher: warp, window sums, ZNCC and the volume in
+//! one pass; the cost stage is its time minus `warp`'s), `aggregation_8_paths`
+//! and `wta`, then the whole method. The stage split of one frame is printed
 //! before the measurements; `examples/full_size.rs` prints it per frame
 //! with the CPU time and peak memory.
 
@@ -13,9 +17,13 @@ mod scenes;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 
-use omnimvs_stereo::{SgmParams, SphericalStereo, SweepStep, winner_take_all};
+use omnimvs_stereo::{
+    CameraView, SgmParams, SphereProjector, SphericalStereo, SweepStep, winner_take_all,
+};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+use rayon::prelude::*;
 use scenes::{Rendered, published_rig, room};
+use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
     let rig = published_rig(1.0);
@@ -50,6 +58,49 @@ fn bench(c: &mut Criterion) {
     .unwrap();
     g.bench_function("whole_method_every_other_sphere", |b| {
         b.iter(|| half.compute(&images, None).unwrap())
+    });
+    // The warp alone: every sphere, camera and grid row, as `Matcher::warp_row`.
+    let projectors: Vec<SphereProjector> = rig
+        .cameras
+        .iter()
+        .enumerate()
+        .map(|(i, c)| SphereProjector::new(c, i + 1, &grid).unwrap())
+        .collect();
+    let views: Vec<CameraView> = images
+        .iter()
+        .enumerate()
+        .map(|(i, img)| CameraView::new(img, None, i + 1).unwrap())
+        .collect();
+    // Four consecutive spheres per task, interleaved row by row and camera
+    // by camera, as the matcher does (it keeps the images in cache).
+    g.bench_function("warp", |b| {
+        b.iter(|| {
+            let spheres: Vec<usize> = (0..hyps.count).collect();
+            spheres
+                .par_chunks(4)
+                .map(|ns| {
+                    let d: Vec<f32> = ns
+                        .iter()
+                        .map(|&n| hyps.inv_depth(n as f64) as f32)
+                        .collect();
+                    let w = grid.width;
+                    let (mut cols, mut rows, mut tmp) =
+                        (vec![0f32; w], vec![0f32; w], vec![0f32; w]);
+                    let mut acc = 0f32;
+                    for row in 0..grid.height {
+                        for (p, v) in projectors.iter().zip(&views) {
+                            for &dn in &d {
+                                p.project_run(row * w, dn, &mut cols, &mut rows, &mut tmp);
+                                for (&c, &r) in cols.iter().zip(&rows) {
+                                    acc += v.sample(c, r).unwrap_or(0.0);
+                                }
+                            }
+                        }
+                    }
+                    black_box(acc)
+                })
+                .sum::<f32>()
+        })
     });
     g.bench_function("warp_and_cost", |b| {
         b.iter(|| stereo.cost_volume(&images, None).unwrap())

@@ -86,10 +86,13 @@ pub struct Matcher<'a> {
 /// Per-thread buffers of one sphere's computation.
 struct Scratch {
     ncam: usize,
-    patch: usize,
     width: usize,
+    /// Rows in the ring of samples: the window's `patch` and the one that
+    /// is leaving it, so that a new row can be warped before the old one is
+    /// subtracted and both happen in one pass ([`Self::update`]).
+    slots: usize,
     pairs: Vec<(usize, usize)>,
-    /// `[cam][slot][col]`: sampled values of the last `patch` rows.
+    /// `[cam][slot][col]`: sampled values of the last `slots` rows.
     values: Vec<f32>,
     /// Same layout: 1 where the sample is missing.
     missing: Vec<f32>,
@@ -97,8 +100,6 @@ struct Scratch {
     colsum: Vec<f32>,
     /// `[quantity][col]`: full window sums of the current row.
     boxsum: Vec<f32>,
-    /// `[quantity]`: the running window sum along the row.
-    window: Vec<f32>,
     /// `[cam][col]`: window mean and `1 / std` of each camera.
     mean: Vec<f32>,
     inv_std: Vec<f32>,
@@ -119,17 +120,18 @@ impl Scratch {
                 pairs.push((a, b));
             }
         }
+        // Quantities per column: per camera sum, sum of squares, missing
+        // count; per pair the sum of products.
         let q = 3 * ncam + pairs.len();
         Self {
             ncam,
-            patch,
             width,
             pairs,
-            values: vec![0.0; ncam * patch * width],
-            missing: vec![0.0; ncam * patch * width],
+            slots: patch + 1,
+            values: vec![0.0; ncam * (patch + 1) * width],
+            missing: vec![0.0; ncam * (patch + 1) * width],
             colsum: vec![0.0; q * width],
             boxsum: vec![0.0; q * width],
-            window: vec![0.0; q],
             mean: vec![0.0; ncam * width],
             inv_std: vec![0.0; ncam * width],
             cost_sum: vec![0.0; width],
@@ -140,19 +142,64 @@ impl Scratch {
         }
     }
 
-    /// Quantities per column: per camera sum, sum of squares, missing count;
-    /// per pair the sum of products.
-    fn quantities(&self) -> usize {
-        3 * self.ncam + self.pairs.len()
-    }
-
     fn row_slice(&self, cam: usize, slot: usize) -> std::ops::Range<usize> {
-        let start = (cam * self.patch + slot) * self.width;
+        let start = (cam * self.slots + slot) * self.width;
         start..start + self.width
     }
 
     fn quantity(&self, q: usize) -> std::ops::Range<usize> {
         q * self.width..(q + 1) * self.width
+    }
+
+    /// Removes the row in slot `remove` from the column sums and adds the
+    /// row in slot `add`.
+    fn update(&mut self, remove: Option<usize>, add: Option<usize>) {
+        match (remove, add) {
+            (Some(old), Some(new)) => self.replace(old, new),
+            (Some(old), None) => self.accumulate(old, -1.0),
+            (None, Some(new)) => self.accumulate(new, 1.0),
+            (None, None) => {}
+        }
+    }
+
+    /// `accumulate(old, -1.0)` then `accumulate(new, 1.0)` in one pass over
+    /// the column sums: per element the same operations in the same order
+    /// (`-1 * v` is `-v` exactly), so the sums are bit-identical.
+    fn replace(&mut self, old: usize, new: usize) {
+        let (ncam, w) = (self.ncam, self.width);
+        for cam in 0..ncam {
+            let (ro, rn) = (self.row_slice(cam, old), self.row_slice(cam, new));
+            let (vo, mo) = (&self.values[ro.clone()], &self.missing[ro]);
+            let (vn, mn) = (&self.values[rn.clone()], &self.missing[rn]);
+            let (s1, rest) = self.colsum.split_at_mut((ncam + cam) * w);
+            let sum = &mut s1[cam * w..(cam + 1) * w];
+            let (s2, s3) = rest.split_at_mut(ncam * w);
+            let (sq, ms) = (&mut s2[..w], &mut s3[..w]);
+            for i in 0..w {
+                sum[i] += -vo[i];
+                sum[i] += vn[i];
+                sq[i] += -vo[i] * vo[i];
+                sq[i] += vn[i] * vn[i];
+                ms[i] += -mo[i];
+                ms[i] += mn[i];
+            }
+        }
+        for (k, &(a, b)) in self.pairs.iter().enumerate() {
+            let (ao, bo) = (
+                &self.values[self.row_slice(a, old)],
+                &self.values[self.row_slice(b, old)],
+            );
+            let (an, bn) = (
+                &self.values[self.row_slice(a, new)],
+                &self.values[self.row_slice(b, new)],
+            );
+            let r = (3 * ncam + k) * w;
+            let col = &mut self.colsum[r..r + w];
+            for i in 0..w {
+                col[i] += -ao[i] * bo[i];
+                col[i] += an[i] * bn[i];
+            }
+        }
     }
 
     /// Adds (`sign = 1`) or removes (`-1`) the row in `slot` from the column sums.
@@ -185,6 +232,96 @@ impl Scratch {
     }
 }
 
+/// Quantities whose running sums advance side by side in
+/// [`row_window_sums`]: independent additions that hide each other's latency.
+const LANES: usize = 6;
+
+/// Window sums along one grid row for every quantity: `boxsum[j][x]` is the
+/// sum of `colsum[j][x - r ..= x + r]`, columns taken round the ring.
+/// `colsum` and `boxsum` are `[quantity][col]` with rows of `w`, `w > 2 r + 1`.
+///
+/// Each quantity is one running sum from column 0, in exactly the order of
+/// [`row_window_sums_reference`] (so the results are bit-identical), but the
+/// columns entering and leaving the window are read from contiguous slices:
+/// the row splits into three runs where neither index wraps.
+#[inline(always)]
+fn row_window_sums(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
+    debug_assert!(w > 2 * r + 1 && colsum.len() == boxsum.len() && colsum.len().is_multiple_of(w));
+    // (first column, first entering column, first leaving column, length).
+    let runs = [
+        (0, r + 1, w - r, r),
+        (r, 2 * r + 1, 0, w - 2 * r - 1),
+        (w - r - 1, 0, w - 2 * r - 1, r + 1),
+    ];
+    let mut rows = colsum.chunks_exact(w).zip(boxsum.chunks_exact_mut(w));
+    loop {
+        let mut c: [&[f32]; LANES] = [&[]; LANES];
+        let mut b: [&mut [f32]; LANES] = Default::default();
+        let mut lanes = 0;
+        for (cj, bj) in rows.by_ref().take(LANES) {
+            c[lanes] = cj;
+            b[lanes] = bj;
+            lanes += 1;
+        }
+        if lanes == 0 {
+            break;
+        }
+        let mut acc = [0f32; LANES];
+        for k in 0..2 * r + 1 {
+            let x = (k + w - r) % w;
+            for l in 0..lanes {
+                acc[l] += c[l][x];
+            }
+        }
+        for &(x0, enter, leave, len) in &runs {
+            if lanes == LANES {
+                // The common case: all lanes' chains in one loop body.
+                let e: [&[f32]; LANES] = std::array::from_fn(|l| &c[l][enter..enter + len]);
+                let v: [&[f32]; LANES] = std::array::from_fn(|l| &c[l][leave..leave + len]);
+                let o = b.each_mut().map(|bl| &mut bl[x0..x0 + len]);
+                for i in 0..len {
+                    for l in 0..LANES {
+                        o[l][i] = acc[l];
+                        acc[l] += e[l][i] - v[l][i];
+                    }
+                }
+                continue;
+            }
+            for l in 0..lanes {
+                let (bl, cl) = (&mut b[l][x0..x0 + len], c[l]);
+                let (e, v) = (&cl[enter..enter + len], &cl[leave..leave + len]);
+                let mut a = acc[l];
+                for ((o, &ein), &out) in bl.iter_mut().zip(e).zip(v) {
+                    *o = a;
+                    a += ein - out;
+                }
+                acc[l] = a;
+            }
+        }
+    }
+}
+
+/// [`row_window_sums`] written plainly (the reference of its tests):
+/// every quantity's running sum, indices taken modulo the width.
+#[cfg(test)]
+fn row_window_sums_reference(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
+    let mut window = vec![0f32; colsum.len() / w];
+    for k in 0..2 * r + 1 {
+        let x = (k + w - r) % w;
+        for (j, acc) in window.iter_mut().enumerate() {
+            *acc += colsum[j * w + x];
+        }
+    }
+    for x in 0..w {
+        let enter = (x + r + 1) % w;
+        let leave = (x + w - r) % w;
+        for (j, acc) in window.iter_mut().enumerate() {
+            boxsum[j * w + x] = *acc;
+            *acc += colsum[j * w + enter] - colsum[j * w + leave];
+        }
+    }
+}
+
 impl Matcher<'_> {
     fn patch(&self) -> usize {
         2 * self.radius + 1
@@ -194,7 +331,7 @@ impl Matcher<'_> {
     /// into the ring slot of that row.
     fn warp_row(&self, s: &mut Scratch, cam: usize, row: usize, inv_depth: f32) {
         let w = self.grid.width;
-        let slot = row % s.patch;
+        let slot = row % s.slots;
         let view = &self.views[cam];
         self.projectors[cam].project_run(
             row * w,
@@ -217,26 +354,8 @@ impl Matcher<'_> {
     /// longitude.
     fn cost_row(&self, s: &mut Scratch, row: usize, out: &mut [u16]) {
         let (w, h, r) = (self.grid.width, self.grid.height, self.radius);
-        let q = s.quantities();
         let ncam = s.ncam;
-        // Window sums along the row: one running sum per quantity, the
-        // quantities interleaved so that the additions are independent.
-        s.window.fill(0.0);
-        for k in 0..self.patch() {
-            let x = (k + w - r) % w;
-            for (j, acc) in s.window.iter_mut().enumerate() {
-                *acc += s.colsum[j * w + x];
-            }
-        }
-        for x in 0..w {
-            let enter = (x + r + 1) % w;
-            let leave = (x + w - r) % w;
-            for (j, acc) in s.window.iter_mut().enumerate() {
-                s.boxsum[j * w + x] = *acc;
-                *acc += s.colsum[j * w + enter] - s.colsum[j * w + leave];
-            }
-        }
-        let _ = q;
+        row_window_sums(&s.colsum, &mut s.boxsum, w, r);
         // ZNCC, vectorised along the row.
         let rows = (row + r).min(h - 1) - row.saturating_sub(r) + 1;
         let inv_n = 1.0 / (rows * self.patch()) as f32;
@@ -319,33 +438,28 @@ impl Matcher<'_> {
             warp_rows(scratch, row);
             let t1 = Instant::now();
             for s in scratch.iter_mut() {
-                s.accumulate(row % s.patch, 1.0);
+                s.accumulate(row % s.slots, 1.0);
             }
             warp += t1 - t0;
             cost += t1.elapsed();
         }
         for row in 0..h {
+            // The ring has a slot more than the window, so the new row is
+            // warped before the leaving one is subtracted.
             let t0 = Instant::now();
-            if row > r {
-                for s in scratch.iter_mut() {
-                    s.accumulate((row - r - 1) % s.patch, -1.0);
-                }
-            }
-            let t1 = Instant::now();
             let add = row + r;
             if add < h {
                 warp_rows(scratch, add);
             }
-            let t2 = Instant::now();
+            let t1 = Instant::now();
             for (g, s) in scratch.iter_mut().enumerate() {
-                if add < h {
-                    s.accumulate(add % s.patch, 1.0);
-                }
+                let leave = (row > r).then(|| (row - r - 1) % s.slots);
+                s.update(leave, (add < h).then(|| add % s.slots));
                 let dst = g * plane + row * w;
                 self.cost_row(s, row, &mut out[dst..dst + w]);
             }
-            warp += t2 - t1;
-            cost += (t1 - t0) + t2.elapsed();
+            warp += t1 - t0;
+            cost += t1.elapsed();
         }
         (warp, cost)
     }
@@ -454,5 +568,77 @@ impl Matcher<'_> {
                 cost: total - warp,
             },
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use omnimvs_camera::rng::SplitMix64;
+
+    #[test]
+    fn row_window_sums_equal_the_plain_running_sums_bit_for_bit() {
+        let mut rng = SplitMix64::new(15);
+        // Widths from the smallest allowed (2r + 2) up, radii 0..=4, and
+        // quantity counts that leave 0..3 lanes over (18 is four cameras).
+        for (w, r, q) in [
+            (2, 0, 1),
+            (4, 1, 3),
+            (10, 4, 18),
+            (11, 4, 5),
+            (64, 2, 7),
+            (640, 4, 18),
+        ] {
+            let colsum: Vec<f32> = (0..q * w)
+                .map(|_| (rng.next_f64() * 200.0 - 100.0) as f32)
+                .collect();
+            let (mut fast, mut plain) = (vec![f32::NAN; q * w], vec![f32::NAN; q * w]);
+            row_window_sums(&colsum, &mut fast, w, r);
+            row_window_sums_reference(&colsum, &mut plain, w, r);
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast), bits(&plain), "w {w} r {r} q {q}");
+            // And they are window sums round the ring (to rounding).
+            for j in 0..q {
+                for x in 0..w {
+                    let exact: f64 = (0..2 * r + 1)
+                        .map(|k| f64::from(colsum[j * w + (x + w + k - r) % w]))
+                        .sum();
+                    assert!((f64::from(fast[j * w + x]) - exact).abs() < 1e-2);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn replacing_a_row_equals_removing_then_adding_it_bit_for_bit() {
+        let mut rng = SplitMix64::new(16);
+        for ncam in [2, 3, 4] {
+            let (patch, w) = (3, 37);
+            let mut fused = Scratch::new(ncam, patch, w);
+            for (v, m) in fused.values.iter_mut().zip(fused.missing.iter_mut()) {
+                // Normalised samples, some of them missing (0 with a 1 flag).
+                let missing = rng.below(5) == 0;
+                *v = if missing {
+                    0.0
+                } else {
+                    (rng.next_f64() * 6.0 - 3.0) as f32
+                };
+                *m = if missing { 1.0 } else { 0.0 };
+            }
+            for c in fused.colsum.iter_mut() {
+                *c = (rng.next_f64() * 50.0 - 25.0) as f32;
+            }
+            let mut plain = Scratch::new(ncam, patch, w);
+            plain.values.clone_from(&fused.values);
+            plain.missing.clone_from(&fused.missing);
+            plain.colsum.clone_from(&fused.colsum);
+            for (old, new) in [(0, 3), (1, 0), (3, 2)] {
+                fused.update(Some(old), Some(new));
+                plain.accumulate(old, -1.0);
+                plain.accumulate(new, 1.0);
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fused.colsum), bits(&plain.colsum), "{ncam} cameras");
+            }
+        }
     }
 }
