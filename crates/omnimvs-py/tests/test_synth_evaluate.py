@@ -27,7 +27,11 @@ def test_synth_writes_a_dataset(synthetic):
     assert all(image.std() > 5 for image in ds.images(1))
     gt = ds.ground_truth(1)
     assert gt.dtype == np.float32 and gt.shape == (320, 640)
-    np.testing.assert_array_equal(gt, tifffile.imread(out / "omnidepth_gt_640" / "00001.tiff"))
+    # The released two-page layout: an RGB picture, then the f32 values.
+    with tifffile.TiffFile(out / "omnidepth_gt_640" / "00001.tiff") as tif:
+        assert len(tif.pages) == 2
+        assert tif.pages[0].dtype == np.uint8 and tif.pages[0].shape == (320, 640, 3)
+        np.testing.assert_array_equal(gt, tif.pages[1].asarray())
     assert (gt > 0).mean() > 0.5
 
 
