@@ -160,6 +160,18 @@ pub fn read_raw_f32(path: &Path, width: usize) -> Result<InvDepthMap, DataError>
     })
 }
 
+/// Checks that `data` holds a `width x height` map before it is written to `path`.
+fn check_map_len(path: &Path, width: usize, height: usize, data: &[f32]) -> Result<(), DataError> {
+    if data.len() == width * height {
+        return Ok(());
+    }
+    Err(DataError::mismatch(
+        format!("{}: map length", path.display()),
+        width * height,
+        data.len(),
+    ))
+}
+
 /// Writes an f32 map as a single-page, deflate-compressed TIFF, atomically.
 ///
 /// # Errors
@@ -170,13 +182,7 @@ pub fn write_f32_tiff(
     height: usize,
     data: &[f32],
 ) -> Result<(), DataError> {
-    if data.len() != width * height {
-        return Err(DataError::mismatch(
-            format!("{}: map length", path.display()),
-            width * height,
-            data.len(),
-        ));
-    }
+    check_map_len(path, width, height, data)?;
     let mut buf = Cursor::new(Vec::new());
     let bad = |e: tiff::TiffError| DataError::format(path, format!("cannot encode TIFF: {e}"));
     TiffEncoder::new(&mut buf)
@@ -200,13 +206,7 @@ pub fn write_gt_tiff(
     height: usize,
     data: &[f32],
 ) -> Result<(), DataError> {
-    if data.len() != width * height {
-        return Err(DataError::mismatch(
-            format!("{}: map length", path.display()),
-            width * height,
-            data.len(),
-        ));
-    }
+    check_map_len(path, width, height, data)?;
     let max = data
         .iter()
         .copied()

@@ -44,19 +44,7 @@ fn main() {
     let mut within = [[0f64; 3]; 3];
     for frame in first..=last {
         let sample = source.load(0, frame, 0, None).unwrap();
-        let images = sample
-            .images
-            .iter()
-            .map(|img| {
-                burn::tensor::Tensor::<4>::from_data(
-                    burn::tensor::TensorData::new(
-                        img.clone(),
-                        [1, 1, config.input_height, config.input_width],
-                    ),
-                    &device,
-                )
-            })
-            .collect::<Vec<_>>();
+        let images = sample.image_tensors([config.input_height, config.input_width], &device);
         let out = net.forward(&images, &geometry).unwrap();
         let truths = [&sample.stage_gt[0], &sample.stage_gt[1], &sample.gt];
         let mut previous: Option<Vec<f32>> = None;

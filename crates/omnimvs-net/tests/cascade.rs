@@ -133,19 +133,7 @@ fn stages_have_the_expected_shapes_and_stay_in_range() {
     let net = CascadeNet::new(&config, &device).unwrap();
     let geometry = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
     let sample = micro_sample(&config);
-    let learner_images: Vec<_> = sample
-        .images
-        .iter()
-        .map(|img| {
-            burn::tensor::Tensor::<4>::from_data(
-                burn::tensor::TensorData::new(
-                    img.clone(),
-                    [1, 1, config.input_height, config.input_width],
-                ),
-                &device,
-            )
-        })
-        .collect();
+    let learner_images = sample.image_tensors([config.input_height, config.input_width], &device);
     let out = net.forward(&learner_images, &geometry).unwrap();
     let sizes = config.cascade_sizes();
     let ks = [

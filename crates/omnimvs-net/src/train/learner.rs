@@ -161,16 +161,7 @@ impl<M: Trainable> Learner<M> {
     /// The sample's images as `[1, 1, H_I, W_I]` tensors on `device`.
     pub fn image_tensors_on(&self, sample: &Sample, device: &Device) -> Vec<Tensor<4>> {
         let c = self.net.config();
-        sample
-            .images
-            .iter()
-            .map(|image| {
-                Tensor::from_data(
-                    TensorData::new(image.clone(), [1, 1, c.input_height, c.input_width]),
-                    device,
-                )
-            })
-            .collect()
+        sample.image_tensors([c.input_height, c.input_width], device)
     }
 
     /// The sample's images on the training device.

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::ValidityMask;
 use omnimvs_data::Dataset;
 use omnimvs_data::gt::GroundTruth;
@@ -37,6 +38,19 @@ pub struct Sample {
     /// The window of longitudes the cascade's refinement stages train on (`None`: the whole
     /// panorama; the paper's network ignores it).
     pub window: Option<ColumnWindow>,
+}
+
+impl Sample {
+    /// The images as `[1, 1, rows, cols]` tensors on `device` (`[rows, cols]` the network's
+    /// input size, the size the images were prepared at).
+    pub fn image_tensors(&self, [rows, cols]: [usize; 2], device: &Device) -> Vec<Tensor<4>> {
+        self.images
+            .iter()
+            .map(|image| {
+                Tensor::from_data(TensorData::new(image.clone(), [1, 1, rows, cols]), device)
+            })
+            .collect()
+    }
 }
 
 /// A dataset prepared for training: its rig, masks, hypotheses and the sweep grids of every
