@@ -230,6 +230,24 @@ impl AnyNet {
     }
 }
 
+/// The image size `[rows, cols]` that every camera of `rig` shares: the size a network takes
+/// at `infer --input-size native` (our networks take one input size for all cameras). Every
+/// camera's size, in rig order, when they differ or there is no camera.
+///
+/// # Errors
+/// The cameras' sizes, when they are not all the same.
+pub fn common_image_size(rig: &omnimvs_camera::Rig) -> Result<[usize; 2], Vec<[usize; 2]>> {
+    let sizes: Vec<[usize; 2]> = rig
+        .cameras
+        .iter()
+        .map(|c| [c.model.height() as usize, c.model.width() as usize])
+        .collect();
+    match sizes.first() {
+        Some(&first) if sizes.iter().all(|s| *s == first) => Ok(first),
+        _ => Err(sizes),
+    }
+}
+
 /// Loads in-memory files of either family (the configuration's `family` decides).
 ///
 /// # Errors

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use numpy::PyArray2;
 use omnimvs_net::bundled::BundledModel;
-use omnimvs_net::weights::{AnyNet, load_family};
+use omnimvs_net::weights::{AnyNet, common_image_size, load_family};
 use omnimvs_net::{Backend, NetConfig, NetEstimator};
 use omnimvs_sweep::LutCache;
 use pyo3::prelude::*;
@@ -74,19 +74,8 @@ pub fn infer<'py>(
             .as_deref()
             .and_then(Path::extension)
             .is_some_and(|e| e == "pt" || e == "pth");
-        if is_pytorch && let Some(camera) = ds.rig.cameras.first() {
-            let size = [
-                camera.model.height() as usize,
-                camera.model.width() as usize,
-            ];
-            if ds
-                .rig
-                .cameras
-                .iter()
-                .all(|c| [c.model.height() as usize, c.model.width() as usize] == size)
-            {
-                net.set_input_size(size).py_err()?;
-            }
+        if is_pytorch && let Ok(size) = common_image_size(&ds.rig) {
+            net.set_input_size(size).py_err()?;
         }
         let (estimator, _status) = NetEstimator::new(
             net,

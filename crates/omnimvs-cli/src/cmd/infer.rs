@@ -14,6 +14,7 @@ use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_net::Backend;
 use omnimvs_net::NetEstimator;
 use omnimvs_net::infer::FrameResult;
+use omnimvs_net::weights::common_image_size;
 use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
 
 use crate::args::{BACKEND_HELP, Preset, Size, parse_backend};
@@ -123,17 +124,13 @@ pub fn input_size(
     Ok(match asked {
         InputSize::Model => None,
         InputSize::Fixed(size) => Some([size.height, size.width]),
-        InputSize::Native => {
-            let sizes: Vec<[usize; 2]> = ds
-                .rig
-                .cameras
-                .iter()
-                .map(|c| [c.model.height() as usize, c.model.width() as usize])
-                .collect();
-            let Some(&first) = sizes.first() else {
-                bail!("{}: the rig has no camera", ds.config_path.display());
-            };
-            if let Some(other) = sizes.iter().position(|s| *s != first) {
+        InputSize::Native => match common_image_size(&ds.rig) {
+            Ok(size) => Some(size),
+            Err(sizes) => {
+                let Some(first) = sizes.first() else {
+                    bail!("{}: the rig has no camera", ds.config_path.display());
+                };
+                let other = sizes.iter().position(|s| s != first).unwrap_or_default();
                 bail!(
                     "{}: --input-size native needs one image size for every camera; camera 1 \
                      is {}x{}, camera {} is {}x{} (give --input-size HEIGHTxWIDTH)",
@@ -145,8 +142,7 @@ pub fn input_size(
                     sizes[other][1]
                 );
             }
-            Some(first)
-        }
+        },
     })
 }
 
