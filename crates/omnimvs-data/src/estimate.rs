@@ -28,6 +28,22 @@ pub struct DepthEstimate {
 }
 
 impl DepthEstimate {
+    /// A network's estimate: `index` and its `entropy` on `spec`, the inverse depth computed
+    /// from the hypotheses, in `seconds`.
+    pub fn with_entropy(
+        spec: SweepSpec,
+        method: impl Into<String>,
+        index: Vec<f32>,
+        entropy: Vec<f32>,
+        seconds: f64,
+    ) -> Self {
+        Self {
+            entropy: Some(entropy),
+            seconds,
+            ..Self::from_index(spec, method, index)
+        }
+    }
+
     /// An estimate of `index` on `spec`, its inverse depth computed from the hypotheses.
     pub fn from_index(spec: SweepSpec, method: impl Into<String>, index: Vec<f32>) -> Self {
         Self {
@@ -53,6 +69,15 @@ pub trait StageObserver {
 
     /// One stage took `seconds` (in the order they run; `total` last).
     fn stage(&mut self, name: &'static str, seconds: f64);
+
+    /// Several stages in order, given only when [`Self::wants_timings`].
+    fn stages(&mut self, stages: &[(&'static str, f64)]) {
+        if self.wants_timings() {
+            for &(name, seconds) in stages {
+                self.stage(name, seconds);
+            }
+        }
+    }
 }
 
 /// The observer that measures nothing.

@@ -5,9 +5,7 @@
 
 use burn::tensor::Device;
 use omnimvs_camera::ValidityMask;
-use omnimvs_data::{
-    Dataset, DepthEstimate, DepthEstimator, EstimateError, NoTimings, StageObserver,
-};
+use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, EstimateError, StageObserver};
 use omnimvs_sweep::{
     CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache, SweepSpec,
 };
@@ -113,29 +111,6 @@ impl NetEstimator {
             Self::Cascade(i) => (0..i.net().config.num_cameras).collect(),
         }
     }
-
-    /// Runs the network on one frame's gray images (rig order), stages not measured.
-    ///
-    /// # Errors
-    /// [`NetError`] for inconsistent inputs.
-    pub fn run(&self, images: &[GrayImage]) -> Result<DepthEstimate, NetError> {
-        self.run_observed(images, &mut NoTimings)
-    }
-
-    /// [`Self::run`], each stage's time given to `observer` when it wants them.
-    ///
-    /// # Errors
-    /// [`NetError`] for inconsistent inputs.
-    pub fn run_observed(
-        &self,
-        images: &[GrayImage],
-        observer: &mut dyn StageObserver,
-    ) -> Result<DepthEstimate, NetError> {
-        match self {
-            Self::OmniMvs(i) => i.run_observed(images, observer),
-            Self::Cascade(i) => i.run(images, observer),
-        }
-    }
 }
 
 impl From<NetError> for EstimateError {
@@ -156,11 +131,16 @@ impl DepthEstimator for NetEstimator {
         NetEstimator::spec(self)
     }
 
+    /// Stages are timed, and the device waited for after each, only when `observer` wants
+    /// them.
     fn estimate_observed(
         &self,
         images: &[GrayImage],
         observer: &mut dyn StageObserver,
     ) -> Result<DepthEstimate, EstimateError> {
-        Ok(self.run_observed(images, observer)?)
+        Ok(match self {
+            Self::OmniMvs(i) => i.run_observed(images, observer)?,
+            Self::Cascade(i) => i.run(images, observer)?,
+        })
     }
 }

@@ -10,6 +10,7 @@ use omnimvs_sweep::{
 };
 
 pub use crate::backend::device_from_name;
+use crate::cascade::model::read_values;
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::{OmniMvsNet, SweepInput, SweepTaps};
@@ -152,38 +153,28 @@ impl Inference {
             Some(taps) => SweepInput::Device(taps),
             None => SweepInput::Host(&self.grids),
         };
-        let timed = observer.wants_timings();
-        let (out, t) = self.net.infer_with(&inputs, sweep, &self.order, timed)?;
-        let entropy = out.entropy();
-        let read = |t: Tensor<3>, what: &str| {
-            t.into_data()
-                .try_into_vec_as::<f32>()
-                .map_err(|e| NetError::Shape {
-                    what: format!("{what} ({e:?})"),
-                    expected: vec![],
-                    actual: vec![],
-                })
-        };
-        let index = read(out.index, "index map")?;
-        let entropy = read(entropy, "entropy map")?;
-        if timed {
-            for (name, seconds) in [
-                ("features", t.features),
-                ("sweep", t.sweep),
-                ("fusion", t.fusion),
-                ("fusion_finish", t.fusion_finish),
-                ("cost", t.cost),
-                ("softargmin", t.softargmin),
-                ("total", t.total),
-            ] {
-                observer.stage(name, seconds);
-            }
-        }
-        Ok(DepthEstimate {
-            entropy: Some(entropy),
-            seconds: t.total,
-            ..DepthEstimate::from_index(self.spec, Self::NAME, index)
-        })
+        let (out, t) =
+            self.net
+                .infer_with(&inputs, sweep, &self.order, observer.wants_timings())?;
+        let entropy = read_values(out.entropy(), "entropy map")?;
+        let index = read_values(out.index, "index map")?;
+        observer.stages(&[
+            ("features", t.features),
+            ("sweep", t.sweep),
+            ("fusion", t.fusion),
+            ("fusion_finish", t.fusion_finish),
+            ("cost", t.cost),
+            ("softargmin", t.softargmin),
+            ("total", t.total),
+        ]);
+        let spec = self.spec;
+        Ok(DepthEstimate::with_entropy(
+            spec,
+            Self::NAME,
+            index,
+            entropy,
+            t.total,
+        ))
     }
 }
 

@@ -54,16 +54,14 @@ impl SgmEstimator {
 impl StageTimings {
     /// Gives every stage to `observer`, `total` last.
     pub fn report(&self, observer: &mut dyn StageObserver) {
-        for (name, seconds) in [
+        observer.stages(&[
             ("prepare", self.prepare_s),
             ("warp", self.warp_s),
             ("cost", self.cost_s),
             ("aggregation", self.aggregation_s),
             ("wta", self.wta_s),
             ("total", self.total_s),
-        ] {
-            observer.stage(name, seconds);
-        }
+        ]);
     }
 }
 
@@ -89,9 +87,7 @@ impl DepthEstimator for SgmEstimator {
         observer: &mut dyn StageObserver,
     ) -> Result<DepthEstimate, EstimateError> {
         let out = self.stereo.compute(images, self.masks.as_deref())?;
-        if observer.wants_timings() {
-            out.timings.report(observer);
-        }
+        out.timings.report(observer);
         Ok(DepthEstimate {
             spec: self.spec,
             method: Self::NAME.into(),

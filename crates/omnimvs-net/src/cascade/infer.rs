@@ -83,21 +83,20 @@ impl CascadeInference {
         let [_, _, fine] = out.stages;
         let entropy = read_values(fine.entropy(), "entropy map")?;
         let index = read_values(fine.index, "index map")?;
-        if timed {
-            for (name, seconds) in [
-                ("features", t.features),
-                ("coarse", t.coarse),
-                ("mid", t.mid),
-                ("fine", t.fine),
-                ("total", t.total),
-            ] {
-                observer.stage(name, seconds);
-            }
-        }
-        Ok(DepthEstimate {
-            entropy: Some(entropy),
-            seconds: t.total,
-            ..DepthEstimate::from_index(self.spec, Self::NAME, index)
-        })
+        observer.stages(&[
+            ("features", t.features),
+            ("coarse", t.coarse),
+            ("mid", t.mid),
+            ("fine", t.fine),
+            ("total", t.total),
+        ]);
+        let spec = self.spec;
+        Ok(DepthEstimate::with_entropy(
+            spec,
+            Self::NAME,
+            index,
+            entropy,
+            t.total,
+        ))
     }
 }
