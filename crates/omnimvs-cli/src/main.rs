@@ -25,7 +25,6 @@ macro_rules! out {
 mod args;
 mod cmd;
 mod out;
-mod pictures;
 mod weights;
 
 /// 360-degree depth maps from a rig of ultra-wide (220-degree) fisheye cameras,
