@@ -4,9 +4,9 @@
 
 use burn::tensor::Device;
 use omnimvs_data::gt::GroundTruth;
-use omnimvs_net::bench::synthetic_grids;
-use omnimvs_net::train::{Learner, Sample, TrainConfig};
+use omnimvs_net::synthetic::synthetic_grids;
 use omnimvs_net::{Layout, NetConfig};
+use omnimvs_train::{Learner, Sample, TrainConfig};
 
 /// The smallest network the decoder allows: `N = 32`, a `32 x 32` output, two cameras.
 fn micro_config() -> NetConfig {

@@ -6,8 +6,8 @@ use std::path::Path;
 
 use omnimvs_data::image_io::write_png_u8;
 
-use super::trainer::EpochRecord;
-use crate::error::NetError;
+use crate::error::TrainError;
+use crate::trainer::EpochRecord;
 
 const WIDTH: usize = 640;
 const HEIGHT: usize = 400;
@@ -116,8 +116,8 @@ fn text_width(text: &str) -> usize {
 /// (through a temporary file).
 ///
 /// # Errors
-/// [`NetError`] when the file cannot be written.
-pub fn plot_curves(history: &[EpochRecord], path: &Path) -> Result<(), NetError> {
+/// [`TrainError`] when the file cannot be written.
+pub fn plot_curves(history: &[EpochRecord], path: &Path) -> Result<(), TrainError> {
     let mut canvas = Canvas::new();
     let train: Vec<(f64, f64)> = history
         .iter()
@@ -200,7 +200,7 @@ pub fn plot_curves(history: &[EpochRecord], path: &Path) -> Result<(), NetError>
     }
     let tmp = path.with_extension("partial.png");
     write_png_u8(&tmp, WIDTH, HEIGHT, 3, &canvas.pixels)?;
-    std::fs::rename(&tmp, path).map_err(|source| NetError::Io {
+    std::fs::rename(&tmp, path).map_err(|source| TrainError::Io {
         path: path.to_path_buf(),
         source,
     })
