@@ -47,6 +47,9 @@ pub enum TrainError {
         /// What went wrong.
         message: String,
     },
+    /// The training curves could not be drawn.
+    #[error("drawing the training curves: {0}")]
+    Plot(String),
     /// The network: building it, its weights, a forward pass.
     #[error(transparent)]
     Net(#[from] omnimvs_net::NetError),

@@ -9,6 +9,7 @@ use burn::optim::momentum::MomentumConfig;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer, SgdConfig};
 use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::{Device, Tensor, TensorData};
+use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::gt::GroundTruth;
 
 use crate::config::{Optimizer, TrainConfig};
@@ -202,24 +203,40 @@ impl<M: Trainable> Learner<M> {
         Ok(value)
     }
 
-    /// Writes the model and the optimiser state into `dir` (created if needed).
+    /// The model and the optimiser state as burnpack files in memory (the bytes of
+    /// [`MODEL_FILE`] and [`OPTIM_FILE`]: the same containers burn writes to a file).
     ///
     /// # Errors
-    /// [`TrainError`] when a file cannot be written.
+    /// [`TrainError::Checkpoint`] (naming the file under `dir`) when burn cannot serialise them.
+    pub fn checkpoint_bytes(&self, dir: &Path) -> Result<(Vec<u8>, Vec<u8>), TrainError> {
+        let model = dir.join(MODEL_FILE);
+        let mut store = BurnpackStore::from_bytes(None);
+        self.net
+            .save_into(&mut store)
+            .map_err(|e| ckpt_error(&model, e))?;
+        let model_bytes = store.get_bytes().map_err(|e| ckpt_error(&model, e))?;
+        let optim = dir.join(OPTIM_FILE);
+        let optim_bytes = self.optim.into_bytes().map_err(|e| ckpt_error(&optim, e))?;
+        Ok((model_bytes.to_vec(), optim_bytes.to_vec()))
+    }
+
+    /// Writes the model and the optimiser state into `dir` (created if needed): both are
+    /// serialised in memory first, then each file is written atomically, so a failure leaves
+    /// any file of an earlier checkpoint there whole.
+    ///
+    /// # Errors
+    /// [`TrainError`] when a file cannot be serialised or written.
     pub fn save_checkpoint(&self, dir: &Path) -> Result<(), TrainError> {
         std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
             path: dir.to_path_buf(),
             source,
         })?;
-        let model = dir.join(MODEL_FILE);
-        let mut store = BurnpackStore::from_file(&model)
-            .auto_extension(false)
-            .overwrite(true);
-        self.net
-            .save_into(&mut store)
-            .map_err(|e| ckpt_error(&model, e))?;
-        let optim = dir.join(OPTIM_FILE);
-        self.optim.save(&optim).map_err(|e| ckpt_error(&optim, e))
+        let (model_bytes, optim_bytes) = self.checkpoint_bytes(dir)?;
+        for (name, bytes) in [(MODEL_FILE, model_bytes), (OPTIM_FILE, optim_bytes)] {
+            let path = dir.join(name);
+            write_atomic(&path, &bytes).map_err(|source| TrainError::Io { path, source })?;
+        }
+        Ok(())
     }
 
     /// Restores the model and the optimiser state written by [`Learner::save_checkpoint`].

@@ -1,207 +1,149 @@
 //! The PNG of the training curves: training and validation loss (index units) per epoch,
-//! drawn directly into an RGB buffer (a 3x5 pixel font for the labels) so that the crate
-//! needs no plotting library.
+//! drawn with `plotters` into an RGB buffer and written atomically. The labels use DejaVu Sans
+//! (its ASCII subset, `fonts/`, embedded in the binary), so drawing needs no system font.
 
 use std::path::Path;
+use std::sync::OnceLock;
 
 use omnimvs_data::image_io::write_png_u8;
+use plotters::prelude::*;
+use plotters::style::{FontStyle, register_font};
 
 use crate::error::TrainError;
 use crate::trainer::EpochRecord;
 
-const WIDTH: usize = 640;
-const HEIGHT: usize = 400;
-const LEFT: usize = 70;
-const RIGHT: usize = 20;
-const TOP: usize = 40;
-const BOTTOM: usize = 50;
-const TRAIN_COLOR: [u8; 3] = [31, 119, 180];
-const VAL_COLOR: [u8; 3] = [255, 127, 14];
-const AXIS_COLOR: [u8; 3] = [40, 40, 40];
-const GRID_COLOR: [u8; 3] = [225, 225, 225];
-const FONT_SCALE: usize = 2;
+/// Width of the picture, pixels.
+pub const WIDTH: u32 = 640;
+/// Height of the picture, pixels.
+pub const HEIGHT: u32 = 400;
+const TRAIN_COLOR: RGBColor = RGBColor(31, 119, 180);
+const VAL_COLOR: RGBColor = RGBColor(255, 127, 14);
+/// The family name the embedded font is registered under: plotters' default, so every text
+/// of a chart (ticks, legend) finds it.
+const FONT_FAMILY: &str = "sans-serif";
+const FONT: &[u8] = include_bytes!("../fonts/DejaVuSans-ascii.ttf");
 
-/// 3x5 glyphs, one row per 3 bits (most significant bit on the left).
-fn glyph(c: char) -> Option<[u8; 5]> {
-    Some(match c {
-        '0' => [7, 5, 5, 5, 7],
-        '1' => [2, 6, 2, 2, 7],
-        '2' => [7, 1, 7, 4, 7],
-        '3' => [7, 1, 7, 1, 7],
-        '4' => [5, 5, 7, 1, 1],
-        '5' => [7, 4, 7, 1, 7],
-        '6' => [7, 4, 7, 5, 7],
-        '7' => [7, 1, 1, 1, 1],
-        '8' => [7, 5, 7, 5, 7],
-        '9' => [7, 5, 7, 1, 7],
-        '.' => [0, 0, 0, 0, 2],
-        '-' => [0, 0, 7, 0, 0],
-        'a' => [0, 7, 1, 7, 7],
-        'c' => [0, 7, 4, 4, 7],
-        'e' => [7, 5, 7, 4, 7],
-        'h' => [4, 4, 7, 5, 5],
-        'i' => [2, 0, 2, 2, 2],
-        'l' => [6, 2, 2, 2, 7],
-        'n' => [0, 6, 5, 5, 5],
-        'o' => [0, 7, 5, 5, 7],
-        'p' => [7, 5, 7, 4, 4],
-        'r' => [0, 7, 4, 4, 4],
-        's' => [7, 4, 7, 1, 7],
-        't' => [4, 7, 4, 4, 7],
-        'v' => [0, 5, 5, 5, 2],
-        ' ' => [0; 5],
-        _ => return None,
-    })
-}
-
-struct Canvas {
-    pixels: Vec<u8>,
-}
-
-impl Canvas {
-    fn new() -> Self {
-        Self {
-            pixels: vec![255; WIDTH * HEIGHT * 3],
-        }
-    }
-
-    fn put(&mut self, x: i64, y: i64, color: [u8; 3]) {
-        if x >= 0 && y >= 0 && (x as usize) < WIDTH && (y as usize) < HEIGHT {
-            let i = (y as usize * WIDTH + x as usize) * 3;
-            self.pixels[i..i + 3].copy_from_slice(&color);
-        }
-    }
-
-    /// A line of width 2 (Bresenham, thickened).
-    fn line(&mut self, (x0, y0): (f64, f64), (x1, y1): (f64, f64), color: [u8; 3]) {
-        let steps = (x1 - x0).abs().max((y1 - y0).abs()).ceil().max(1.0) as usize;
-        for s in 0..=steps {
-            let t = s as f64 / steps as f64;
-            let (x, y) = (x0 + (x1 - x0) * t, y0 + (y1 - y0) * t);
-            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                self.put(x.round() as i64 + dx, y.round() as i64 + dy, color);
-            }
-        }
-    }
-
-    fn text(&mut self, x: usize, y: usize, text: &str, color: [u8; 3]) {
-        for (k, c) in text.chars().enumerate() {
-            let Some(rows) = glyph(c) else { continue };
-            let x0 = x + k * 4 * FONT_SCALE;
-            for (r, bits) in rows.iter().enumerate() {
-                for col in 0..3 {
-                    if bits >> (2 - col) & 1 == 1 {
-                        for sy in 0..FONT_SCALE {
-                            for sx in 0..FONT_SCALE {
-                                self.put(
-                                    (x0 + col * FONT_SCALE + sx) as i64,
-                                    (y + r * FONT_SCALE + sy) as i64,
-                                    color,
-                                );
-                            }
-                        }
-                    }
-                }
-            }
-        }
+/// Registers the embedded font with plotters once per process.
+fn font() -> Result<(), TrainError> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok =
+        *REGISTERED.get_or_init(|| register_font(FONT_FAMILY, FontStyle::Normal, FONT).is_ok());
+    if ok {
+        Ok(())
+    } else {
+        Err(TrainError::Plot("the embedded font cannot be read".into()))
     }
 }
 
-/// Width in pixels of `text` in the plot's font.
-fn text_width(text: &str) -> usize {
-    text.chars().count() * 4 * FONT_SCALE
+fn plot_error(e: impl std::fmt::Display) -> TrainError {
+    TrainError::Plot(e.to_string())
 }
 
-/// Draws the training and validation loss of `history` and writes the PNG to `path`
-/// (through a temporary file).
+/// The curves of `history` as `WIDTH x HEIGHT` RGB pixels (row-major, 3 bytes a pixel): the
+/// training loss and, where there is one, the validation loss of every epoch, a dot per
+/// epoch. Non-finite losses are left out.
 ///
 /// # Errors
-/// [`TrainError`] when the file cannot be written.
-pub fn plot_curves(history: &[EpochRecord], path: &Path) -> Result<(), TrainError> {
-    let mut canvas = Canvas::new();
-    let train: Vec<(f64, f64)> = history
+/// [`TrainError::Plot`] when plotters fails to draw.
+pub fn draw_curves(history: &[EpochRecord]) -> Result<Vec<u8>, TrainError> {
+    font()?;
+    let finite = |(e, l): (i32, f64)| l.is_finite().then_some((e, l));
+    let train: Vec<(i32, f64)> = history
         .iter()
-        .map(|r| (r.epoch as f64, r.train_loss))
+        .filter_map(|r| finite((r.epoch as i32, r.train_loss)))
         .collect();
-    let val: Vec<(f64, f64)> = history
+    let val: Vec<(i32, f64)> = history
         .iter()
-        .filter_map(|r| r.val_loss.map(|v| (r.epoch as f64, v)))
+        .filter_map(|r| r.val_loss.and_then(|v| finite((r.epoch as i32, v))))
         .collect();
-    let max_epoch = history.iter().map(|r| r.epoch).max().unwrap_or(1).max(2) as f64;
+    let max_epoch = history.iter().map(|r| r.epoch).max().unwrap_or(1).max(2) as i32;
     let max_loss = train
         .iter()
         .chain(&val)
         .map(|p| p.1)
-        .filter(|v| v.is_finite())
         .fold(0f64, f64::max)
         .max(1e-3)
         * 1.05;
-    let (x0, x1) = (LEFT as f64, (WIDTH - RIGHT) as f64);
-    let (y0, y1) = ((HEIGHT - BOTTOM) as f64, TOP as f64);
-    let px = |(e, l): (f64, f64)| {
-        (
-            x0 + (e - 1.0) / (max_epoch - 1.0) * (x1 - x0),
-            y0 + l / max_loss * (y1 - y0),
-        )
-    };
-    // Grid and tick labels.
-    for k in 0..=5 {
-        let value = max_loss * k as f64 / 5.0;
-        let y = y0 + value / max_loss * (y1 - y0);
-        canvas.line((x0, y), (x1, y), GRID_COLOR);
-        let label = format!("{value:.2}");
-        canvas.text(
-            LEFT - 8 - text_width(&label),
-            y as usize - 5,
-            &label,
-            AXIS_COLOR,
-        );
-    }
-    let ticks = (max_epoch as usize).saturating_sub(1).clamp(1, 10);
-    for k in 0..=ticks {
-        let epoch = 1.0 + (max_epoch - 1.0) * k as f64 / ticks as f64;
-        let (x, _) = px((epoch, 0.0));
-        canvas.line((x, y0), (x, y0 + 5.0), AXIS_COLOR);
-        let label = format!("{}", epoch.round() as usize);
-        canvas.text(
-            x as usize - text_width(&label) / 2,
-            y0 as usize + 10,
-            &label,
-            AXIS_COLOR,
-        );
-    }
-    canvas.line((x0, y0), (x1, y0), AXIS_COLOR);
-    canvas.line((x0, y0), (x0, y1), AXIS_COLOR);
-    canvas.text(
-        WIDTH / 2 - text_width("epoch") / 2,
-        HEIGHT - 20,
-        "epoch",
-        AXIS_COLOR,
-    );
-    canvas.text(10, 12, "loss", AXIS_COLOR);
-    // Legend.
-    canvas.line((x1 - 150.0, 18.0), (x1 - 125.0, 18.0), TRAIN_COLOR);
-    canvas.text(WIDTH - RIGHT - 118, 13, "train", TRAIN_COLOR);
-    canvas.line((x1 - 60.0, 18.0), (x1 - 35.0, 18.0), VAL_COLOR);
-    canvas.text(WIDTH - RIGHT - 28, 13, "val", VAL_COLOR);
-    // Curves, with a dot per epoch.
-    for (points, color) in [(&train, TRAIN_COLOR), (&val, VAL_COLOR)] {
-        for pair in points.windows(2) {
-            canvas.line(px(pair[0]), px(pair[1]), color);
-        }
-        for &p in points.iter() {
-            let (x, y) = px(p);
-            for dy in -2..=2 {
-                for dx in -2..=2 {
-                    canvas.put(x.round() as i64 + dx, y.round() as i64 + dy, color);
-                }
+    let mut pixels = vec![255u8; (WIDTH * HEIGHT * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut pixels, (WIDTH, HEIGHT)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_error)?;
+        let mut chart = ChartBuilder::on(&root)
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(1..max_epoch, 0f64..max_loss)
+            .map_err(plot_error)?;
+        chart
+            .configure_mesh()
+            .x_labels((max_epoch as usize).min(11))
+            .y_labels(6)
+            .x_desc("epoch")
+            .y_desc("loss (index units)")
+            .label_style((FONT_FAMILY, 14))
+            .axis_desc_style((FONT_FAMILY, 15))
+            .y_label_formatter(&|v| format!("{v:.2}"))
+            .light_line_style(WHITE)
+            .draw()
+            .map_err(plot_error)?;
+        for (name, points, color) in [("train", &train, TRAIN_COLOR), ("val", &val, VAL_COLOR)] {
+            if points.is_empty() {
+                continue;
             }
+            chart
+                .draw_series(LineSeries::new(
+                    points.iter().copied(),
+                    color.stroke_width(2),
+                ))
+                .map_err(plot_error)?
+                .label(name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(2))
+                });
+            chart
+                .draw_series(points.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                .map_err(plot_error)?;
         }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font((FONT_FAMILY, 14))
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK.mix(0.4))
+            .draw()
+            .map_err(plot_error)?;
+        root.present().map_err(plot_error)?;
     }
-    let tmp = path.with_extension("partial.png");
-    write_png_u8(&tmp, WIDTH, HEIGHT, 3, &canvas.pixels)?;
-    std::fs::rename(&tmp, path).map_err(|source| TrainError::Io {
+    Ok(pixels)
+}
+
+/// Draws the training and validation loss of `history` ([`draw_curves`]) and writes the PNG
+/// to `path` atomically.
+///
+/// # Errors
+/// [`TrainError`] when the curves cannot be drawn or the file cannot be written.
+pub fn plot_curves(history: &[EpochRecord], path: &Path) -> Result<(), TrainError> {
+    let pixels = draw_curves(history)?;
+    write_png_u8(path, WIDTH as usize, HEIGHT as usize, 3, &pixels)?;
+    Ok(())
+}
+
+/// Reads a run's `metrics.jsonl` (one [`EpochRecord`] a line), e.g. to redraw its curves.
+///
+/// # Errors
+/// [`TrainError`] when the file cannot be read or a line is not a record.
+pub fn read_metrics(path: &Path) -> Result<Vec<EpochRecord>, TrainError> {
+    let text = std::fs::read_to_string(path).map_err(|source| TrainError::Io {
         path: path.to_path_buf(),
         source,
-    })
+    })?;
+    text.lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|line| {
+            serde_json::from_str(line).map_err(|source| TrainError::Json {
+                path: path.to_path_buf(),
+                source,
+            })
+        })
+        .collect()
 }

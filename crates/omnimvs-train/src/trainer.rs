@@ -11,7 +11,8 @@
 //! RUN_DIR/checkpoints/epoch-EEEE/  model.bpk, optim.bpk, state.json
 //! ```
 //!
-//! Every file is written under a temporary name and renamed, so killing the process at any
+//! Every file is written atomically (`omnimvs_camera::fs::write_atomic`: a temporary file, then
+//! a rename; a checkpoint is a new folder renamed into place), so killing the process at any
 //! moment leaves the previous epoch's checkpoint usable: at most one epoch is lost.
 
 use std::collections::HashMap;
@@ -121,20 +122,15 @@ fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, TrainError>
     })
 }
 
-/// Saves weights (safetensors + JSON) under `name` in `dir` atomically.
+/// Saves weights (safetensors + JSON) under `name` in `dir`, each file atomically.
 fn export_weights<M: Trainable>(
     learner: &Learner<M>,
     dir: &Path,
     name: &str,
 ) -> Result<(), TrainError> {
-    let tmp = dir.join(format!("{name}.partial.safetensors"));
-    learner.net.save_weights(&tmp)?;
-    for ext in ["json", "safetensors"] {
-        let from = tmp.with_extension(ext);
-        let to = dir.join(format!("{name}.{ext}"));
-        std::fs::rename(&from, &to).map_err(|e| io_error(&to, e))?;
-    }
-    Ok(())
+    learner
+        .net
+        .save_weights(&dir.join(format!("{name}.safetensors")))
 }
 
 /// A training run on dataset folders, of the paper's network or another [`Trainable`]
