@@ -30,9 +30,9 @@ if [ "$torch_version" != "2.9.0" ]; then
 fi
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target/libtorch}"
 cd "$root"
-# `-p omnimvs-net` selects the library alone; everything else goes through the binary crate.
+# `-p omnimvs-net` (or `-p omnimvs-train`) selects a library alone; everything else goes through the binary crate.
 features=omnimvs-cli/libtorch
 for arg in "$@"; do
-    case "$arg" in omnimvs-net) features=libtorch ;; esac
+    case "$arg" in omnimvs-net | omnimvs-train) features=libtorch ;; esac
 done
 exec cargo "$command" --features "$features" "$@"

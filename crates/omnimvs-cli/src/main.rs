@@ -23,6 +23,7 @@ macro_rules! out {
 }
 
 mod args;
+mod bench;
 mod cmd;
 mod out;
 mod weights;

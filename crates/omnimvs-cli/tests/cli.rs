@@ -212,6 +212,40 @@ fn bench_reports_stages_train_step_and_memory() {
     assert!(v["forward"]["peak_rss_bytes"].as_u64().unwrap() > 0);
 }
 
+/// The memory budget for paper-preset inference on the CPU: one warm-up forward pass
+/// (random weights, batch norms folded, the memory-lean per-camera path) under 4 GiB.
+/// `cargo test --release --workspace --test cli -- --ignored paper_preset`.
+#[test]
+#[ignore = "paper preset: minutes of CPU and about 3 GB of memory"]
+fn paper_preset_inference_fits_in_4_gb() {
+    const BUDGET_BYTES: u64 = 4 << 30;
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let o = omnimvs(&[
+        "bench",
+        "--preset",
+        "paper",
+        "--repeats",
+        "0",
+        "--train-steps",
+        "0",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let peak = v["forward"]["peak_rss_bytes"]
+        .as_u64()
+        .expect("peak RSS is read from /proc on Linux");
+    eprintln!("paper preset peak RSS: {} MiB", peak >> 20);
+    assert!(
+        peak < BUDGET_BYTES,
+        "peak RSS {} MiB over the 4 GiB budget",
+        peak >> 20
+    );
+}
+
 #[test]
 fn backends_missing_from_the_build_are_explained() {
     let o = omnimvs(&["bench", "--backend", "gpu"]);

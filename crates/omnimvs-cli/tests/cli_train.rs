@@ -1,7 +1,8 @@
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)]
 //! `omnimvs train` end to end, a few steps of the `tiny` preset on a small generated dataset:
 //! a run stopped after one epoch and continued with `--resume` ends with the same weights and
-//! losses as the run made in one go, and `infer --weights RUN/model.safetensors` reads the
+//! losses as the run made in one go (even after an attempt whose checkpoint could not be put in
+//! place, which leaves the previous checkpoint as it was), and `infer --weights RUN/model.safetensors` reads the
 //! weights back and scores the validation frame as the trainer's validation did.
 
 mod support;
@@ -9,7 +10,7 @@ mod support;
 use std::path::Path;
 
 use omnimvs_data::gt::read_inv_depth;
-use support::{read_json, run_ok, synth_dataset};
+use support::{omnimvs, read_json, run_ok, synth_dataset, text};
 
 /// The tensor bytes of a `.safetensors` file (after its 8-byte length and JSON header, whose
 /// metadata keys come in no fixed order).
@@ -80,6 +81,35 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
         (Some(32), Some(128)),
         "the tiny preset's grid: {config}"
     );
+
+    // A checkpoint that cannot be put in place (a file stands where epoch 2's folder goes)
+    // fails the run and leaves epoch 1's checkpoint and the pointer to it as they were.
+    let checkpoint = resumed.join("checkpoints/epoch-0001");
+    let files = ["model.bpk", "optim.bpk", "state.json"];
+    let before: Vec<Vec<u8>> = files
+        .iter()
+        .map(|f| std::fs::read(checkpoint.join(f)).unwrap())
+        .collect();
+    let latest = std::fs::read(resumed.join("latest.json")).unwrap();
+    let blocker = resumed.join("checkpoints/epoch-0002");
+    std::fs::write(&blocker, b"not a folder").unwrap();
+    let o = omnimvs(&["train", "--resume", resumed.to_str().unwrap()], &cache);
+    assert!(
+        !o.status.success(),
+        "a blocked checkpoint must fail the run"
+    );
+    assert!(
+        text(&o.stderr).contains("epoch-0002"),
+        "{}",
+        text(&o.stderr)
+    );
+    assert_eq!(std::fs::read(resumed.join("latest.json")).unwrap(), latest);
+    for (f, bytes) in files.iter().zip(&before) {
+        assert_eq!(&std::fs::read(checkpoint.join(f)).unwrap(), bytes, "{f}");
+    }
+    std::fs::remove_file(&blocker).unwrap();
+
+    // Resumed from there (after the failed attempt), the run ends as the straight one below.
     let stdout = run_ok(&["train", "--resume", resumed.to_str().unwrap()], &cache);
     assert!(stdout.contains("epochs 2..2 of 2"), "{stdout}");
 

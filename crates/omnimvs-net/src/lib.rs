@@ -12,12 +12,12 @@
 //! - [`weights`]: our safetensors files and the import of reference PyTorch checkpoints.
 //! - [`infer`]: running the paper's network on a dataset's frames.
 //! - [`estimator`]: either family on a dataset's frames, one result type.
+//! - [`synthetic`]: a lookup table without a rig, for benchmarks and tests.
 //! - [`backend`]: run-time choice of the compute backend (`cpu`, `libtorch`, `wgpu`, ...).
-//! - [`bench`]: per-stage forward timings.
-//! - [`train`]: end-to-end training (loss, SGD, augmentation, loader, checkpoints).
+//!
+//! Training is the crate `omnimvs-train`; the benchmarks of `omnimvs bench` are the CLI's.
 
 pub mod backend;
-pub mod bench;
 pub mod bundled;
 pub mod cascade;
 pub mod config;
@@ -25,8 +25,8 @@ pub mod error;
 pub mod estimator;
 pub mod infer;
 pub mod model;
+pub mod synthetic;
 pub mod taps;
-pub mod train;
 pub mod weights;
 
 pub use backend::Backend;

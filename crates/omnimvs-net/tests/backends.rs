@@ -10,7 +10,7 @@
 use std::path::Path;
 
 use burn::tensor::{Device, Tensor, TensorData};
-use omnimvs_net::bench::synthetic_grids;
+use omnimvs_net::synthetic::synthetic_grids;
 use omnimvs_net::weights::load_any;
 use omnimvs_net::{Backend, NetConfig, SweepInput, SweepTaps};
 

@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)] // test helpers
 
 use burn::tensor::{Device, Distribution, Tensor};
-use omnimvs_net::bench::synthetic_grids;
+use omnimvs_net::synthetic::synthetic_grids;
 use omnimvs_net::weights::{config_path, load, load_any, save};
 use omnimvs_net::{Layout, NetConfig, OmniMvsNet};
 

@@ -5,15 +5,15 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use omnimvs_camera::fs::write_atomic;
-use omnimvs_net::bench::{
-    BenchReport, CascadeBenchReport, ForwardOptions, TrainStepReport, bench_cascade_forward,
-    bench_cascade_train_step, bench_forward_with, bench_train_step,
-};
 use omnimvs_net::{Backend, Family, NetConfig};
 use omnimvs_synth::rig::preset_rig;
 use serde::Serialize;
 
 use crate::args::{BACKEND_HELP, Preset, parse_backend, parse_output_file};
+use crate::bench::{
+    BenchReport, CascadeBenchReport, ForwardOptions, TrainStepReport, bench_cascade_forward,
+    bench_cascade_train_step, bench_forward, bench_train_step,
+};
 
 /// Time the network's stages, a training step and peak memory on a compute backend.
 ///
@@ -135,7 +135,7 @@ fn bench_omnimvs(
         fold_batch_norm: !args.no_fold,
         device_sweep,
     };
-    let forward = bench_forward_with(config, &options, device).context("forward benchmark")?;
+    let forward = bench_forward(config, &options, device).context("forward benchmark")?;
     outln!(
         "{:<8} {:>9} {:>9} {:>9} {:>9} {:>10} {:>9}",
         "forward",

@@ -7,11 +7,11 @@ use anyhow::{Context, Result, bail};
 use burn::tensor::Device;
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::FrameRange;
-use omnimvs_net::train::trainer::read_run_config;
-use omnimvs_net::train::{
+use omnimvs_net::{CascadeNet, Family, OmniMvsNet};
+use omnimvs_train::trainer::read_run_config;
+use omnimvs_train::{
     EpochRecord, Optimizer, PhotometricAugment, StepInfo, TrainConfig, Trainable, Trainer,
 };
-use omnimvs_net::{CascadeNet, Family, OmniMvsNet};
 
 use crate::args::{BACKEND_HELP, Preset, parse_backend};
 

@@ -13,9 +13,9 @@ use omnimvs_data::gt::ground_truth_index;
 use omnimvs_data::gt::{GroundTruth, InvDepthMap, sample_ground_truth};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LookupTable, SphereSet};
 
-use super::rng::SplitMix64;
-use crate::error::NetError;
-use crate::taps::SweepGrid;
+use crate::error::TrainError;
+use crate::rng::SplitMix64;
+use omnimvs_net::taps::SweepGrid;
 
 /// Small rotations `new_rig_from_rig`; index 0 is the identity.
 #[derive(Clone, Debug, PartialEq)]
@@ -74,22 +74,22 @@ pub fn rotate_rig(rig: &Rig, new_rig_from_rig: &Rotation3<f64>) -> Rig {
 /// per camera.
 ///
 /// # Errors
-/// [`NetError`] when the table cannot be built or split.
+/// [`TrainError`] when the table cannot be built or split.
 pub fn rotated_grids(
     rig: &Rig,
     rotation: &Rotation3<f64>,
     grid: &EquirectGrid,
     hypotheses: &InvDepthHypotheses,
-) -> Result<Vec<SweepGrid>, NetError> {
+) -> Result<Vec<SweepGrid>, TrainError> {
     let rotated = rotate_rig(rig, rotation);
     let table = LookupTable::build(&rotated, grid, hypotheses, SphereSet::EveryOther)?;
-    SweepGrid::split_table(
+    Ok(SweepGrid::split_table(
         &table.data,
         rig.len(),
         table.num_spheres(),
         grid.height,
         grid.width,
-    )
+    )?)
 }
 
 /// Ground truth on the output `grid` of the rig frame rotated by `new_rig_from_rig`: the
@@ -100,13 +100,13 @@ pub fn rotated_grids(
 /// latitude range are invalid.
 ///
 /// # Errors
-/// [`NetError::Data`] for a degenerate map size.
+/// [`TrainError::Data`] for a degenerate map size.
 pub fn resample_ground_truth(
     map: &InvDepthMap,
     grid: &EquirectGrid,
     new_rig_from_rig: &Rotation3<f64>,
     hypotheses: &InvDepthHypotheses,
-) -> Result<GroundTruth, NetError> {
+) -> Result<GroundTruth, TrainError> {
     Ok(sample_ground_truth(
         map,
         hypotheses,

@@ -6,9 +6,9 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-use super::photometric::PhotometricAugment;
-use crate::config::{Family, NetConfig};
-use crate::error::NetError;
+use crate::error::TrainError;
+use crate::photometric::PhotometricAugment;
+use omnimvs_net::config::{Family, NetConfig};
 
 /// The optimiser of a run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -120,10 +120,10 @@ impl TrainConfig {
     /// Checks the values a run needs.
     ///
     /// # Errors
-    /// [`NetError::InvalidConfig`] naming the field.
-    pub fn validate(&self) -> Result<(), NetError> {
+    /// [`TrainError::InvalidConfig`] naming the field.
+    pub fn validate(&self) -> Result<(), TrainError> {
         let invalid =
-            |field: &'static str, message: String| NetError::InvalidConfig { field, message };
+            |field: &'static str, message: String| TrainError::InvalidConfig { field, message };
         self.net.validate()?;
         if self.epochs == 0 {
             return Err(invalid("epochs", "must be at least 1".into()));

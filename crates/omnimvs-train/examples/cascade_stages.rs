@@ -2,7 +2,7 @@
 //! its own grid, and how often the next stage's hypotheses still bracket the truth (a
 //! refinement stage can only move within its hypotheses, so a coarse miss stays a miss).
 //!
-//! `cargo run --release -p omnimvs-net --example cascade_stages -- WEIGHTS DATASET A B`
+//! `cargo run --release -p omnimvs-train --example cascade_stages -- WEIGHTS DATASET A B`
 //!
 //! Training ground truth (sky valid at index 0), in inverse-depth index units of N.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -13,9 +13,9 @@ use burn::tensor::Device;
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::CascadeGeometry;
 use omnimvs_net::cascade::model::read_values;
-use omnimvs_net::train::SampleSource;
-use omnimvs_net::train::augment::RotationSet;
 use omnimvs_net::weights::load_cascade;
+use omnimvs_train::SampleSource;
+use omnimvs_train::augment::RotationSet;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

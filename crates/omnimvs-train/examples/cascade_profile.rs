@@ -1,7 +1,7 @@
 //! Profiles the cascade at full size on one real or generated frame: forward pass per stage
 //! (inference mode) and training steps (forward, backward, optimiser).
 //!
-//! `cargo run --release -p omnimvs-net --example cascade_profile -- DATASET [FRAME] [STEPS]
+//! `cargo run --release -p omnimvs-train --example cascade_profile -- DATASET [FRAME] [STEPS]
 //! [WINDOW]` (WINDOW: train on that many output columns of longitude, see
 //! `omnimvs train --column-window`)
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -12,9 +12,9 @@ use std::time::Instant;
 use burn::tensor::Device;
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeInference};
-use omnimvs_net::train::augment::RotationSet;
-use omnimvs_net::train::{Learner, Optimizer, SampleSource, TrainConfig};
 use omnimvs_net::{CascadeNet, NetConfig};
+use omnimvs_train::augment::RotationSet;
+use omnimvs_train::{Learner, Optimizer, SampleSource, TrainConfig};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

@@ -9,16 +9,16 @@ use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 use omnimvs_data::gt::GroundTruth;
 
-use super::learner::{masked_l1, target_data_with};
-use super::sample::{Sample, SampleSource};
-use crate::cascade::geometry::crop_columns;
-use crate::cascade::{CascadeGeometry, CascadeNet};
-use crate::config::NetConfig;
-use crate::error::NetError;
-use crate::model::{OmniMvsNet, SweepTaps};
-use crate::weights;
+use crate::error::TrainError;
+use crate::learner::{masked_l1, target_data_with};
+use crate::sample::{Sample, SampleSource};
+use omnimvs_net::cascade::geometry::crop_columns;
+use omnimvs_net::cascade::{CascadeGeometry, CascadeNet};
+use omnimvs_net::config::NetConfig;
+use omnimvs_net::model::{OmniMvsNet, SweepTaps};
+use omnimvs_net::weights;
 
-/// A network the [`super::Trainer`] can train.
+/// A network the [`crate::Trainer`] can train.
 pub trait Trainable: Module + Sized {
     /// What a forward pass needs about one rotation of a source's rig, on one device.
     type Geometry: Clone;
@@ -26,8 +26,8 @@ pub trait Trainable: Module + Sized {
     /// A network for `config` on `device`: from `init` weights when given, else random.
     ///
     /// # Errors
-    /// [`NetError`] for an invalid configuration or unreadable weights.
-    fn build(config: &NetConfig, init: Option<&Path>, device: &Device) -> Result<Self, NetError>;
+    /// [`TrainError`] for an invalid configuration or unreadable weights.
+    fn build(config: &NetConfig, init: Option<&Path>, device: &Device) -> Result<Self, TrainError>;
 
     /// The sizes the network was built for.
     fn config(&self) -> &NetConfig;
@@ -35,54 +35,54 @@ pub trait Trainable: Module + Sized {
     /// The geometry of `source`'s rig under its rotation `rotation`, on `device`.
     ///
     /// # Errors
-    /// [`NetError`] when the rig does not fit the network.
+    /// [`TrainError`] when the rig does not fit the network.
     fn geometry(
         &self,
         source: &SampleSource,
         rotation: usize,
         device: &Device,
-    ) -> Result<Self::Geometry, NetError>;
+    ) -> Result<Self::Geometry, TrainError>;
 
     /// The training loss of a sample (`images` on the training device, camera `order` at the
     /// concatenation where the family has one).
     ///
     /// # Errors
-    /// [`NetError`] for inputs that do not fit the network.
+    /// [`TrainError`] for inputs that do not fit the network.
     fn loss(
         &self,
         images: &[Tensor<4>],
         geometry: &Self::Geometry,
         order: &[usize],
         sample: &Sample,
-    ) -> Result<Tensor<1>, NetError>;
+    ) -> Result<Tensor<1>, TrainError>;
 
     /// The inference-mode index map `[1, H, W]` on the output grid, for validation
     /// (`geometry` of the identity rotation, on the inference device).
     ///
     /// # Errors
-    /// [`NetError`] for inputs that do not fit the network.
+    /// [`TrainError`] for inputs that do not fit the network.
     fn predict(
         &self,
         images: &[Tensor<4>],
         geometry: &Self::Geometry,
         source: &SampleSource,
-    ) -> Result<Tensor<3>, NetError>;
+    ) -> Result<Tensor<3>, TrainError>;
 
     /// Writes the weights (safetensors) and the configuration beside them.
     ///
     /// # Errors
-    /// [`NetError`] when a file cannot be written.
-    fn save_weights(&self, path: &Path) -> Result<(), NetError>;
+    /// [`TrainError`] when a file cannot be written.
+    fn save_weights(&self, path: &Path) -> Result<(), TrainError>;
 }
 
 impl Trainable for OmniMvsNet {
     type Geometry = Vec<SweepTaps>;
 
-    fn build(config: &NetConfig, init: Option<&Path>, device: &Device) -> Result<Self, NetError> {
-        match init {
-            Some(path) => weights::load_any(path, config, device),
-            None => OmniMvsNet::new(config, device),
-        }
+    fn build(config: &NetConfig, init: Option<&Path>, device: &Device) -> Result<Self, TrainError> {
+        Ok(match init {
+            Some(path) => weights::load_any(path, config, device)?,
+            None => OmniMvsNet::new(config, device)?,
+        })
     }
 
     fn config(&self) -> &NetConfig {
@@ -94,12 +94,15 @@ impl Trainable for OmniMvsNet {
         source: &SampleSource,
         rotation: usize,
         device: &Device,
-    ) -> Result<Self::Geometry, NetError> {
-        let grids = source.grids.get(rotation).ok_or_else(|| NetError::Shape {
-            what: "rotation of the augmentation".into(),
-            expected: vec![source.grids.len()],
-            actual: vec![rotation],
-        })?;
+    ) -> Result<Self::Geometry, TrainError> {
+        let grids = source
+            .grids
+            .get(rotation)
+            .ok_or_else(|| TrainError::Shape {
+                what: "rotation of the augmentation".into(),
+                expected: vec![source.grids.len()],
+                actual: vec![rotation],
+            })?;
         Ok(SweepTaps::for_grids(
             grids,
             self.config.feature_size(),
@@ -113,7 +116,7 @@ impl Trainable for OmniMvsNet {
         geometry: &Self::Geometry,
         order: &[usize],
         sample: &Sample,
-    ) -> Result<Tensor<1>, NetError> {
+    ) -> Result<Tensor<1>, TrainError> {
         let device = first_device(images, self.config.num_cameras)?;
         let out = self.forward(images, geometry, order)?; // index [1, H, W]
         Ok(index_l1(out.index, &sample.gt, true, &device))
@@ -124,9 +127,9 @@ impl Trainable for OmniMvsNet {
         images: &[Tensor<4>],
         _geometry: &Self::Geometry,
         source: &SampleSource,
-    ) -> Result<Tensor<3>, NetError> {
+    ) -> Result<Tensor<3>, TrainError> {
         // The host sweep of the identity rotation's tables: no device taps needed.
-        let grids = source.grids.first().ok_or_else(|| NetError::Shape {
+        let grids = source.grids.first().ok_or_else(|| TrainError::Shape {
             what: "rotations of the augmentation".into(),
             expected: vec![1],
             actual: vec![0],
@@ -134,19 +137,19 @@ impl Trainable for OmniMvsNet {
         Ok(self.infer(images, grids, &self.identity_order())?.index)
     }
 
-    fn save_weights(&self, path: &Path) -> Result<(), NetError> {
-        weights::save(self, path)
+    fn save_weights(&self, path: &Path) -> Result<(), TrainError> {
+        Ok(weights::save(self, path)?)
     }
 }
 
 impl Trainable for CascadeNet {
     type Geometry = CascadeGeometry;
 
-    fn build(config: &NetConfig, init: Option<&Path>, device: &Device) -> Result<Self, NetError> {
-        match init {
-            Some(path) => weights::load_cascade_grown(path, config, device),
-            None => CascadeNet::new(config, device),
-        }
+    fn build(config: &NetConfig, init: Option<&Path>, device: &Device) -> Result<Self, TrainError> {
+        Ok(match init {
+            Some(path) => weights::load_cascade_grown(path, config, device)?,
+            None => CascadeNet::new(config, device)?,
+        })
     }
 
     fn config(&self) -> &NetConfig {
@@ -158,13 +161,13 @@ impl Trainable for CascadeNet {
         source: &SampleSource,
         rotation: usize,
         device: &Device,
-    ) -> Result<Self::Geometry, NetError> {
-        CascadeGeometry::new(
+    ) -> Result<Self::Geometry, TrainError> {
+        Ok(CascadeGeometry::new(
             &source.rotated_rig(rotation),
             &self.config,
             &source.hypotheses,
             device,
-        )
+        )?)
     }
 
     fn loss(
@@ -173,10 +176,10 @@ impl Trainable for CascadeNet {
         geometry: &Self::Geometry,
         _order: &[usize],
         sample: &Sample,
-    ) -> Result<Tensor<1>, NetError> {
+    ) -> Result<Tensor<1>, TrainError> {
         let device = first_device(images, self.config.num_cameras)?;
         if sample.stage_gt.len() != 2 {
-            return Err(NetError::Shape {
+            return Err(TrainError::Shape {
                 what: "ground truth of the cascade's coarse and half-resolution stages".into(),
                 expected: vec![2],
                 actual: vec![sample.stage_gt.len()],
@@ -208,18 +211,18 @@ impl Trainable for CascadeNet {
         images: &[Tensor<4>],
         geometry: &Self::Geometry,
         _source: &SampleSource,
-    ) -> Result<Tensor<3>, NetError> {
+    ) -> Result<Tensor<3>, TrainError> {
         let [_, _, fine] = self.forward(images, geometry)?.stages;
         Ok(fine.index)
     }
 
-    fn save_weights(&self, path: &Path) -> Result<(), NetError> {
-        weights::save_module(self, &self.config, path)
+    fn save_weights(&self, path: &Path) -> Result<(), TrainError> {
+        Ok(weights::save_module(self, &self.config, path)?)
     }
 }
 
 /// The columns `cols` of a ground truth.
-fn crop_gt(gt: &GroundTruth, cols: std::ops::Range<usize>) -> Result<GroundTruth, NetError> {
+fn crop_gt(gt: &GroundTruth, cols: std::ops::Range<usize>) -> Result<GroundTruth, TrainError> {
     let grid = omnimvs_sweep::EquirectGrid::new(gt.height, gt.width, 45.0)?;
     let index = crop_columns(&gt.index, &grid, &cols)?;
     let valid = gt
@@ -236,15 +239,15 @@ fn crop_gt(gt: &GroundTruth, cols: std::ops::Range<usize>) -> Result<GroundTruth
 }
 
 /// The device of the first image.
-fn first_device(images: &[Tensor<4>], expected: usize) -> Result<Device, NetError> {
+fn first_device(images: &[Tensor<4>], expected: usize) -> Result<Device, TrainError> {
     images
         .first()
         .map(Tensor::device)
         .ok_or_else(|| no_images(expected))
 }
 
-fn no_images(expected: usize) -> NetError {
-    NetError::Shape {
+fn no_images(expected: usize) -> TrainError {
+    TrainError::Shape {
         what: "images per frame".into(),
         expected: vec![expected],
         actual: vec![0],

@@ -5,9 +5,9 @@ use std::sync::Arc;
 use std::sync::mpsc::{Receiver, sync_channel};
 use std::thread::JoinHandle;
 
-use super::photometric::PhotometricAugment;
-use super::sample::{Sample, SampleSource};
-use crate::error::NetError;
+use crate::error::TrainError;
+use crate::photometric::PhotometricAugment;
+use crate::sample::{Sample, SampleSource};
 
 /// One item of an epoch's plan.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,7 +29,7 @@ pub struct PlanItem {
 /// A running loader; dropping the receiver stops the thread after its current sample.
 pub struct Loader {
     /// Prepared samples in plan order, with the plan item they belong to.
-    pub samples: Receiver<(PlanItem, Result<Sample, NetError>)>,
+    pub samples: Receiver<(PlanItem, Result<Sample, TrainError>)>,
     handle: Option<JoinHandle<()>>,
 }
 

@@ -9,13 +9,14 @@ use burn::optim::momentum::MomentumConfig;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer, SgdConfig};
 use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::{Device, Tensor, TensorData};
+use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::gt::GroundTruth;
 
-use super::config::{Optimizer, TrainConfig};
-use super::sample::Sample;
-use super::trainable::Trainable;
-use crate::error::NetError;
-use crate::model::{OmniMvsNet, SweepTaps};
+use crate::config::{Optimizer, TrainConfig};
+use crate::error::TrainError;
+use crate::sample::Sample;
+use crate::trainable::Trainable;
+use omnimvs_net::model::{OmniMvsNet, SweepTaps};
 
 /// File of the model inside a checkpoint folder.
 pub const MODEL_FILE: &str = "model.bpk";
@@ -51,8 +52,8 @@ pub fn target_data_with(gt: &GroundTruth, round: bool) -> (TensorData, TensorDat
     (TensorData::new(target, shape), TensorData::new(mask, shape))
 }
 
-fn ckpt_error(path: &Path, message: impl std::fmt::Display) -> NetError {
-    NetError::Weights {
+fn ckpt_error(path: &Path, message: impl std::fmt::Display) -> TrainError {
+    TrainError::Checkpoint {
         path: path.to_path_buf(),
         message: message.to_string(),
     }
@@ -106,13 +107,13 @@ impl Learner {
     /// `config.seed`.
     ///
     /// # Errors
-    /// [`NetError`] for an invalid configuration or unreadable initial weights.
-    pub fn new(config: &TrainConfig, device: &Device) -> Result<Self, NetError> {
+    /// [`TrainError`] for an invalid configuration or unreadable initial weights.
+    pub fn new(config: &TrainConfig, device: &Device) -> Result<Self, TrainError> {
         Self::for_model(config, device)
     }
 
     /// Sweep taps of one camera set on the training device.
-    pub fn taps(&self, grids: &[crate::taps::SweepGrid]) -> Vec<SweepTaps> {
+    pub fn taps(&self, grids: &[omnimvs_net::taps::SweepGrid]) -> Vec<SweepTaps> {
         SweepTaps::for_grids(grids, self.net.config.feature_size(), &self.device)
     }
 }
@@ -121,8 +122,8 @@ impl<M: Trainable> Learner<M> {
     /// A learner of any [`Trainable`] family for `config` on `device` (autodiff is added).
     ///
     /// # Errors
-    /// [`NetError`] for an invalid configuration or unreadable initial weights.
-    pub fn for_model(config: &TrainConfig, device: &Device) -> Result<Self, NetError> {
+    /// [`TrainError`] for an invalid configuration or unreadable initial weights.
+    pub fn for_model(config: &TrainConfig, device: &Device) -> Result<Self, TrainError> {
         config.validate()?;
         let device = device.clone().autodiff();
         device.seed(config.seed);
@@ -132,7 +133,7 @@ impl<M: Trainable> Learner<M> {
             || built.out_width != config.net.out_width
             || built.num_invdepth != config.net.num_invdepth
         {
-            return Err(NetError::InvalidConfig {
+            return Err(TrainError::InvalidConfig {
                 field: "init",
                 message: format!(
                     "the weights' output {}x{} N={} differs from the run's {}x{} N={}",
@@ -172,13 +173,13 @@ impl<M: Trainable> Learner<M> {
     /// Loss of `sample` with the current weights, without updating them.
     ///
     /// # Errors
-    /// [`NetError`] for inputs that do not fit the network.
+    /// [`TrainError`] for inputs that do not fit the network.
     pub fn loss(
         &self,
         sample: &Sample,
         geometry: &M::Geometry,
         order: &[usize],
-    ) -> Result<Tensor<1>, NetError> {
+    ) -> Result<Tensor<1>, TrainError> {
         let images = self.image_tensors(sample);
         self.net.loss(&images, geometry, order, sample)
     }
@@ -187,14 +188,14 @@ impl<M: Trainable> Learner<M> {
     /// step.
     ///
     /// # Errors
-    /// [`NetError`] for inputs that do not fit the network.
+    /// [`TrainError`] for inputs that do not fit the network.
     pub fn step(
         &mut self,
         sample: &Sample,
         geometry: &M::Geometry,
         order: &[usize],
         lr: f64,
-    ) -> Result<f32, NetError> {
+    ) -> Result<f32, TrainError> {
         let loss = self.loss(sample, geometry, order)?;
         let value = loss.clone().into_scalar::<f32>();
         let grads = GradientsParams::from_grads(loss.backward(), &self.net);
@@ -202,31 +203,47 @@ impl<M: Trainable> Learner<M> {
         Ok(value)
     }
 
-    /// Writes the model and the optimiser state into `dir` (created if needed).
+    /// The model and the optimiser state as burnpack files in memory (the bytes of
+    /// [`MODEL_FILE`] and [`OPTIM_FILE`]: the same containers burn writes to a file).
     ///
     /// # Errors
-    /// [`NetError`] when a file cannot be written.
-    pub fn save_checkpoint(&self, dir: &Path) -> Result<(), NetError> {
-        std::fs::create_dir_all(dir).map_err(|source| NetError::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
+    /// [`TrainError::Checkpoint`] (naming the file under `dir`) when burn cannot serialise them.
+    pub fn checkpoint_bytes(&self, dir: &Path) -> Result<(Vec<u8>, Vec<u8>), TrainError> {
         let model = dir.join(MODEL_FILE);
-        let mut store = BurnpackStore::from_file(&model)
-            .auto_extension(false)
-            .overwrite(true);
+        let mut store = BurnpackStore::from_bytes(None);
         self.net
             .save_into(&mut store)
             .map_err(|e| ckpt_error(&model, e))?;
+        let model_bytes = store.get_bytes().map_err(|e| ckpt_error(&model, e))?;
         let optim = dir.join(OPTIM_FILE);
-        self.optim.save(&optim).map_err(|e| ckpt_error(&optim, e))
+        let optim_bytes = self.optim.into_bytes().map_err(|e| ckpt_error(&optim, e))?;
+        Ok((model_bytes.to_vec(), optim_bytes.to_vec()))
+    }
+
+    /// Writes the model and the optimiser state into `dir` (created if needed): both are
+    /// serialised in memory first, then each file is written atomically, so a failure leaves
+    /// any file of an earlier checkpoint there whole.
+    ///
+    /// # Errors
+    /// [`TrainError`] when a file cannot be serialised or written.
+    pub fn save_checkpoint(&self, dir: &Path) -> Result<(), TrainError> {
+        std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        let (model_bytes, optim_bytes) = self.checkpoint_bytes(dir)?;
+        for (name, bytes) in [(MODEL_FILE, model_bytes), (OPTIM_FILE, optim_bytes)] {
+            let path = dir.join(name);
+            write_atomic(&path, &bytes).map_err(|source| TrainError::Io { path, source })?;
+        }
+        Ok(())
     }
 
     /// Restores the model and the optimiser state written by [`Learner::save_checkpoint`].
     ///
     /// # Errors
-    /// [`NetError`] when a file is missing or does not fit the network.
-    pub fn load_checkpoint(&mut self, dir: &Path) -> Result<(), NetError> {
+    /// [`TrainError`] when a file is missing or does not fit the network.
+    pub fn load_checkpoint(&mut self, dir: &Path) -> Result<(), TrainError> {
         let model: PathBuf = dir.join(MODEL_FILE);
         if !model.exists() {
             return Err(ckpt_error(&model, "no such checkpoint file"));

@@ -2,11 +2,12 @@
 //! after a checkpoint round trip equals the uninterrupted run's.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::Device;
 use omnimvs_data::gt::GroundTruth;
-use omnimvs_net::bench::synthetic_grids;
-use omnimvs_net::train::{Learner, Sample, TrainConfig};
+use omnimvs_net::synthetic::synthetic_grids;
 use omnimvs_net::{Layout, NetConfig};
+use omnimvs_train::{Learner, Sample, TrainConfig};
 
 /// The smallest network the decoder allows: `N = 32`, a `32 x 32` output, two cameras.
 fn micro_config() -> NetConfig {
@@ -136,4 +137,39 @@ fn resume_gives_the_uninterrupted_next_step_loss() {
         (fresh[1] - expected[1]).abs() > 1e-4,
         "momentum not restored? {fresh:?} vs {expected:?}"
     );
+}
+
+#[test]
+fn checkpoints_are_burns_own_files_written_whole() {
+    let config = train_config(3);
+    let mut learner = Learner::new(&config, &Device::flex()).unwrap();
+    let sample = micro_sample(&config.net);
+    let taps = learner.taps(&synthetic_grids(&config.net));
+    learner.step(&sample, &taps, &[0, 1], 0.01).unwrap(); // momentum buffers to save
+    let dir = tempfile::tempdir().unwrap();
+    learner.save_checkpoint(dir.path()).unwrap();
+    // Only the two files: the temporary files of the atomic writes are gone.
+    let mut names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["model.bpk", "optim.bpk"]);
+    // Byte for byte what burn's own file writers give: old run folders still resume.
+    let burn_dir = tempfile::tempdir().unwrap();
+    let mut store = BurnpackStore::from_file(burn_dir.path().join("model.bpk"))
+        .auto_extension(false)
+        .overwrite(true);
+    learner.net.save_into(&mut store).unwrap();
+    learner
+        .optim
+        .save(burn_dir.path().join("optim.bpk"))
+        .unwrap();
+    for name in names {
+        assert_eq!(
+            std::fs::read(dir.path().join(&name)).unwrap(),
+            std::fs::read(burn_dir.path().join(&name)).unwrap(),
+            "{name}"
+        );
+    }
 }

@@ -22,8 +22,8 @@
 use omnimvs_sweep::GrayImage;
 use serde::{Deserialize, Serialize};
 
-use super::rng::SplitMix64;
-use crate::error::NetError;
+use crate::error::TrainError;
+use crate::rng::SplitMix64;
 
 /// Ranges of the photometric augmentation (see the module documentation).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -89,13 +89,13 @@ impl PhotometricAugment {
     /// Checks the ranges.
     ///
     /// # Errors
-    /// [`NetError::InvalidConfig`] naming the field.
-    pub fn validate(&self) -> Result<(), NetError> {
+    /// [`TrainError::InvalidConfig`] naming the field.
+    pub fn validate(&self) -> Result<(), TrainError> {
         let range = |field: &'static str, [low, high]: [f64; 2]| {
             if low > 0.0 && low <= high && high.is_finite() {
                 Ok(())
             } else {
-                Err(NetError::InvalidConfig {
+                Err(TrainError::InvalidConfig {
                     field,
                     message: format!("must be 0 < low <= high, got [{low}, {high}]"),
                 })
@@ -107,7 +107,7 @@ impl PhotometricAugment {
             if (0.0..=max).contains(&value) {
                 Ok(())
             } else {
-                Err(NetError::InvalidConfig {
+                Err(TrainError::InvalidConfig {
                     field,
                     message: format!("must be in [0, {max}], got {value}"),
                 })

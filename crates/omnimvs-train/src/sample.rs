@@ -9,14 +9,14 @@ use omnimvs_data::Dataset;
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 
-use super::photometric::PhotometricAugment;
+use crate::photometric::PhotometricAugment;
 
-use super::augment::{RotationSet, resample_ground_truth, rotate_rig, rotated_grids};
-use crate::cascade::ColumnWindow;
-use crate::config::{Family, NetConfig};
-use crate::error::NetError;
-use crate::infer::{network_inputs, sweep_geometry};
-use crate::taps::SweepGrid;
+use crate::augment::{RotationSet, resample_ground_truth, rotate_rig, rotated_grids};
+use crate::error::TrainError;
+use omnimvs_net::cascade::ColumnWindow;
+use omnimvs_net::config::{Family, NetConfig};
+use omnimvs_net::infer::{network_inputs, sweep_geometry};
+use omnimvs_net::taps::SweepGrid;
 
 /// A prepared sample.
 #[derive(Clone, Debug)]
@@ -79,8 +79,8 @@ impl SampleSource {
     /// Opens `path` and builds the sweep grids of every rotation for `net`.
     ///
     /// # Errors
-    /// [`NetError`] when the dataset cannot be read or its rig does not fit the network.
-    pub fn open(path: &Path, net: &NetConfig, rotations: RotationSet) -> Result<Self, NetError> {
+    /// [`TrainError`] when the dataset cannot be read or its rig does not fit the network.
+    pub fn open(path: &Path, net: &NetConfig, rotations: RotationSet) -> Result<Self, TrainError> {
         let dataset = Dataset::open(path)?;
         let (grid, hypotheses) = sweep_geometry(net, &dataset)?;
         let (grids, stage_grids) = match net.family {
@@ -131,23 +131,23 @@ impl SampleSource {
     /// Network inputs of a frame's gray images: normalised over the valid pixels, resized.
     ///
     /// # Errors
-    /// [`NetError`] for a mask of another size.
-    pub fn inputs(&self, images: &[GrayImage]) -> Result<Vec<Vec<f32>>, NetError> {
-        network_inputs(images, &self.masks, self.input_size)
+    /// [`TrainError`] for a mask of another size.
+    pub fn inputs(&self, images: &[GrayImage]) -> Result<Vec<Vec<f32>>, TrainError> {
+        Ok(network_inputs(images, &self.masks, self.input_size)?)
     }
 
     /// Reads `frame` for rotation `rotation` (`source` is only recorded in the sample), its
     /// images changed by `photometric` with the given seed when one is given.
     ///
     /// # Errors
-    /// [`NetError`] when a file is missing or unreadable, or the frame has no ground truth.
+    /// [`TrainError`] when a file is missing or unreadable, or the frame has no ground truth.
     pub fn load(
         &self,
         source: usize,
         frame: u32,
         rotation: usize,
         photometric: Option<(&PhotometricAugment, u64)>,
-    ) -> Result<Sample, NetError> {
+    ) -> Result<Sample, TrainError> {
         let mut images = self.dataset.read_frame(frame)?;
         if let Some((augment, seed)) = photometric {
             augment.apply(&mut images, seed);

@@ -11,7 +11,8 @@
 //! RUN_DIR/checkpoints/epoch-EEEE/  model.bpk, optim.bpk, state.json
 //! ```
 //!
-//! Every file is written under a temporary name and renamed, so killing the process at any
+//! Every file is written atomically (`omnimvs_camera::fs::write_atomic`: a temporary file, then
+//! a rename; a checkpoint is a new folder renamed into place), so killing the process at any
 //! moment leaves the previous epoch's checkpoint usable: at most one epoch is lost.
 
 use std::collections::HashMap;
@@ -23,18 +24,18 @@ use burn::tensor::{Device, Tensor};
 use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
 use serde::{Deserialize, Serialize};
 
-use super::augment::RotationSet;
-use super::config::TrainConfig;
-use super::learner::{Learner, target_data};
-use super::loader::{Loader, PlanItem};
-use super::photometric::PhotometricAugment;
-use super::plot::plot_curves;
-use super::rng::SplitMix64;
-use super::sample::SampleSource;
-use super::trainable::Trainable;
-use crate::cascade::ColumnWindow;
-use crate::error::NetError;
-use crate::model::OmniMvsNet;
+use crate::augment::RotationSet;
+use crate::config::TrainConfig;
+use crate::error::TrainError;
+use crate::learner::{Learner, target_data};
+use crate::loader::{Loader, PlanItem};
+use crate::photometric::PhotometricAugment;
+use crate::plot::plot_curves;
+use crate::rng::SplitMix64;
+use crate::sample::SampleSource;
+use crate::trainable::Trainable;
+use omnimvs_net::cascade::ColumnWindow;
+use omnimvs_net::model::OmniMvsNet;
 
 /// Progress of one training step.
 #[derive(Clone, Copy, Debug)]
@@ -93,48 +94,43 @@ struct Latest {
     epochs_done: usize,
 }
 
-fn io_error(path: &Path, source: std::io::Error) -> NetError {
-    NetError::Io {
+fn io_error(path: &Path, source: std::io::Error) -> TrainError {
+    TrainError::Io {
         path: path.to_path_buf(),
         source,
     }
 }
 
 /// Writes `bytes` to `path` through a synced temporary file and a rename.
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), NetError> {
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
     omnimvs_camera::fs::write_atomic(path, bytes).map_err(|e| io_error(path, e))
 }
 
-fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), NetError> {
-    let text = serde_json::to_string_pretty(value).map_err(|source| NetError::Json {
+fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), TrainError> {
+    let text = serde_json::to_string_pretty(value).map_err(|source| TrainError::Json {
         path: path.to_path_buf(),
         source,
     })?;
     write_atomic(path, (text + "\n").as_bytes())
 }
 
-fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, NetError> {
+fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, TrainError> {
     let text = std::fs::read_to_string(path).map_err(|e| io_error(path, e))?;
-    serde_json::from_str(&text).map_err(|source| NetError::Json {
+    serde_json::from_str(&text).map_err(|source| TrainError::Json {
         path: path.to_path_buf(),
         source,
     })
 }
 
-/// Saves weights (safetensors + JSON) under `name` in `dir` atomically.
+/// Saves weights (safetensors + JSON) under `name` in `dir`, each file atomically.
 fn export_weights<M: Trainable>(
     learner: &Learner<M>,
     dir: &Path,
     name: &str,
-) -> Result<(), NetError> {
-    let tmp = dir.join(format!("{name}.partial.safetensors"));
-    learner.net.save_weights(&tmp)?;
-    for ext in ["json", "safetensors"] {
-        let from = tmp.with_extension(ext);
-        let to = dir.join(format!("{name}.{ext}"));
-        std::fs::rename(&from, &to).map_err(|e| io_error(&to, e))?;
-    }
-    Ok(())
+) -> Result<(), TrainError> {
+    learner
+        .net
+        .save_weights(&dir.join(format!("{name}.safetensors")))
 }
 
 /// A training run on dataset folders, of the paper's network or another [`Trainable`]
@@ -162,8 +158,8 @@ pub struct Trainer<M: Trainable = OmniMvsNet> {
 /// resuming it).
 ///
 /// # Errors
-/// [`NetError`] when `train_config.json` cannot be read.
-pub fn read_run_config(run_dir: &Path) -> Result<TrainConfig, NetError> {
+/// [`TrainError`] when `train_config.json` cannot be read.
+pub fn read_run_config(run_dir: &Path) -> Result<TrainConfig, TrainError> {
     read_json(&run_dir.join("train_config.json"))
 }
 
@@ -171,12 +167,16 @@ impl<M: Trainable> Trainer<M> {
     /// Starts a new run in `run_dir`, writing `train_config.json`.
     ///
     /// # Errors
-    /// [`NetError`] for an invalid configuration, unreadable data, no training frame, or a
+    /// [`TrainError`] for an invalid configuration, unreadable data, no training frame, or a
     /// run folder that already holds a run.
-    pub fn create(config: TrainConfig, run_dir: &Path, device: &Device) -> Result<Self, NetError> {
+    pub fn create(
+        config: TrainConfig,
+        run_dir: &Path,
+        device: &Device,
+    ) -> Result<Self, TrainError> {
         let config_path = run_dir.join("train_config.json");
         if config_path.exists() {
-            return Err(NetError::InvalidConfig {
+            return Err(TrainError::InvalidConfig {
                 field: "out",
                 message: format!(
                     "{} already holds a run; resume it or choose another folder",
@@ -193,12 +193,12 @@ impl<M: Trainable> Trainer<M> {
     /// number of epochs when given (the schedule follows the new total).
     ///
     /// # Errors
-    /// [`NetError`] when the run folder or its checkpoint cannot be read.
+    /// [`TrainError`] when the run folder or its checkpoint cannot be read.
     pub fn resume(
         run_dir: &Path,
         epochs: Option<usize>,
         device: &Device,
-    ) -> Result<Self, NetError> {
+    ) -> Result<Self, TrainError> {
         let config_path = run_dir.join("train_config.json");
         let mut config: TrainConfig = read_json(&config_path)?;
         if let Some(epochs) = epochs {
@@ -216,10 +216,10 @@ impl<M: Trainable> Trainer<M> {
         Ok(trainer)
     }
 
-    fn build(config: TrainConfig, run_dir: &Path, device: &Device) -> Result<Self, NetError> {
+    fn build(config: TrainConfig, run_dir: &Path, device: &Device) -> Result<Self, TrainError> {
         config.validate()?;
         if config.data.is_empty() {
-            return Err(NetError::InvalidConfig {
+            return Err(TrainError::InvalidConfig {
                 field: "data",
                 message: "needs at least one dataset folder".into(),
             });
@@ -236,7 +236,7 @@ impl<M: Trainable> Trainer<M> {
             .map(|s| config.split(&s.frames_with_gt()))
             .collect();
         if splits.iter().all(|(train, _)| train.is_empty()) {
-            return Err(NetError::InvalidConfig {
+            return Err(TrainError::InvalidConfig {
                 field: "train_frames",
                 message: "no training frame with ground truth in the datasets".into(),
             });
@@ -294,7 +294,7 @@ impl<M: Trainable> Trainer<M> {
             .collect()
     }
 
-    fn geometry_for(&mut self, source: usize, rotation: usize) -> Result<M::Geometry, NetError> {
+    fn geometry_for(&mut self, source: usize, rotation: usize) -> Result<M::Geometry, TrainError> {
         if let Some(g) = self.geometries.get(&(source, rotation)) {
             return Ok(g.clone());
         }
@@ -310,8 +310,8 @@ impl<M: Trainable> Trainer<M> {
     /// did not have) and records it in `train_config.json`.
     ///
     /// # Errors
-    /// [`NetError`] for a window the run cannot use or a file that cannot be written.
-    pub fn set_column_window(&mut self, width: Option<usize>) -> Result<(), NetError> {
+    /// [`TrainError`] for a window the run cannot use or a file that cannot be written.
+    pub fn set_column_window(&mut self, width: Option<usize>) -> Result<(), TrainError> {
         let mut config = self.config.clone();
         config.column_window = width;
         config.validate()?;
@@ -324,11 +324,11 @@ impl<M: Trainable> Trainer<M> {
     /// records it in `train_config.json`.
     ///
     /// # Errors
-    /// [`NetError`] for ranges the run cannot use or a file that cannot be written.
+    /// [`TrainError`] for ranges the run cannot use or a file that cannot be written.
     pub fn set_photometric(
         &mut self,
         photometric: Option<PhotometricAugment>,
-    ) -> Result<(), NetError> {
+    ) -> Result<(), TrainError> {
         let mut config = self.config.clone();
         config.photometric = photometric;
         config.validate()?;
@@ -340,12 +340,12 @@ impl<M: Trainable> Trainer<M> {
     /// Trains until `config.epochs`, validating and checkpointing after every epoch.
     ///
     /// # Errors
-    /// [`NetError`] when a sample cannot be read or a file cannot be written.
+    /// [`TrainError`] when a sample cannot be read or a file cannot be written.
     pub fn run(
         &mut self,
         on_step: &mut dyn FnMut(&StepInfo),
         on_epoch: &mut dyn FnMut(&EpochRecord),
-    ) -> Result<(), NetError> {
+    ) -> Result<(), TrainError> {
         while self.state.epochs_done < self.config.epochs {
             let record = self.train_epoch(on_step)?;
             on_epoch(&record);
@@ -360,7 +360,7 @@ impl<M: Trainable> Trainer<M> {
     pub fn train_epoch(
         &mut self,
         on_step: &mut dyn FnMut(&StepInfo),
-    ) -> Result<EpochRecord, NetError> {
+    ) -> Result<EpochRecord, TrainError> {
         let epoch = self.state.epochs_done;
         let lr = self.config.lr_at(epoch);
         let plan = self.plan(epoch);
@@ -431,8 +431,8 @@ impl<M: Trainable> Trainer<M> {
     /// inference mode), taken from the sources in turn up to `max_val_frames`.
     ///
     /// # Errors
-    /// [`NetError`] when a frame cannot be read.
-    pub fn validate(&mut self) -> Result<(Option<f64>, Option<Metrics>), NetError> {
+    /// [`TrainError`] when a frame cannot be read.
+    pub fn validate(&mut self) -> Result<(Option<f64>, Option<Metrics>), TrainError> {
         let net = self.learner.inference_net();
         let device = self.learner.device.clone().without_autodiff();
         let c = net.config().clone();
@@ -463,7 +463,7 @@ impl<M: Trainable> Trainer<M> {
             };
             let index = net.predict(&images, &geometry, source)?;
             let (target, mask) = target_data(&sample.gt);
-            let loss = super::learner::masked_l1(
+            let loss = crate::learner::masked_l1(
                 index.clone(),
                 Tensor::from_data(target, &device),
                 Tensor::from_data(mask, &device),
@@ -474,7 +474,7 @@ impl<M: Trainable> Trainer<M> {
                 index
                     .into_data()
                     .try_into_vec_as::<f32>()
-                    .map_err(|e| NetError::Shape {
+                    .map_err(|e| TrainError::Shape {
                         what: format!("index map ({e:?})"),
                         expected: vec![],
                         actual: vec![],
@@ -485,12 +485,12 @@ impl<M: Trainable> Trainer<M> {
         Ok((loss, mean_metrics(&metrics)))
     }
 
-    fn write_outputs(&self, improved: bool) -> Result<(), NetError> {
+    fn write_outputs(&self, improved: bool) -> Result<(), TrainError> {
         let dir = &self.run_dir;
         // Metrics log and curves first: they only describe finished epochs.
         let mut log = String::new();
         for record in &self.state.history {
-            let line = serde_json::to_string(record).map_err(|source| NetError::Json {
+            let line = serde_json::to_string(record).map_err(|source| TrainError::Json {
                 path: dir.join("metrics.jsonl"),
                 source,
             })?;

@@ -1,5 +1,8 @@
-//! End-to-end training (ICCV 2019 paper, sections 3.3 and 5.1).
+//! End-to-end training of the networks of `omnimvs-net` (ICCV 2019 paper, sections 3.3 and
+//! 5.1, and the cascade): one [`Trainer`] for every [`Trainable`] family. The network crate
+//! is the library of inference and weights; this crate is what `omnimvs train` needs on top.
 //!
+//! - [`error`]: [`TrainError`], what can go wrong in a run.
 //! - [`config`]: the training configuration written next to every run.
 //! - [`rng`]: the seeded generator behind shuffling and augmentation (resumable by epoch).
 //! - [`augment`]: the fixed set of small rig rotations and the ground truth rotated to match.
@@ -13,6 +16,7 @@
 
 pub mod augment;
 pub mod config;
+pub mod error;
 pub mod learner;
 pub mod loader;
 pub mod photometric;
@@ -24,6 +28,7 @@ pub mod trainer;
 
 pub use augment::{RotationSet, resample_ground_truth};
 pub use config::{Optimizer, TrainConfig};
+pub use error::TrainError;
 pub use learner::{Learner, masked_l1};
 pub use photometric::PhotometricAugment;
 pub use sample::{Sample, SampleSource};

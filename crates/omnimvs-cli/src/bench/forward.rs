@@ -1,0 +1,247 @@
+//! Forward-pass timings per stage of both network families.
+
+use anyhow::Result;
+use burn::module::Module;
+use burn::tensor::Device;
+use omnimvs_camera::Rig;
+use omnimvs_net::cascade::{CascadeGeometry, CascadeNet, CascadeTimings};
+use omnimvs_net::config::NetConfig;
+use omnimvs_net::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
+use omnimvs_net::synthetic::synthetic_grids;
+use omnimvs_sweep::InvDepthHypotheses;
+use serde::Serialize;
+
+use super::{median_of, peak_rss_bytes, random_images};
+
+/// Result of [`bench_forward`].
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    /// The configuration measured.
+    pub config: NetConfig,
+    /// Whether batch norms were folded into the convolutions.
+    pub folded_batch_norm: bool,
+    /// Timings of every measured run (the warm-up run excluded).
+    pub runs: Vec<StageTimingsRow>,
+    /// Peak resident memory of the process after the runs, bytes (Linux only).
+    pub peak_rss_bytes: Option<u64>,
+    /// Fraction of sweep samples inside some camera's field of view.
+    pub valid_fraction: f64,
+}
+
+/// [`StageTimings`] in a serialisable row.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct StageTimingsRow {
+    /// Unary features, seconds.
+    pub features: f64,
+    /// Warp + transference, seconds.
+    pub sweep: f64,
+    /// Fusion convolution, batch norm and ReLU, seconds.
+    pub fusion: f64,
+    /// 3D encoder-decoder, seconds.
+    pub cost: f64,
+    /// Softargmin, seconds.
+    pub softargmin: f64,
+    /// Whole forward pass, seconds.
+    pub total: f64,
+}
+
+impl From<StageTimings> for StageTimingsRow {
+    fn from(t: StageTimings) -> Self {
+        Self {
+            features: t.features,
+            sweep: t.sweep,
+            fusion: t.fusion + t.fusion_finish,
+            cost: t.cost,
+            softargmin: t.softargmin,
+            total: t.total,
+        }
+    }
+}
+
+impl BenchReport {
+    /// Median of each stage over the runs.
+    pub fn median(&self) -> Option<StageTimingsRow> {
+        if self.runs.is_empty() {
+            return None;
+        }
+        let med = |f| median_of(&self.runs, f);
+        Some(StageTimingsRow {
+            features: med(|r| r.features),
+            sweep: med(|r| r.sweep),
+            fusion: med(|r| r.fusion),
+            cost: med(|r| r.cost),
+            softargmin: med(|r| r.softargmin),
+            total: med(|r| r.total),
+        })
+    }
+}
+
+/// Options of [`bench_forward`].
+#[derive(Clone, Copy, Debug)]
+pub struct ForwardOptions {
+    /// Unmeasured runs first.
+    pub warmup: usize,
+    /// Measured runs.
+    pub repeats: usize,
+    /// Fold the batch norms into the convolutions.
+    pub fold_batch_norm: bool,
+    /// Sweep on the device (GPU backends) instead of the host.
+    pub device_sweep: bool,
+}
+
+impl Default for ForwardOptions {
+    fn default() -> Self {
+        Self {
+            warmup: 1,
+            repeats: 3,
+            fold_batch_norm: true,
+            device_sweep: false,
+        }
+    }
+}
+
+/// Runs the memory-lean inference on random images `warmup + repeats` times (the warm-up
+/// runs are not measured) and reports the stage timings, the sweep on the host or the device.
+///
+/// # Errors
+/// For an invalid configuration.
+pub fn bench_forward(
+    config: &NetConfig,
+    options: &ForwardOptions,
+    device: &Device,
+) -> Result<BenchReport> {
+    let ForwardOptions {
+        warmup,
+        repeats,
+        fold_batch_norm,
+        device_sweep,
+    } = *options;
+    let net = OmniMvsNet::new(config, device)?;
+    let net = if fold_batch_norm {
+        net.fold_batch_norm()
+    } else {
+        net
+    };
+    let grids = synthetic_grids(config);
+    let valid = grids
+        .iter()
+        .flat_map(|g| g.coords.chunks_exact(2))
+        .filter(|xy| xy[0] > -2.0)
+        .count();
+    let total: usize = grids.iter().map(|g| g.coords.len() / 2).sum();
+    let taps: Vec<SweepTaps> = if device_sweep {
+        SweepTaps::for_grids(&grids, config.feature_size(), device)
+    } else {
+        Vec::new()
+    };
+    let sweep = if device_sweep {
+        SweepInput::Device(&taps)
+    } else {
+        SweepInput::Host(&grids)
+    };
+    let images = random_images(config, device);
+    let order = net.identity_order();
+    let mut runs = Vec::new();
+    for run in 0..warmup + repeats {
+        let (_, timings) = net.infer_timed_with(&images, sweep, &order)?;
+        if run >= warmup {
+            runs.push(timings.into());
+        }
+    }
+    Ok(BenchReport {
+        config: config.clone(),
+        folded_batch_norm: fold_batch_norm,
+        runs,
+        peak_rss_bytes: peak_rss_bytes(),
+        valid_fraction: valid as f64 / total.max(1) as f64,
+    })
+}
+
+/// One forward pass of the cascade, seconds per stage.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct CascadeRow {
+    /// Feature pyramids of all cameras.
+    pub features: f64,
+    /// Coarse volume, regularisation, soft argmax.
+    pub coarse: f64,
+    /// Half-resolution stage (hypotheses and taps on the host included).
+    pub mid: f64,
+    /// Full-resolution stage (likewise).
+    pub fine: f64,
+    /// Whole forward pass.
+    pub total: f64,
+}
+
+impl From<CascadeTimings> for CascadeRow {
+    fn from(t: CascadeTimings) -> Self {
+        Self {
+            features: t.features,
+            coarse: t.coarse,
+            mid: t.mid,
+            fine: t.fine,
+            total: t.total,
+        }
+    }
+}
+
+/// Result of [`bench_cascade_forward`].
+#[derive(Clone, Debug, Serialize)]
+pub struct CascadeBenchReport {
+    /// The configuration measured.
+    pub config: NetConfig,
+    /// Number of parameters of the network.
+    pub params: usize,
+    /// Timings of every measured run (warm-up runs excluded).
+    pub runs: Vec<CascadeRow>,
+    /// Peak resident memory of the process after the runs, bytes (Linux only).
+    pub peak_rss_bytes: Option<u64>,
+}
+
+impl CascadeBenchReport {
+    /// Median of each stage over the runs.
+    pub fn median(&self) -> Option<CascadeRow> {
+        if self.runs.is_empty() {
+            return None;
+        }
+        let med = |f| median_of(&self.runs, f);
+        Some(CascadeRow {
+            features: med(|r| r.features),
+            coarse: med(|r| r.coarse),
+            mid: med(|r| r.mid),
+            fine: med(|r| r.fine),
+            total: med(|r| r.total),
+        })
+    }
+}
+
+/// Times the cascade's forward pass per stage on random images for `rig` (random weights,
+/// inference mode, `warmup` unmeasured runs first).
+///
+/// # Errors
+/// For a configuration that is not a cascade or a rig that does not fit it.
+pub fn bench_cascade_forward(
+    config: &NetConfig,
+    rig: &Rig,
+    min_depth_m: f64,
+    warmup: usize,
+    repeats: usize,
+    device: &Device,
+) -> Result<CascadeBenchReport> {
+    let net = CascadeNet::new(config, device)?.valid();
+    let hypotheses = InvDepthHypotheses::new(config.num_invdepth, min_depth_m)?;
+    let geometry = CascadeGeometry::new(rig, config, &hypotheses, device)?;
+    let images = random_images(config, device);
+    let mut runs = Vec::new();
+    for run in 0..warmup + repeats {
+        let (_, timings) = net.forward_timed(&images, &geometry, true)?;
+        if run >= warmup {
+            runs.push(timings.into());
+        }
+    }
+    Ok(CascadeBenchReport {
+        config: config.clone(),
+        params: net.num_params(),
+        runs,
+        peak_rss_bytes: peak_rss_bytes(),
+    })
+}

@@ -1,0 +1,134 @@
+//! Training the cascade: gradients reach every stage's weights and it overfits one frame.
+//! Uses the published rig of `sunny_single` from `../shared/data/omnimvs-samples`.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use burn::optim::GradientsParams;
+use burn::tensor::Device;
+use omnimvs_camera::Rig;
+use omnimvs_data::Dataset;
+use omnimvs_data::gt::GroundTruth;
+use omnimvs_net::cascade::CascadeGeometry;
+use omnimvs_net::cascade::model::read_values;
+use omnimvs_net::{CascadeNet, NetConfig};
+use omnimvs_sweep::InvDepthHypotheses;
+use omnimvs_train::{Learner, Optimizer, Sample, TrainConfig};
+
+#[path = "../../omnimvs-camera/tests/support/samples.rs"]
+mod samples;
+use samples::sample as sample_dir;
+
+fn sunny_rig() -> (Rig, InvDepthHypotheses) {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    (ds.rig, hyps)
+}
+
+/// The smallest cascade: a `16 x 64` output, `N = 32`, 8 coarse spheres, `48 x 50` inputs.
+fn micro_config() -> NetConfig {
+    let mut config = NetConfig {
+        num_invdepth: 32,
+        out_height: 16,
+        out_width: 64,
+        input_height: 48,
+        input_width: 50,
+        ..NetConfig::cascade()
+    };
+    config.cascade.feature_channels = [4, 4, 8];
+    config.cascade.groups = [2, 2, 4];
+    config.cascade.coarse_spheres = 8;
+    config.cascade.coarse_channels = [4, 4, 8];
+    config.cascade.stage_hypotheses = [4, 3];
+    config.cascade.stage_channels = [4, 4];
+    config
+}
+
+fn micro_images(config: &NetConfig) -> Vec<Vec<f32>> {
+    (0..config.num_cameras)
+        .map(|cam| {
+            (0..config.input_height * config.input_width)
+                .map(|i| {
+                    let (r, c) = (
+                        (i / config.input_width) as f32,
+                        (i % config.input_width) as f32,
+                    );
+                    ((0.7 * c + 1.3 * r + cam as f32).sin() + (0.31 * c * r).cos()) * 0.8
+                })
+                .collect()
+        })
+        .collect()
+}
+
+fn gt_on(h: usize, w: usize) -> GroundTruth {
+    let index = (0..h * w)
+        .map(|i| 4.0 + 20.0 * (i % w) as f32 / (w - 1) as f32 + 0.5 * ((i / w) % 3) as f32)
+        .collect();
+    GroundTruth {
+        width: w,
+        height: h,
+        index,
+        valid: (0..h * w).map(|i| i % 7 != 0).collect(),
+    }
+}
+
+fn micro_sample(config: &NetConfig) -> Sample {
+    let [coarse, mid, fine] = config.cascade_sizes();
+    Sample {
+        source: 0,
+        frame: 1,
+        rotation: 0,
+        images: micro_images(config),
+        gt: gt_on(fine[0], fine[1]),
+        stage_gt: vec![gt_on(coarse[0], coarse[1]), gt_on(mid[0], mid[1])],
+        window: None,
+    }
+}
+
+fn train_config(seed: u64) -> TrainConfig {
+    TrainConfig {
+        net: micro_config(),
+        seed,
+        optimizer: Optimizer::Adam,
+        ..TrainConfig::default()
+    }
+}
+
+#[test]
+fn gradients_reach_every_stage_and_it_overfits_one_frame() {
+    let (rig, hyps) = sunny_rig();
+    let config = train_config(3);
+    let device = Device::flex();
+    let mut learner = Learner::<CascadeNet>::for_model(&config, &device).unwrap();
+    let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
+    let sample = micro_sample(&config.net);
+
+    let loss = learner.loss(&sample, &geometry, &[]).unwrap();
+    let grads = GradientsParams::from_grads(loss.backward(), &learner.net);
+    let net = &learner.net;
+    let norm = |name: &str, grad: Option<Vec<f32>>| {
+        let grad = grad.unwrap_or_else(|| panic!("no gradient for {name}"));
+        let norm: f32 = grad.iter().map(|g| g.abs()).sum();
+        assert!(
+            norm > 0.0 && norm.is_finite(),
+            "{name}: gradient norm {norm}"
+        );
+    };
+    let read4 = |id| grads.get::<4>(id).map(|g| read_values(g, "grad").unwrap());
+    norm("features.conv0", read4(net.features.conv0.conv.weight.id));
+    norm("features.out2", read4(net.features.out2.conv.weight.id));
+    norm("features.out8", read4(net.features.out8.conv.weight.id));
+    norm("coarse.out", read4(net.coarse.out.conv.weight.id));
+    norm("mid.out", read4(net.mid.out.conv.weight.id));
+    norm("fine.out", read4(net.fine.out.conv.weight.id));
+
+    let first = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+    let mut last = first;
+    let mut steps = 1;
+    while steps < 80 && last > 0.3 * first {
+        last = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+        steps += 1;
+    }
+    assert!(
+        last < 0.3 * first,
+        "loss {first} -> {last} after {steps} steps: the cascade does not fit one frame"
+    );
+}
