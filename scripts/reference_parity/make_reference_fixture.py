@@ -22,12 +22,14 @@ With --synth DIR --pred DIR (repeatable, in pairs) it also checks that the refer
 loads a dataset written by `omnimvs synth` as it is (config, images, invalid masks, the
 two-page ground-truth TIFF, the train/test split) and scores the prediction
 index maps PRED/%05d_index.tiff (as `omnimvs sgm` or `infer` write them) with the
-reference's own loadGTInvdepthIndex + evalError, writing metrics.json and copies of the
-ground truth and predictions it scored (under OUT/metrics/).
+reference's own loadGTInvdepthIndex + evalError: the figures go to reference.json
+(`metrics`), what was scored to OUT/metrics/NAME/ (%05d_gt.tiff: the ground truth's f32
+values, %05d_pred.png: the predictions as 16-bit round(index * 64)).
 
 Shims, all for an old code base on new libraries, none changing what the reference computes:
 numpy's removed `np.bool` alias is set to `bool`; scipy's
-Rotation.as_dcm/from_dcm are its renamed as_matrix/from_matrix; `.cuda()` of tensors and modules is the
+Rotation.as_dcm/from_dcm are its renamed as_matrix/from_matrix; scikit-image's MultiImage is
+its ImageCollection (one element per TIFF page, MultiImage's behaviour before 0.19); `.cuda()` of tensors and modules is the
 identity (the reference has no CPU switch); matplotlib draws off screen; the reference's
 visualisation and thumbnail writers are off (run_test's `vis`/`save_misc` options, and results
 written as raw f32, which the reference's own writers support by file extension).
@@ -65,6 +67,12 @@ def import_reference(checkout):
 
     if not hasattr(Rotation, "as_dcm"):  # renamed in scipy 1.4, the old names removed in 1.6
         Rotation.as_dcm, Rotation.from_dcm = Rotation.as_matrix, Rotation.from_matrix
+    import skimage.io
+
+    # scikit-image 0.19 made MultiImage stack a TIFF's pages into one element; the reference
+    # (readImageFloat) expects one element per page, the old behaviour, which ImageCollection
+    # keeps. Without it the reference cannot read the released sets' two-page TIFFs either.
+    skimage.io.MultiImage = skimage.io.ImageCollection
     torch.Tensor.cuda = lambda self, *a, **k: self
     torch.nn.Module.cuda = lambda self, *a, **k: self
     sys.path.insert(0, os.path.abspath(checkout))
@@ -143,12 +151,22 @@ def run_reference_test(torch, ckpt, name, root, result_dir):
     return index, entropy.reshape(EQUIRECT)
 
 
+PRED_SCALE = 64  # predictions are stored as 16-bit PNG of round(index * PRED_SCALE)
+
+
 def check_synth(torch, dataset_dir, pred_dir, out_dir, report):
     """The reference's Dataset on a folder written by `omnimvs synth`, unchanged (read-only:
-    it has its masks), and the reference's evalError of the prediction index maps."""
+    it has its masks), and the reference's evalError of predictions.
+
+    The predictions PRED/%05d_index.tiff are quantised to 1/PRED_SCALE of a step and stored as
+    16-bit PNG, the ground truth's f32 page is stored deflated behind a small thumbnail (the
+    released two-page layout); both sides of the test score exactly those values."""
     from dataset import Dataset
     import tifffile
+    import skimage.io
+    import skimage.transform
     from easydict import EasyDict as Edict
+    from utils.image import readImageFloat
 
     dataset_dir = os.path.abspath(dataset_dir)
     root, name = os.path.split(dataset_dir)
@@ -173,18 +191,31 @@ def check_synth(torch, dataset_dir, pred_dir, out_dir, report):
         # The reference's training sample too (what its trainer's DataLoader calls).
         if fidx in data.train_idx:
             data.loadTrainSample(data.train_idx.index(fidx))
+        else:
+            data.loadTestSample(data.test_idx.index(fidx))
         pred_path = os.path.join(pred_dir, "%05d_index.tiff" % fidx)
         pred = tifffile.imread(pred_path).astype(np.float32)
         assert pred.shape == EQUIRECT, pred_path
+        q = np.clip(np.round(pred * PRED_SCALE), 0, 65535).astype(np.uint16)
+        pred = q.astype(np.float32) / np.float32(PRED_SCALE)
         e = data.evalError(pred, gt, valid)
         frames.append({"frame": fidx, "errors": [float(x) for x in e]})
-        gt_name = data.gt_depth_fmt % (EQUIRECT[1], fidx)
-        shutil.copy(os.path.join(dataset_dir, gt_name), os.path.join(mdir, "%05d_gt.tiff" % fidx))
-        pred.astype("<f4").tofile(os.path.join(mdir, "%05d_index.f32" % fidx))
+        # Fixture copies: the ground truth's f32 values, bit for bit, and the predictions.
+        gt_src = os.path.join(dataset_dir, data.gt_depth_fmt % (EQUIRECT[1], fidx))
+        gt_f32 = readImageFloat(gt_src)
+        thumb = np.zeros((8, 16, 3), np.uint8)
+        gt_dst = os.path.join(mdir, "%05d_gt.tiff" % fidx)
+        with tifffile.TiffWriter(gt_dst) as tif:
+            tif.write(thumb, photometric="rgb")
+            tif.write(gt_f32.astype(np.float32), photometric="minisblack",
+                      compression="zlib", compressionargs={"level": 9})
+        assert np.array_equal(readImageFloat(gt_dst), gt_f32), gt_dst
+        skimage.io.imsave(os.path.join(mdir, "%05d_pred.png" % fidx), q, check_contrast=False)
     mean = np.mean([f["errors"] for f in frames], axis=0)
     report["metrics"].append({
         "dataset": name,
         "min_depth_m": data.min_depth,
+        "pred_scale": PRED_SCALE,
         "train_idx": data.train_idx,
         "test_idx": data.test_idx,
         "gt_phi": data.gt_phi,

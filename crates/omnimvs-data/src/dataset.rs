@@ -113,6 +113,7 @@ impl Dataset {
                 img_fmt: format!("cam%d/%0{digits}d.{ext}"),
                 frames: crate::FrameRange::inclusive(first, last),
                 gt_fmt: None,
+                split: None,
             },
             rig,
         })
