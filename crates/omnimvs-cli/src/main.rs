@@ -24,6 +24,7 @@ macro_rules! out {
 
 mod args;
 mod cmd;
+mod dataset;
 mod out;
 mod pictures;
 mod weights;
@@ -33,7 +34,8 @@ mod weights;
 ///
 /// A DATASET is a folder with a reference-layout `config.yaml` (the rig and
 /// the image file pattern) and the camera images, e.g.
-/// `../shared/data/omnimvs-samples/itbt_sample`. Dataset folders are only
+/// `../shared/data/omnimvs-samples/itbt_sample`, or a folder in the released
+/// datasets' layout (`ocam1.txt`.. and `poses.txt`, see `--pose-unit`). Dataset folders are only
 /// read, never written. Lookup tables are cached in `$OMNIMVS_CACHE_DIR`
 /// (default `~/.cache/omnimvs`).
 #[derive(Debug, Parser)]
@@ -41,6 +43,13 @@ mod weights;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Unit of the translations in a released-layout folder's poses.txt (a folder with
+    /// ocam1.txt.. and poses.txt instead of config.yaml): cm in the released OmniThings,
+    /// OmniHouse and urban sets (the default), mm in SweepNet's real_indoor_sample.
+    /// `omnimvs info` shows the baselines it gives, in metres. A config.yaml's poses are
+    /// always metres.
+    #[arg(long, global = true, value_enum)]
+    pose_unit: Option<dataset::PoseUnit>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -60,6 +69,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    dataset::set_pose_unit(cli.pose_unit);
     let result = match cli.command {
         Command::Bench(a) => cmd::bench::run(&a),
         Command::Demo(a) => cmd::demo::run(&a),

@@ -7,11 +7,11 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_camera::fs::write_atomic;
+use omnimvs_data::FrameRange;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics, index_on_eval_grid};
-use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_net::NetEstimator;
 use omnimvs_stereo::{SgmParams, SphericalStereo};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LutCache};
@@ -195,7 +195,7 @@ struct Row<'a> {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let ds = Dataset::open(&args.data)?;
+    let ds = crate::dataset::open_dataset(&args.data)?;
     let frames: Vec<u32> = args
         .frames
         .indices()

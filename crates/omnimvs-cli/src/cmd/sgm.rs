@@ -5,11 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use omnimvs_camera::fs::write_atomic;
+use omnimvs_data::FrameRange;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::write_f32_tiff;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics};
-use omnimvs_data::{Dataset, FrameRange};
 use omnimvs_stereo::{
     DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SphericalStereo, StageTimings, SweepStep,
 };
@@ -112,7 +112,7 @@ fn quantile(values: &[f32], q: f64) -> f32 {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let ds = Dataset::open(&args.dataset)?;
+    let ds = crate::dataset::open_dataset(&args.dataset)?;
     let frames: Vec<u32> = match &args.frames {
         Some(range) => range.indices(),
         None => ds.frames_found(),
