@@ -13,7 +13,8 @@ crates/omnimvs-cli/tests/fixtures/reference/):
   <sample>_00001_index.f32    the reference's index map of frame 1 (160x640, N = 192; raw
                               little-endian f32, row major), for sunny_single and itbt_sample
   <sample>_00001_entropy.f32  the reference's entropy map of the same frame
-  reference.json              what was run: versions, sizes, seeds, the index spread
+  reference.json              what was run: versions, sizes, seeds, the index spread and, with
+                              --omnimvs BIN, `omnimvs lut` against the reference's lookup table
 
 by running the reference's test pipeline (run_test_omnimvs.py's main(): its Dataset, lookup
 table, network forward, softargmin and entropy) on the CPU.
@@ -36,7 +37,7 @@ written as raw f32, which the reference's own writers support by file extension)
 
 Usage:
   python make_reference_fixture.py REF_CHECKOUT [--samples DIR] [--out DIR]
-      [--synth DATASET --pred PREDICTIONS ...] [--skip-network]
+      [--synth DATASET --pred PREDICTIONS ...] [--skip-network] [--omnimvs BIN]
 """
 import argparse
 import json
@@ -148,7 +149,34 @@ def run_reference_test(torch, ckpt, name, root, result_dir):
     data = Dataset(name, rt.opts.data_opts, db_root=root, load_lut=False)
     back = data.invdepthToIndex(invdepth.astype(np.float64)).reshape(EQUIRECT)
     assert np.abs(back - index).max() < 1e-3, "captured index != written inverse depth"
-    return index, entropy.reshape(EQUIRECT)
+    lut = os.path.join(root, name, "lt_(%d,%d,%d).hwd" % (*EQUIRECT, NUM_INVDEPTH))
+    return index, entropy.reshape(EQUIRECT), lut
+
+
+def compare_lut(omnimvs, sample_dir, reference_lut, tmp):
+    """`omnimvs lut` against the lookup table the reference built: the largest difference in
+    pixels of the camera image over entries valid in both, and the entries valid in one only."""
+    import subprocess
+
+    ours_path = os.path.join(tmp, "ours.hwd")
+    subprocess.run([omnimvs, "lut", sample_dir, "--out", ours_path], check=True,
+                   env=dict(os.environ, OMNIMVS_CACHE_DIR=os.path.join(tmp, "cache")),
+                   stdout=subprocess.DEVNULL)
+    ours = np.fromfile(ours_path, np.float32).reshape(4, NUM_INVDEPTH // 2, *EQUIRECT, 2)
+    theirs = np.fromfile(reference_lut, np.float32).reshape(ours.shape)
+    valid_o = (np.abs(ours) <= 1).all(-1)
+    valid_t = (np.abs(theirs) <= 1).all(-1)
+    both = valid_o & valid_t
+    import yaml
+    cams = yaml.safe_load(open(os.path.join(sample_dir, "config.yaml")))["cameras"]
+    worst = 0.0
+    for c in range(4):
+        h, w = cams[c]["image_size"]
+        scale = np.array([(w - 1) / 2.0, (h - 1) / 2.0])
+        d = np.abs(ours[c] - theirs[c])[both[c]] * scale
+        worst = max(worst, float(d.max()))
+    return {"valid_entries": int(both.sum()), "valid_in_one_only": int((valid_o ^ valid_t).sum()),
+            "max_difference_px": worst}
 
 
 PRED_SCALE = 64  # predictions are stored as 16-bit PNG of round(index * PRED_SCALE)
@@ -232,6 +260,7 @@ def main():
     ap.add_argument("--synth", action="append", default=[], help="a dataset written by omnimvs synth")
     ap.add_argument("--pred", action="append", default=[], help="its predictions (%%05d_index.tiff)")
     ap.add_argument("--skip-network", action="store_true", help="only the --synth checks")
+    ap.add_argument("--omnimvs", help="an omnimvs binary: compare its lookup table with the reference's")
     args = ap.parse_args()
     assert len(args.synth) == len(args.pred), "--synth and --pred go in pairs"
     torch = import_reference(args.checkout)
@@ -257,7 +286,8 @@ def main():
                 root = os.path.join(tmp, "data")
                 stage_sample(args.samples, name, root)
                 t = time.time()
-                index, entropy = run_reference_test(torch, ckpt, name, root, os.path.join(tmp, "results", name))
+                index, entropy, lut = run_reference_test(
+                    torch, ckpt, name, root, os.path.join(tmp, "results", name))
                 secs = time.time() - t
                 index.astype("<f4").tofile(os.path.join(args.out, f"{name}_00001_index.f32"))
                 entropy.astype("<f4").tofile(os.path.join(args.out, f"{name}_00001_entropy.f32"))
@@ -269,6 +299,9 @@ def main():
                     "entropy_mean": float(entropy.mean()), "entropy_max": float(entropy.max()),
                     "seconds": round(secs, 1),
                 }
+                if args.omnimvs:
+                    report["samples"][name]["lut_vs_omnimvs"] = compare_lut(
+                        args.omnimvs, os.path.join(args.samples, name), lut, tmp)
                 print(name, report["samples"][name], flush=True)
     if args.synth:
         report["metrics"] = []

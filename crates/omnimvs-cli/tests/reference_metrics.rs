@@ -48,6 +48,7 @@ fn eval_gives_the_reference_evalerror_figures_on_generated_frames() {
     assert_eq!(sets.len(), 2, "a things set and a house set");
     let grid = EquirectGrid::new(160, 640, 45.0).unwrap();
     let ndepth = 192;
+    let mut worst = 0f64;
     for set in sets {
         let name = set["dataset"].as_str().unwrap();
         let min_depth = set["min_depth_m"].as_f64().unwrap();
@@ -71,6 +72,7 @@ fn eval_gives_the_reference_evalerror_figures_on_generated_frames() {
                 .map(|v| v.as_f64().unwrap())
                 .collect();
             for (i, (a, b)) in ours.iter().zip(&theirs).enumerate() {
+                worst = worst.max((a - b).abs());
                 assert!(
                     (a - b).abs() <= TOLERANCE,
                     "{name} frame {k}: figure {i} (>1, >3, >5, MAE, RMS) is {a}, the reference's {b}\nours {ours:?}\ntheirs {theirs:?}"
@@ -90,6 +92,7 @@ fn eval_gives_the_reference_evalerror_figures_on_generated_frames() {
             assert!((a - b).abs() <= TOLERANCE, "{name} mean {i}: {a} vs {b}");
         }
     }
+    eprintln!("largest difference to the reference's figures: {worst:e}");
 }
 
 /// The sets the fixture was made from stated the reference's split as `synth` writes it: a
@@ -111,4 +114,39 @@ fn the_reference_read_the_split_that_synth_writes() {
         split("house"),
         (serde_json::json!([2048]), serde_json::json!([2049]))
     );
+}
+
+/// What the reference's `Dataset` needs from a generated folder's `config.yaml`, as `synth`
+/// writes it now (the fixture's folders were checked by the reference itself): ground truth
+/// announced (`dtype: gt`, `gt_phi`), the split (OmniThings' test frames start at 4097), and
+/// every camera's `invalid_mask` file.
+#[test]
+fn synth_writes_what_the_reference_dataset_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = support::synth_dataset(dir.path(), "things", "4096..4097", "48x50", 3);
+    let text = std::fs::read_to_string(data.join("config.yaml")).unwrap();
+    let yaml: serde_json::Value = {
+        // The few keys the reference reads from `dataset:`, one per line.
+        let mut map = serde_json::Map::new();
+        for line in text.lines().map(str::trim) {
+            for key in ["dtype", "gt_phi", "train_idx", "test_idx"] {
+                if let Some(v) = line.strip_prefix(&format!("{key}: ")) {
+                    map.insert(key.into(), v.into());
+                }
+            }
+        }
+        map.into()
+    };
+    assert_eq!(yaml["dtype"], "gt", "{text}");
+    assert_eq!(yaml["gt_phi"], "90.0", "{text}");
+    assert_eq!(yaml["train_idx"], "[4096]", "{text}");
+    assert_eq!(yaml["test_idx"], "[4097]", "{text}");
+    for camera in 1..=4 {
+        assert!(
+            text.contains(&format!("invalid_mask: \"mask{camera}.png\"")),
+            "{text}"
+        );
+        assert!(data.join(format!("mask{camera}.png")).is_file());
+    }
+    assert!(data.join("omnidepth_gt_640/04097.tiff").is_file());
 }
