@@ -25,13 +25,15 @@ pub const HOUSE_TEST_FRAMES: RangeInclusive<u32> = 2049..=2560;
 /// `gt_phi_deg` degrees of latitude either side of the equator.
 pub fn published_split(kind: SceneKind, frames: &FrameRange, gt_phi_deg: f64) -> Split {
     let test = match kind {
-        SceneKind::Things => THINGS_TEST_FRAMES,
-        SceneKind::House => HOUSE_TEST_FRAMES,
+        SceneKind::Things => Some(THINGS_TEST_FRAMES),
+        SceneKind::House => Some(HOUSE_TEST_FRAMES),
         // A custom scene cannot fill a dataset; no test frames if it ever does.
-        SceneKind::Custom => 1..=0,
+        SceneKind::Custom => None,
     };
-    let (test_idx, train): (Vec<u32>, Vec<u32>) =
-        frames.indices().into_iter().partition(|f| test.contains(f));
+    let (test_idx, train): (Vec<u32>, Vec<u32>) = frames
+        .indices()
+        .into_iter()
+        .partition(|f| test.as_ref().is_some_and(|t| t.contains(f)));
     Split {
         train,
         test: test_idx,
