@@ -47,7 +47,7 @@ struct Cli {
     /// ocam1.txt.. and poses.txt instead of config.yaml): cm in the released OmniThings,
     /// OmniHouse and urban sets (the default), mm in SweepNet's real_indoor_sample.
     /// `omnimvs info` shows the baselines it gives, in metres. A config.yaml's poses are
-    /// always metres.
+    /// always metres. Taken by info, lut, pano, parity, sgm, infer and eval.
     #[arg(long, global = true, value_enum)]
     pose_unit: Option<dataset::PoseUnit>,
 }
@@ -67,8 +67,32 @@ enum Command {
     Eval(cmd::eval::Args),
 }
 
+/// The commands that do not open their dataset through [`dataset::open_dataset`], so a
+/// stated pose unit would be silently ignored there: `train` (its datasets are opened by the
+/// trainer), `demo` and `synth` (they write their own `config.yaml`), `bench`.
+fn ignores_pose_unit(command: &Command) -> Option<&'static str> {
+    match command {
+        Command::Train(_) => Some("train"),
+        Command::Demo(_) => Some("demo"),
+        Command::Synth(_) => Some("synth"),
+        Command::Bench(_) => Some("bench"),
+        _ => None,
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Some(unit) = cli.pose_unit
+        && let Some(name) = ignores_pose_unit(&cli.command)
+    {
+        eprintln!(
+            "error: --pose-unit {}: `omnimvs {name}` does not take it (info, lut, pano, parity, sgm, infer and eval do); a released-layout folder is read in centimetres there",
+            clap::ValueEnum::to_possible_value(&unit)
+                .map(|v| v.get_name().to_string())
+                .unwrap_or_default()
+        );
+        return ExitCode::from(2);
+    }
     dataset::set_pose_unit(cli.pose_unit);
     let result = match cli.command {
         Command::Bench(a) => cmd::bench::run(&a),

@@ -109,3 +109,30 @@ fn a_pose_unit_for_a_config_yaml_is_refused() {
         &dir.path().join("cache"),
     );
 }
+
+/// A command that would not apply the unit refuses it rather than ignoring it.
+#[test]
+fn a_command_that_would_ignore_the_unit_refuses_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = omnimvs(
+        &[
+            "synth",
+            "--kind",
+            "things",
+            "--frames",
+            "1",
+            "--out",
+            dir.path().join("x").to_str().unwrap(),
+            "--pose-unit",
+            "mm",
+        ],
+        &dir.path().join("cache"),
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("--pose-unit mm") && err.contains("synth"),
+        "{err}"
+    );
+    assert!(!dir.path().join("x").exists());
+}
