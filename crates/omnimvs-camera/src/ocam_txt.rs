@@ -133,6 +133,22 @@ impl LengthUnit {
     }
 }
 
+/// Reads `m`, `cm` or `mm`; the error names the three.
+impl std::str::FromStr for LengthUnit {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "m" => Ok(Self::Metre),
+            "cm" => Ok(Self::Centimetre),
+            "mm" => Ok(Self::Millimetre),
+            other => Err(format!(
+                "expected a length unit m, cm or mm, found {other:?}"
+            )),
+        }
+    }
+}
+
 impl std::fmt::Display for LengthUnit {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.symbol())
