@@ -26,7 +26,6 @@ mod args;
 mod cmd;
 mod dataset;
 mod out;
-mod pictures;
 mod weights;
 
 /// 360-degree depth maps from a rig of ultra-wide (220-degree) fisheye cameras,

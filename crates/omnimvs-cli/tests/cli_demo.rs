@@ -53,7 +53,10 @@ fn demo_reports_figures_of_its_outputs_in_range() {
     let ds = Dataset::open(&out.join("things")).unwrap();
     let grid = EquirectGrid::new(height, width, 45.0).unwrap();
     let hyps = ds.hypotheses(ndepth).unwrap();
-    let truth = ds.eval_truth(1, &grid, &hyps).unwrap().unwrap();
+    let truth = ds
+        .eval_truth(1, &omnimvs_sweep::SweepSpec::new(grid, hyps))
+        .unwrap()
+        .unwrap();
     let index = read_inv_depth(&out.join("sgm/00001_index.tiff")).unwrap();
     assert_eq!((index.width, index.height), (width, height));
     let sgm = eval_metrics(&index.data, &truth, ndepth).unwrap().reference;

@@ -73,7 +73,10 @@ fn sgm_writes_every_output_and_finds_the_depth() {
         assert!(confidence.data.iter().all(|c| (0.0..=1.0).contains(c)));
 
         // The figures of sgm.json are those of the written index map against ground truth.
-        let truth = ds.eval_truth(frame, &grid, &hyps).unwrap().unwrap();
+        let truth = ds
+            .eval_truth(frame, &omnimvs_sweep::SweepSpec::new(grid, hyps))
+            .unwrap()
+            .unwrap();
         let ours = eval_metrics(&index.data, &truth, ndepth).unwrap();
         let record = &report["frames"][frame as usize - 1];
         assert_eq!(record["frame"].as_u64(), Some(u64::from(frame)));

@@ -1,7 +1,7 @@
 use std::path::{Path, PathBuf};
 
 use omnimvs_camera::{Rig, ValidityMask, parse_config_rig};
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec};
 
 use crate::gt::{EvalTruth, GroundTruth, InvDepthMap, eval_truth_on_grid, read_inv_depth};
 use crate::image_io::read_gray_sized;
@@ -171,6 +171,27 @@ impl Dataset {
         Ok(InvDepthHypotheses::new(ndepth, self.config.min_depth_m)?)
     }
 
+    /// The sweep of this dataset on a `height x width` grid over `±phi_deg` with `ndepth`
+    /// spheres from the configuration's minimum depth.
+    ///
+    /// # Errors
+    /// [`DataError::Sweep`] for a grid or `ndepth` out of range.
+    pub fn sweep_spec(
+        &self,
+        height: usize,
+        width: usize,
+        phi_deg: f64,
+        ndepth: usize,
+    ) -> Result<SweepSpec, DataError> {
+        Ok(SweepSpec::from_sizes(
+            height,
+            width,
+            phi_deg,
+            ndepth,
+            self.config.min_depth_m,
+        )?)
+    }
+
     /// Candidate paths of an image: the configured pattern, then the same
     /// with the frame number zero-padded to 4 and 5 digits (released sets mix
     /// `0001.png` and `00001.png`).
@@ -319,20 +340,18 @@ impl Dataset {
         grid: &EquirectGrid,
         hyps: &InvDepthHypotheses,
     ) -> Result<Option<GroundTruth>, DataError> {
-        Ok(self.eval_truth(frame, grid, hyps)?.map(|truth| truth.gt))
+        let spec = SweepSpec::new(*grid, *hyps);
+        Ok(self.eval_truth(frame, &spec)?.map(|truth| truth.gt))
     }
 
-    /// [`Self::ground_truth`] together with the sky mask on the same pixels, for scoring under
-    /// either protocol ([`crate::metrics::Protocol`]; [`eval_truth_on_grid`]).
+    /// [`Self::ground_truth`] on `spec`'s grid and hypotheses together with the sky mask on
+    /// the same pixels, for scoring under either protocol ([`crate::metrics::Protocol`];
+    /// [`eval_truth_on_grid`]).
     ///
     /// # Errors
     /// As [`Self::ground_truth`].
-    pub fn eval_truth(
-        &self,
-        frame: u32,
-        grid: &EquirectGrid,
-        hyps: &InvDepthHypotheses,
-    ) -> Result<Option<EvalTruth>, DataError> {
+    pub fn eval_truth(&self, frame: u32, spec: &SweepSpec) -> Result<Option<EvalTruth>, DataError> {
+        let (grid, hyps) = (&spec.grid, &spec.hypotheses);
         let Some(map) = self.read_gt(frame)? else {
             return Ok(None);
         };

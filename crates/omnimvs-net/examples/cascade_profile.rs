@@ -35,10 +35,15 @@ fn main() {
     let inference = CascadeInference::new(net, &ds, device.clone()).unwrap();
     println!("geometry: {:.3} s", start.elapsed().as_secs_f64());
     for _ in 0..2 {
-        let (_, t) = inference.run(&images, true).unwrap();
+        let mut t = omnimvs_data::StageTimes::default();
+        inference.run(&images, &mut t).unwrap();
         println!(
             "forward: features {:.3}  coarse {:.3}  mid {:.3}  fine {:.3}  total {:.3} s",
-            t.features, t.coarse, t.mid, t.fine, t.total
+            t.get("features"),
+            t.get("coarse"),
+            t.get("mid"),
+            t.get("fine"),
+            t.get("total")
         );
     }
 

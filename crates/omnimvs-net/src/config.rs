@@ -67,6 +67,16 @@ pub struct CascadeParams {
     pub stage_channels: [usize; 2],
     /// Weights of the coarse, half- and full-resolution losses.
     pub loss_weights: [f64; 3],
+    /// Context residual pairs at stride 8 after the base four convolutions, dilated 4 and 8
+    /// in turn (a wider view for textureless and thin regions). Their residual branch starts
+    /// at zero, so a trained network grows into them unchanged (`0`: the first cascades).
+    #[serde(default)]
+    pub context_pairs: usize,
+    /// Refinement stages that can keep their centre: each answers
+    /// `centre + g (soft argmax - centre)` with a per-pixel gate `g` in `0..1` learnt from
+    /// its hidden features (starting near 1, where the stage behaves as without it).
+    #[serde(default)]
+    pub stage_gates: bool,
 }
 
 impl Default for CascadeParams {
@@ -80,6 +90,8 @@ impl Default for CascadeParams {
             stage_intervals: [2.0, 1.0],
             stage_channels: [32, 16],
             loss_weights: [0.5, 1.0, 2.0],
+            context_pairs: 0,
+            stage_gates: false,
         }
     }
 }

@@ -1,16 +1,19 @@
 //! One way to run a network of either family on a dataset's frames: the paper's network
 //! through its lookup tables ([`Inference`]), the cascade through its per-pixel sampler
-//! ([`CascadeInference`]), both answering with a [`FrameResult`] on their output grid.
+//! ([`CascadeInference`]), both behind the workspace's one depth interface,
+//! [`DepthEstimator`], answering with a [`DepthEstimate`] on their output grid.
 
 use burn::tensor::Device;
 use omnimvs_camera::ValidityMask;
-use omnimvs_data::Dataset;
-use omnimvs_sweep::{CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache};
+use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, EstimateError, StageObserver};
+use omnimvs_sweep::{
+    CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache, SweepSpec,
+};
 
 use crate::cascade::CascadeInference;
 use crate::config::NetConfig;
 use crate::error::NetError;
-use crate::infer::{FrameResult, Inference};
+use crate::infer::Inference;
 use crate::weights::AnyNet;
 
 /// A network of either family, prepared for one rig.
@@ -54,31 +57,33 @@ impl NetEstimator {
     /// The network's configuration.
     pub fn config(&self) -> &NetConfig {
         match self {
-            Self::OmniMvs(i) => &i.net.config,
+            Self::OmniMvs(i) => &i.net().config,
             Self::Cascade(i) => &i.net().config,
+        }
+    }
+
+    /// The output grid and the dataset's `N` hypotheses.
+    pub fn spec(&self) -> &SweepSpec {
+        match self {
+            Self::OmniMvs(i) => i.spec(),
+            Self::Cascade(i) => i.spec(),
         }
     }
 
     /// The output grid.
     pub fn grid(&self) -> &EquirectGrid {
-        match self {
-            Self::OmniMvs(i) => &i.grid,
-            Self::Cascade(i) => i.grid(),
-        }
+        &self.spec().grid
     }
 
     /// The dataset's `N` hypotheses.
     pub fn hypotheses(&self) -> &InvDepthHypotheses {
-        match self {
-            Self::OmniMvs(i) => &i.hypotheses,
-            Self::Cascade(i) => i.hypotheses(),
-        }
+        &self.spec().hypotheses
     }
 
     /// Validity masks of the cameras.
     pub fn masks(&self) -> &[ValidityMask] {
         match self {
-            Self::OmniMvs(i) => &i.masks,
+            Self::OmniMvs(i) => i.masks(),
             Self::Cascade(i) => i.masks(),
         }
     }
@@ -91,11 +96,7 @@ impl NetEstimator {
     /// the cascade.
     pub fn set_order(&mut self, order: &[usize]) -> Result<(), NetError> {
         match self {
-            Self::OmniMvs(i) => {
-                i.net.check_order(order)?;
-                i.order = order.to_vec();
-                Ok(())
-            }
+            Self::OmniMvs(i) => i.set_order(order),
             Self::Cascade(_) => Err(NetError::InvalidConfig {
                 field: "order",
                 message: "the cascade network has no camera order".into(),
@@ -106,19 +107,40 @@ impl NetEstimator {
     /// The camera concatenation order (the rig's for the cascade).
     pub fn order(&self) -> Vec<usize> {
         match self {
-            Self::OmniMvs(i) => i.order.clone(),
+            Self::OmniMvs(i) => i.order().to_vec(),
             Self::Cascade(i) => (0..i.net().config.num_cameras).collect(),
         }
     }
+}
 
-    /// Runs the network on one frame's gray images (rig order).
-    ///
-    /// # Errors
-    /// [`NetError`] for inconsistent inputs.
-    pub fn run(&self, images: &[GrayImage]) -> Result<FrameResult, NetError> {
+impl From<NetError> for EstimateError {
+    fn from(e: NetError) -> Self {
+        Self::new(e)
+    }
+}
+
+impl DepthEstimator for NetEstimator {
+    fn name(&self) -> &str {
         match self {
-            Self::OmniMvs(i) => i.run(images),
-            Self::Cascade(i) => Ok(i.run(images, false)?.0),
+            Self::OmniMvs(_) => Inference::NAME,
+            Self::Cascade(_) => CascadeInference::NAME,
         }
+    }
+
+    fn spec(&self) -> &SweepSpec {
+        NetEstimator::spec(self)
+    }
+
+    /// Stages are timed, and the device waited for after each, only when `observer` wants
+    /// them.
+    fn estimate_observed(
+        &self,
+        images: &[GrayImage],
+        observer: &mut dyn StageObserver,
+    ) -> Result<DepthEstimate, EstimateError> {
+        Ok(match self {
+            Self::OmniMvs(i) => i.run_observed(images, observer)?,
+            Self::Cascade(i) => i.run(images, observer)?,
+        })
     }
 }

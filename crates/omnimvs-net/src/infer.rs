@@ -3,13 +3,14 @@
 
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::ValidityMask;
-use omnimvs_data::Dataset;
 use omnimvs_data::image_io::normalize_for_network;
+use omnimvs_data::{Dataset, DepthEstimate, NoTimings, StageObserver};
 use omnimvs_sweep::{
-    CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache, SphereSet,
+    CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache, SphereSet, SweepSpec,
 };
 
 pub use crate::backend::device_from_name;
+use crate::cascade::model::read_values;
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::{OmniMvsNet, SweepInput, SweepTaps};
@@ -21,41 +22,25 @@ const ANTIALIAS_FACTOR: f64 = 1.5;
 /// A network ready to run on the frames of one rig.
 pub struct Inference {
     /// The network (batch norms possibly folded).
-    pub net: OmniMvsNet,
+    net: OmniMvsNet,
     /// Lookup table of every camera for the network's output grid.
-    pub grids: Vec<SweepGrid>,
-    /// The `N` inverse-depth hypotheses of the dataset.
-    pub hypotheses: InvDepthHypotheses,
-    /// The output grid.
-    pub grid: EquirectGrid,
+    grids: Vec<SweepGrid>,
+    /// The output grid and the dataset's `N` inverse-depth hypotheses.
+    spec: SweepSpec,
     /// Validity mask of every camera, at the dataset's image size.
-    pub masks: Vec<ValidityMask>,
+    masks: Vec<ValidityMask>,
     /// Camera concatenation order.
-    pub order: Vec<usize>,
+    order: Vec<usize>,
     /// Device the network runs on.
-    pub device: Device,
+    device: Device,
     /// The lookup tables as taps on the device, when the sweep runs there (GPU backends).
-    pub device_taps: Option<Vec<SweepTaps>>,
-}
-
-/// The network's results for one frame, on the `height x width` output grid.
-#[derive(Clone, Debug)]
-pub struct FrameResult {
-    /// Rows of the maps.
-    pub height: usize,
-    /// Columns of the maps.
-    pub width: usize,
-    /// Softargmin hypothesis index `n_hat` in `[0, N - 1]`.
-    pub index: Vec<f32>,
-    /// Inverse depth (1/m) of the index.
-    pub inv_depth: Vec<f32>,
-    /// Entropy of the per-pixel distribution (nats).
-    pub entropy: Vec<f32>,
-    /// Wall time of the forward pass, seconds.
-    pub seconds: f64,
+    device_taps: Option<Vec<SweepTaps>>,
 }
 
 impl Inference {
+    /// The method's name in estimates.
+    pub const NAME: &'static str = "OmniMVS";
+
     /// Prepares `net` for `dataset`: checks the camera count, loads or builds the lookup
     /// table in `cache` (the network sweeps every other sphere) and reads the masks.
     ///
@@ -68,9 +53,13 @@ impl Inference {
         device: Device,
     ) -> Result<(Self, CacheStatus), NetError> {
         let config = net.config.clone();
-        let (grid, hypotheses) = sweep_geometry(&config, dataset)?;
-        let (lut, status) =
-            cache.load_or_build(&dataset.rig, &grid, &hypotheses, SphereSet::EveryOther)?;
+        let spec = sweep_spec(&config, dataset)?;
+        let (lut, status) = cache.load_or_build(
+            &dataset.rig,
+            &spec.grid,
+            &spec.hypotheses,
+            SphereSet::EveryOther,
+        )?;
         let grids = SweepGrid::split_table(
             &lut.data,
             config.num_cameras,
@@ -84,8 +73,7 @@ impl Inference {
             Self {
                 net,
                 grids,
-                hypotheses,
-                grid,
+                spec,
                 masks,
                 order,
                 device,
@@ -93,6 +81,36 @@ impl Inference {
             },
             status,
         ))
+    }
+
+    /// The network.
+    pub fn net(&self) -> &OmniMvsNet {
+        &self.net
+    }
+
+    /// The output grid and the dataset's hypotheses.
+    pub fn spec(&self) -> &SweepSpec {
+        &self.spec
+    }
+
+    /// Validity masks of the cameras at the dataset's image size.
+    pub fn masks(&self) -> &[ValidityMask] {
+        &self.masks
+    }
+
+    /// The camera concatenation order.
+    pub fn order(&self) -> &[usize] {
+        &self.order
+    }
+
+    /// Sets the camera concatenation order.
+    ///
+    /// # Errors
+    /// [`NetError::CameraOrder`] for an order that is not a permutation of the cameras.
+    pub fn set_order(&mut self, order: &[usize]) -> Result<(), NetError> {
+        self.net.check_order(order)?;
+        self.order = order.to_vec();
+        Ok(())
     }
 
     /// Runs the sweep on the device from now on (for GPU backends: the host kernel would copy
@@ -111,54 +129,62 @@ impl Inference {
         input_tensors(&self.net.config, images, &self.masks, &self.device)
     }
 
-    /// Runs the network on one frame's gray images (camera order of the rig).
+    /// Runs the network on one frame's gray images (camera order of the rig), stages not
+    /// measured.
     ///
     /// # Errors
     /// [`NetError`] for inconsistent inputs.
-    pub fn run(&self, images: &[GrayImage]) -> Result<FrameResult, NetError> {
+    pub fn run(&self, images: &[GrayImage]) -> Result<DepthEstimate, NetError> {
+        self.run_observed(images, &mut NoTimings)
+    }
+
+    /// [`Self::run`], each stage's time given to `observer` when it wants them (the device
+    /// is then waited for after every stage).
+    ///
+    /// # Errors
+    /// [`NetError`] for inconsistent inputs.
+    pub fn run_observed(
+        &self,
+        images: &[GrayImage],
+        observer: &mut dyn StageObserver,
+    ) -> Result<DepthEstimate, NetError> {
         let inputs = self.input_tensors(images)?;
         let sweep = match &self.device_taps {
             Some(taps) => SweepInput::Device(taps),
             None => SweepInput::Host(&self.grids),
         };
-        let (out, timings) = self.net.infer_timed_with(&inputs, sweep, &self.order)?;
-        let entropy = out.entropy();
-        let read = |t: Tensor<3>, what: &str| {
-            t.into_data()
-                .try_into_vec_as::<f32>()
-                .map_err(|e| NetError::Shape {
-                    what: format!("{what} ({e:?})"),
-                    expected: vec![],
-                    actual: vec![],
-                })
-        };
-        let index = read(out.index, "index map")?;
-        let entropy = read(entropy, "entropy map")?;
-        let inv_depth = index
-            .iter()
-            .map(|&n| self.hypotheses.inv_depth(f64::from(n)) as f32)
-            .collect();
-        Ok(FrameResult {
-            height: self.net.config.out_height,
-            width: self.net.config.out_width,
+        let (out, t) =
+            self.net
+                .infer_with(&inputs, sweep, &self.order, observer.wants_timings())?;
+        let entropy = read_values(out.entropy(), "entropy map")?;
+        let index = read_values(out.index, "index map")?;
+        observer.stages(&[
+            ("features", t.features),
+            ("sweep", t.sweep),
+            ("fusion", t.fusion),
+            ("fusion_finish", t.fusion_finish),
+            ("cost", t.cost),
+            ("softargmin", t.softargmin),
+            ("total", t.total),
+        ]);
+        let spec = self.spec;
+        Ok(DepthEstimate::with_entropy(
+            spec,
+            Self::NAME,
             index,
-            inv_depth,
             entropy,
-            seconds: timings.total,
-        })
+            t.total,
+        ))
     }
 }
 
 /// Checks that `dataset`'s rig has the network's number of cameras and returns the network's
-/// output grid and the dataset's `N` inverse-depth hypotheses.
+/// sweep: its output grid and the dataset's `N` inverse-depth hypotheses.
 ///
 /// # Errors
 /// [`NetError::Shape`] for another number of cameras; [`NetError`] for an invalid grid or
 /// minimum depth.
-pub fn sweep_geometry(
-    config: &NetConfig,
-    dataset: &Dataset,
-) -> Result<(EquirectGrid, InvDepthHypotheses), NetError> {
+pub fn sweep_spec(config: &NetConfig, dataset: &Dataset) -> Result<SweepSpec, NetError> {
     if dataset.rig.len() != config.num_cameras {
         return Err(NetError::Shape {
             what: format!("cameras of {}", dataset.config_path.display()),
@@ -166,9 +192,24 @@ pub fn sweep_geometry(
             actual: vec![dataset.rig.len()],
         });
     }
-    let grid = EquirectGrid::new(config.out_height, config.out_width, config.phi_deg)?;
-    let hypotheses = dataset.hypotheses(config.num_invdepth)?;
-    Ok((grid, hypotheses))
+    Ok(dataset.sweep_spec(
+        config.out_height,
+        config.out_width,
+        config.phi_deg,
+        config.num_invdepth,
+    )?)
+}
+
+/// [`sweep_spec`] as a grid and hypotheses (the trainer's form).
+///
+/// # Errors
+/// As [`sweep_spec`].
+pub fn sweep_geometry(
+    config: &NetConfig,
+    dataset: &Dataset,
+) -> Result<(EquirectGrid, InvDepthHypotheses), NetError> {
+    let spec = sweep_spec(config, dataset)?;
+    Ok((spec.grid, spec.hypotheses))
 }
 
 /// Network inputs `[1, 1, H_I, W_I]` of a frame's gray images on `device`, for either family:

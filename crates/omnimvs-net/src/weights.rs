@@ -176,6 +176,58 @@ pub fn load_cascade(path: &Path, device: &Device) -> Result<CascadeNet, NetError
     apply_file(CascadeNet::new(&config, device)?, path)
 }
 
+/// Loads cascade weights into a network of `config`, which may have grown from the
+/// weights' own configuration (the file's JSON): more context pairs at stride 8
+/// (`context_pairs`) or gated refinement stages (`stage_gates`), everything else equal. The
+/// new modules keep their starting values, which leave the network's answer as it was (or
+/// nearly: the gates start at 0.98), so training goes on from the loaded network.
+///
+/// # Errors
+/// [`NetError::Weights`] when the file's network is not `config` or a part of it; see
+/// [`load_cascade`].
+pub fn load_cascade_grown(
+    path: &Path,
+    config: &NetConfig,
+    device: &Device,
+) -> Result<CascadeNet, NetError> {
+    let saved = read_config(&config_path(path))?;
+    if saved == *config {
+        return load_cascade(path, device);
+    }
+    let mut shrunk = config.clone();
+    shrunk.cascade.context_pairs = saved.cascade.context_pairs;
+    shrunk.cascade.stage_gates = saved.cascade.stage_gates;
+    let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
+        && (!saved.cascade.stage_gates || config.cascade.stage_gates);
+    if shrunk != saved || !grows {
+        return Err(weights_error(
+            path,
+            "the network of these weights is neither the one asked for nor a part of it \
+             (only `context_pairs` may grow and `stage_gates` switch on)",
+        ));
+    }
+    let old_ctx = 2 * saved.cascade.context_pairs;
+    let is_new = |p: &str| {
+        p.starts_with("mid.gate.")
+            || p.starts_with("fine.gate.")
+            || p.strip_prefix("features.ctx8.")
+                .and_then(|rest| rest.split('.').next())
+                .and_then(|i| i.parse::<usize>().ok())
+                .is_some_and(|i| i >= old_ctx)
+    };
+    if !path.exists() {
+        return Err(weights_error(path, "no such weight file"));
+    }
+    let mut net = CascadeNet::new(config, device)?;
+    let mut store = SafetensorsStore::from_file(path).allow_partial(true);
+    let mut result = net
+        .load_from(&mut store)
+        .map_err(|e| weights_error(path, e.to_string()))?;
+    result.missing.retain(|(p, _)| !is_new(p));
+    check_applied(path, &result)?;
+    Ok(net)
+}
+
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes
 /// (e.g. a model bundled into a binary with `include_bytes!`). `name` labels errors.
 ///

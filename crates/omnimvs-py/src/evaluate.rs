@@ -94,11 +94,11 @@ pub fn evaluate<'py>(
     let (inv_depth, rows, cols) = prediction_values(prediction)?;
     let ds = &dataset.inner;
     let metrics = detached(py, || {
-        let grid = EquirectGrid::new(height, width, phi_deg).py_err()?;
-        let hyps = ds.hypotheses(ndepth).py_err()?;
+        let spec = ds.sweep_spec(height, width, phi_deg, ndepth).py_err()?;
+        let (grid, hyps) = (spec.grid, spec.hypotheses);
         let native =
             EquirectGrid::new(rows, cols, phi_deg).map_err(|e| bad_argument("prediction", e))?;
-        let Some(truth) = ds.eval_truth(frame, &grid, &hyps).py_err()? else {
+        let Some(truth) = ds.eval_truth(frame, &spec).py_err()? else {
             return Err(bad_argument(
                 "frame",
                 format!("frame {frame} of {} has no ground truth", ds.root.display()),

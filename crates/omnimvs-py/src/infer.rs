@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use numpy::PyArray2;
+use omnimvs_data::DepthEstimator;
 use omnimvs_net::bundled::BundledModel;
 use omnimvs_net::weights::{AnyNet, common_image_size, load_family};
 use omnimvs_net::{Backend, NetConfig, NetEstimator};
@@ -86,7 +87,8 @@ pub fn infer<'py>(
         )
         .py_err()?;
         let images = images.load(&ds)?;
-        estimator.run(&images).py_err()
+        estimator.estimate(&images).py_err()
     })?;
-    map_to_array(py, result.inv_depth, result.height, result.width)
+    let (height, width) = (result.spec.height(), result.spec.width());
+    map_to_array(py, result.inv_depth, height, width)
 }

@@ -1,7 +1,7 @@
 //! `omnimvs.lookup_table`: the spherical-sweep lookup table in the reference `.hwd` layout.
 
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
-use omnimvs_sweep::{EquirectGrid, LutCache, SphereSet};
+use omnimvs_sweep::{LutCache, SphereSet};
 use pyo3::prelude::*;
 
 use crate::dataset::geometry;
@@ -42,10 +42,9 @@ pub fn lookup_table<'py>(
         ));
     }
     let lut = detached(py, || {
-        let grid = EquirectGrid::new(height, width, phi_deg).py_err()?;
-        let hyps = ds.hypotheses(ndepth).py_err()?;
+        let spec = ds.sweep_spec(height, width, phi_deg, ndepth).py_err()?;
         let (lut, _status) = LutCache::default_location()
-            .load_or_build(&ds.rig, &grid, &hyps, SphereSet::EveryOther)
+            .load_or_build(&ds.rig, &spec.grid, &spec.hypotheses, SphereSet::EveryOther)
             .py_err()?;
         Ok(lut)
     })?;

@@ -1,8 +1,8 @@
 //! `omnimvs.sgm`: the classical method (spherical-sweep ZNCC + SGM).
 
 use numpy::PyArray2;
-use omnimvs_stereo::{SgmParams, SphericalStereo};
-use omnimvs_sweep::EquirectGrid;
+use omnimvs_data::DepthEstimator;
+use omnimvs_stereo::{SgmEstimator, SgmParams};
 use pyo3::prelude::*;
 
 use crate::dataset::PyRig;
@@ -41,13 +41,12 @@ pub fn sgm<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
     let (ds, images) = frame_source(source, frame, rig)?;
     let inv_depth = detached(py, || {
-        let grid = EquirectGrid::new(height, width, phi_deg).py_err()?;
-        let hyps = ds.hypotheses(ndepth).py_err()?;
-        let stereo = SphericalStereo::new(&ds.rig, grid, hyps, SgmParams::default()).py_err()?;
+        let spec = ds.sweep_spec(height, width, phi_deg, ndepth).py_err()?;
         let masks = ds.masks().py_err()?;
+        let stereo =
+            SgmEstimator::new(&ds.rig, Some(masks), spec, SgmParams::default()).py_err()?;
         let images = images.load(&ds)?;
-        let out = stereo.compute(&images, Some(&masks)).py_err()?;
-        Ok(out.inv_depth)
+        Ok(stereo.estimate(&images).py_err()?.inv_depth)
     })?;
     map_to_array(py, inv_depth, height, width)
 }

@@ -6,6 +6,8 @@
 //!   hypotheses; [`SphericalStereo::compute`] turns the gray images of one
 //!   frame into an inverse-depth map, a fractional index map and a
 //!   confidence map, with the time of each stage.
+//! * [`SgmEstimator`]: the method behind the workspace's one depth interface,
+//!   `omnimvs_data::DepthEstimator`, prepared for a rig, a sweep and its parameters.
 //! * [`SphereProjector`]: where each output pixel meets each sweep sphere in
 //!   each camera, computed on the fly (the lookup table of all spheres would
 //!   not fit the memory budget).
@@ -21,6 +23,7 @@
 
 mod cost;
 mod error;
+mod estimator;
 pub mod params;
 mod pipeline;
 mod projector;
@@ -30,6 +33,7 @@ mod wta;
 
 pub use cost::{CostTimings, CostVolume, Matcher, NO_PAIR_COST, ZNCC_VARIANCE_EPS};
 pub use error::StereoError;
+pub use estimator::SgmEstimator;
 pub use params::{COST_SCALE, DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SweepStep};
 pub use pipeline::{SphericalStereo, StageTimings, StereoResult};
 pub use projector::SphereProjector;

@@ -11,6 +11,7 @@
 //!   `grid_sample(align_corners=True)` semantics and zeros outside.
 //! * [`panorama`]: the gray panorama composed from all cameras at a given
 //!   inverse depth.
+//! * [`SweepSpec`]: a grid and its hypotheses, what every depth estimate answers on.
 //! * [`resample_map`]: a map carried from one grid to another of the same
 //!   latitudes (bilinear, longitude wrapping around).
 
@@ -21,6 +22,7 @@ mod hypotheses;
 mod lut;
 pub mod panorama;
 mod resample;
+mod spec;
 pub mod warp;
 
 pub use cache::{CacheStatus, LutCache};
@@ -30,4 +32,5 @@ pub use hypotheses::InvDepthHypotheses;
 pub use lut::{INVALID_PIXEL, LookupTable, SphereSet, hwd_file_name, normalized_position};
 pub use panorama::{InvDepthSource, Panorama, compose_panorama, warp_camera_to_panorama};
 pub use resample::resample_map;
+pub use spec::SweepSpec;
 pub use warp::{BilinearTap, GrayImage, sample_bilinear, warp_camera_onto_spheres};

@@ -4,21 +4,29 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::colormap::{Colormap, colorize};
-use omnimvs_data::gt::read_inv_depth;
+use omnimvs_data::gt::GroundTruth;
 use omnimvs_data::image_io::write_png_u8;
-use omnimvs_data::metrics::{ProtocolMetrics, eval_metrics};
+use omnimvs_data::metrics::ProtocolMetrics;
+use omnimvs_data::output::evaluation::write_index_png;
+use omnimvs_data::output::pictures::{
+    error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud,
+};
+use omnimvs_data::output::{
+    ConfidenceRun, DepthRun, EvalReport, Evaluation, FrameScene, MethodScores, protocol_tables,
+    write_text,
+};
 use omnimvs_data::ply::write_ply;
-use omnimvs_data::{Dataset, FrameRange};
-use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
+use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange};
+use omnimvs_net::{Backend, BundledModel, NetEstimator};
+use omnimvs_stereo::{SgmEstimator, SgmParams};
+use omnimvs_sweep::{GrayImage, LutCache};
+use omnimvs_synth::rig::preset_rig;
+use omnimvs_synth::{DatasetWriter, SceneKind, Shard, SynthOptions};
 
-use crate::args::{Kind, Method, Preset, RigArg, Size};
-use crate::cmd::eval::protocol_tables;
-use crate::cmd::{eval, infer, sgm, synth};
-use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud};
+use crate::args::{Preset, Size};
+use crate::cmd::{eval, infer, sgm};
 use crate::weights::Weights;
-use omnimvs_net::BundledModel;
 
 /// Run the whole pipeline on a rendered scene (no data needed) and print its metrics.
 ///
@@ -52,6 +60,104 @@ pub struct Args {
     pub samples: PathBuf,
 }
 
+/// A bundled network prepared for a dataset.
+struct Network {
+    weights: Weights,
+    estimator: NetEstimator,
+}
+
+/// Every bundled network, the default first (`tiny` answers at 32x128, the cascade at the
+/// full 160x640), prepared for `ds` on the CPU.
+fn networks(ds: &Dataset) -> Result<Vec<Network>> {
+    let device = Backend::Cpu.device()?;
+    std::iter::once(BundledModel::DEFAULT)
+        .chain(
+            BundledModel::ALL
+                .into_iter()
+                .filter(|m| *m != BundledModel::DEFAULT),
+        )
+        .map(|model| {
+            let weights = Weights::Bundled(model);
+            let net = weights.load_family(Preset::Tiny.name(), &device)?;
+            let (estimator, status) = NetEstimator::new(
+                net,
+                ds,
+                &LutCache::default_location(),
+                device.clone(),
+                false,
+            )?;
+            infer::report_cache(status);
+            Ok(Network { weights, estimator })
+        })
+        .collect()
+}
+
+/// Renders `frames` synthetic `things` frames for the published rig into `dir`.
+fn render(dir: &Path, frames: u32, seed: u64) -> Result<()> {
+    let source = preset_rig()?;
+    let range = FrameRange::inclusive(1, frames);
+    let options = SynthOptions::new(SceneKind::Things, seed);
+    let writer = DatasetWriter::create_with(dir, &source, &options, &range)?;
+    let t0 = Instant::now();
+    writer.run(&Shard::ALL.frames(&range), |_| {})?;
+    outln!(
+        "{}: {frames} frame(s) rendered in {:.1} s",
+        dir.display(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// The classical method and every network on `frames` of `ds`, each once per frame, with
+/// `omnimvs sgm`'s and `omnimvs infer`'s files in `out/<sgm>` and `out/<net_prefix>STEM`.
+/// Returns, per frame, the images and every method's estimate (the classical method's
+/// first).
+fn estimate_all(
+    ds: &Dataset,
+    stereo: &SgmEstimator,
+    networks: &[Network],
+    frames: &[u32],
+    sgm_dir: &Path,
+    net_dir: impl Fn(&Weights) -> PathBuf,
+) -> Result<Vec<(Vec<GrayImage>, Vec<DepthEstimate>)>> {
+    outln!("{}", sgm::header(ds, stereo));
+    let mut sgm_run = ConfidenceRun::new(sgm_dir, *stereo.spec())?;
+    let mut net_runs = networks
+        .iter()
+        .map(|n| {
+            let backend = Backend::Cpu;
+            let settings = infer::settings(&ds.root, &n.weights, &n.estimator, &backend);
+            Ok(DepthRun::new(
+                &net_dir(&n.weights),
+                "infer.json",
+                &settings,
+                true,
+            )?)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut all = Vec::new();
+    for &f in frames {
+        let images = ds.read_frame(f)?;
+        let mut estimates = vec![sgm::frame(ds, stereo, &mut sgm_run, f, &images)?];
+        for (n, run) in networks.iter().zip(&mut net_runs) {
+            let est = n.estimator.estimate(&images)?;
+            infer::frame(ds, &n.estimator, run, f, &images, &est)?;
+            estimates.push(est);
+        }
+        all.push((images, estimates));
+    }
+    sgm::finish(ds, stereo, sgm_run, sgm_dir)?;
+    for ((n, run), dir) in networks
+        .iter()
+        .zip(net_runs)
+        .zip(networks.iter().map(|n| net_dir(&n.weights)))
+    {
+        infer::finish(&n.estimator, run)?;
+        outln!("wrote {} frames to {}", frames.len(), dir.display());
+    }
+    Ok(all)
+}
+
 pub fn run(args: &Args) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
@@ -62,156 +168,85 @@ pub fn run(args: &Args) -> Result<()> {
         args.frames,
         data_dir.display()
     );
-    synth::run(&synth::Args {
-        kind: Kind::Things.into(),
-        rig: RigArg::Published,
-        frames: FrameRange::inclusive(1, args.frames),
-        out: data_dir.clone(),
-        seed: args.seed,
-        size: None,
-        spp: 1,
-        shard: None,
-        meshes: Vec::new(),
-    })?;
+    render(&data_dir, args.frames, args.seed)?;
 
+    let (height, width) = (args.size.height, args.size.width);
     outln!(
-        "[2/5] classical method (ZNCC + SGM), {}x{}, N = {}",
-        args.size.height,
-        args.size.width,
+        "[2/5] classical method (ZNCC + SGM) and bundled networks, {height}x{width}, N = {}",
         args.ndepth
     );
-    let sgm_dir = args.out.join("sgm");
-    sgm::run(&sgm_args(
-        &data_dir,
-        &sgm_dir,
-        args,
-        Some(FrameRange::inclusive(1, args.frames)),
-    ))?;
+    let ds = Dataset::open(&data_dir)?;
+    let spec = ds.sweep_spec(height, width, 45.0, args.ndepth)?;
+    let masks = ds.masks()?;
+    let stereo = SgmEstimator::new(&ds.rig, Some(masks.clone()), spec, SgmParams::default())?;
+    let networks = networks(&ds)?;
+    let frames: Vec<u32> = (1..=args.frames).collect();
+    let estimates = estimate_all(
+        &ds,
+        &stereo,
+        &networks,
+        &frames,
+        &args.out.join("sgm"),
+        |w| args.out.join(format!("net_{}", w.stem())),
+    )?;
 
     outln!("[3/5] metrics and pictures of the classical method at full size");
-    let ds = Dataset::open(&data_dir)?;
-    let grid = EquirectGrid::new(args.size.height, args.size.width, 45.0)?;
-    let hyps = ds.hypotheses(args.ndepth)?;
-    let masks = ds.masks()?;
-    let mut frame_metrics_sgm = Vec::new();
-    for frame in 1..=args.frames {
-        let images = ds.read_frame(frame)?;
-        let index = read_inv_depth(&sgm_dir.join(format!("{frame:05}_index.tiff")))?;
-        let inv = read_inv_depth(&sgm_dir.join(format!("{frame:05}.tiff")))?;
-        let truth = ds
-            .eval_truth(frame, &grid, &hyps)?
-            .context("the synthetic frame has no ground truth")?;
-        frame_metrics_sgm.push(eval_metrics(&index.data, &truth, args.ndepth)?);
-        let gt = &truth.gt;
-        let pano = compose_panorama(
-            &ds.rig,
-            &grid,
-            &images,
-            Some(&masks),
-            InvDepthSource::Map(&inv.data),
-        )?;
-        let gt_inv: Vec<f32> = gt
-            .index
-            .iter()
-            .map(|&n| hyps.inv_depth(f64::from(n)) as f32)
-            .collect();
-        let max_inv = hyps.max_inv_depth();
-        let rows: Vec<(String, Vec<u8>)> = vec![
-            ("inputs".into(), fisheye_strip(&images, grid.width)),
-            (
-                "panorama at the estimated depth".into(),
-                gray_to_rgb(&pano.image),
-            ),
-            (
-                "ground truth".into(),
-                colorize(&gt_inv, 0.0, max_inv, Colormap::Turbo, Some(&gt.valid)),
-            ),
-            (
-                "ZNCC+SGM".into(),
-                colorize(&inv.data, 0.0, max_inv, Colormap::Turbo, None),
-            ),
-            (
-                "ZNCC+SGM error".into(),
-                error_map(&index.data, gt, args.ndepth),
-            ),
-        ];
-        let (px, height) = label_rows(&rows, grid.width);
+    let eval = Evaluation::new(&ds, &frames, spec)?;
+    let mut sgm_metrics = Vec::new();
+    for (k, &frame) in frames.iter().enumerate() {
+        let (images, methods) = &estimates[k];
+        let sgm = &methods[0];
+        sgm_metrics.push(eval.score(k, sgm)?.1);
+        let scene = FrameScene {
+            rig: &ds.rig,
+            images,
+            masks: &masks,
+        };
         let path = args.out.join(format!("things_{frame:05}.png"));
-        write_png_u8(&path, grid.width, height, 3, &px)?;
-        write_ply(
-            &args.out.join(format!("things_{frame:05}_sgm.ply")),
-            &point_cloud(&grid, &inv.data, &pano.image.data),
-        )?;
+        write_truth_comparison(&path, sgm, scene, &eval.truths[k].gt)?;
         outln!("  wrote {} and its point cloud", path.display());
     }
-    let rows: Vec<(String, ProtocolMetrics)> = ProtocolMetrics::mean(&frame_metrics_sgm)
-        .map(|mean| ("ZNCC+SGM".to_string(), mean))
+    let rows: Vec<(String, ProtocolMetrics)> = ProtocolMetrics::mean(&sgm_metrics)
+        .map(|mean| (SgmEstimator::NAME.to_string(), mean))
         .into_iter()
         .collect();
     let table = protocol_tables(&rows);
-    let md = args.out.join("metrics.md");
-    write_atomic(&md, table.as_bytes()).with_context(|| format!("writing {}", md.display()))?;
+    write_text(&args.out.join("metrics.md"), &table)?;
 
-    // Every bundled network, the default first: `tiny` answers at 32x128, the cascade at the
-    // full 160x640.
-    let networks: Vec<Weights> = std::iter::once(BundledModel::DEFAULT)
-        .chain(
-            BundledModel::ALL
-                .into_iter()
-                .filter(|m| *m != BundledModel::DEFAULT),
-        )
-        .map(Weights::Bundled)
-        .collect();
     outln!(
-        "[4/5] bundled networks ({}) against the classical method, all scored at {}x{}, N = {} \
-         (a coarser output upsampled)",
+        "[4/5] bundled networks ({}) against the classical method, all scored at {height}x{width}, \
+         N = {} (a coarser output upsampled)",
         networks
             .iter()
-            .map(Weights::stem)
+            .map(|n| n.weights.stem())
             .collect::<Vec<_>>()
             .join(", "),
-        args.size.height,
-        args.size.width,
         args.ndepth
     );
     let eval_dir = args.out.join("eval");
-    eval::run(&eval::Args {
-        data: data_dir.clone(),
-        method: vec![Method::Net, Method::Sgm],
-        weights: networks.clone(),
-        frames: FrameRange::inclusive(1, args.frames),
-        preset: Preset::Tiny,
-        size: args.size,
-        ndepth: args.ndepth,
-        phi_deg: 45.0,
-        out: Some(eval_dir.clone()),
-        pictures: true,
-        backend: omnimvs_net::Backend::Cpu,
-    })?;
-    let net_table = std::fs::read_to_string(eval_dir.join("eval.md")).ok();
-    for weights in &networks {
-        let out = args.out.join(format!("net_{}", weights.stem()));
-        infer::run(&infer_args(&data_dir, &out, args.frames, weights))?;
-    }
+    let report = score_all(&eval, &networks, &estimates, &eval_dir)?;
+    eval::report(&report, Some(&eval_dir))?;
+    let net_table = report.table();
 
     let itbt = args.samples.join("itbt_sample");
     if itbt.join("config.yaml").is_file() {
         outln!("[5/5] real data: itbt_sample frame 1");
-        let out = args.out.join("itbt_sgm");
-        sgm::run(&sgm_args(
-            &itbt,
-            &out,
-            args,
-            Some(FrameRange::inclusive(1, 1)),
-        ))?;
-        outln!("  ZNCC+SGM: {}", out.join("00001_invdepth.png").display());
-        for weights in &networks {
-            let out = args.out.join(format!("itbt_net_{}", weights.stem()));
-            infer::run(&infer_args(&itbt, &out, 1, weights))?;
+        let ds = Dataset::open(&itbt)?;
+        let spec = ds.sweep_spec(height, width, 45.0, args.ndepth)?;
+        let stereo = SgmEstimator::new(&ds.rig, Some(ds.masks()?), spec, SgmParams::default())?;
+        let networks = self::networks(&ds)?;
+        let sgm_dir = args.out.join("itbt_sgm");
+        let net_dir = |w: &Weights| args.out.join(format!("itbt_net_{}", w.stem()));
+        estimate_all(&ds, &stereo, &networks, &[1], &sgm_dir, net_dir)?;
+        outln!(
+            "  ZNCC+SGM: {}",
+            sgm_dir.join("00001_invdepth.png").display()
+        );
+        for n in &networks {
             outln!(
                 "  network `{}`: {}",
-                weights.stem(),
-                out.join("00001_vis.png").display()
+                n.weights.stem(),
+                net_dir(&n.weights).join("00001_vis.png").display()
             );
         }
     } else {
@@ -221,19 +256,15 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!(
-        "\nClassical method at {}x{}, N = {}, on {} synthetic frames (error in % of N; lower is better):\n\n{}",
-        args.size.height,
-        args.size.width,
+        "\nClassical method at {height}x{width}, N = {}, on {} synthetic frames (error in % of N; lower is better):\n\n{}",
         args.ndepth,
         args.frames,
         table.trim_end()
     );
-    if let Some(t) = net_table {
-        outln!(
-            "\nNetwork and classical method at the same grid:\n\n{}",
-            t.trim_end()
-        );
-    }
+    outln!(
+        "\nNetwork and classical method at the same grid:\n\n{}",
+        net_table.trim_end()
+    );
     outln!(
         "\ndone in {:.1} s: pictures, point clouds and metrics in {}",
         t0.elapsed().as_secs_f64(),
@@ -242,31 +273,100 @@ pub fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
-fn infer_args(dataset: &Path, out: &Path, frames: u32, weights: &Weights) -> infer::Args {
-    infer::Args {
-        dataset: dataset.to_path_buf(),
-        weights: weights.clone(),
-        preset: Preset::Tiny,
-        frames: FrameRange::inclusive(1, frames),
-        out: out.to_path_buf(),
-        backend: omnimvs_net::Backend::Cpu,
-        ply: true,
-        order: None,
-        input_size: None,
-    }
+/// `things_%05d.png` (rows: inputs, panorama at the estimated depth, ground truth, the
+/// estimate, its error) and the estimate's point cloud beside it (`_sgm.ply`).
+fn write_truth_comparison(
+    path: &Path,
+    est: &DepthEstimate,
+    scene: FrameScene<'_>,
+    gt: &GroundTruth,
+) -> Result<()> {
+    let (grid, hyps) = (&est.spec.grid, &est.spec.hypotheses);
+    let pano = scene.panorama(est)?;
+    let gt_inv = est.spec.inv_depth_of(&gt.index);
+    let max_inv = hyps.max_inv_depth();
+    let rows: Vec<(String, Vec<u8>)> = vec![
+        ("inputs".into(), fisheye_strip(scene.images, grid.width)),
+        (
+            "panorama at the estimated depth".into(),
+            gray_to_rgb(&pano.image),
+        ),
+        (
+            "ground truth".into(),
+            colorize(&gt_inv, 0.0, max_inv, Colormap::Turbo, Some(&gt.valid)),
+        ),
+        (
+            est.method.clone(),
+            colorize(&est.inv_depth, 0.0, max_inv, Colormap::Turbo, None),
+        ),
+        (
+            format!("{} error", est.method),
+            error_map(&est.index, gt, est.spec.ndepth()),
+        ),
+    ];
+    let (px, height) = label_rows(&rows, grid.width);
+    write_png_u8(path, grid.width, height, 3, &px)?;
+    let ply = path.with_file_name(format!(
+        "{}_sgm.ply",
+        path.file_stem().unwrap_or_default().to_string_lossy()
+    ));
+    write_ply(&ply, &point_cloud(grid, &est.inv_depth, &pano.image.data))?;
+    Ok(())
 }
 
-fn sgm_args(dataset: &Path, out: &Path, args: &Args, frames: Option<FrameRange>) -> sgm::Args {
-    sgm::Args {
-        dataset: dataset.to_path_buf(),
-        frames,
-        out: out.to_path_buf(),
-        size: args.size,
-        phi_deg: 45.0,
-        ndepth: args.ndepth,
-        p1: omnimvs_stereo::DEFAULT_P1,
-        p2: omnimvs_stereo::DEFAULT_P2,
-        four_paths: false,
-        every_other: false,
+/// `omnimvs eval`'s report of the estimates in memory (the networks first, as `eval --method
+/// net,sgm` orders them), with its pictures of the first frame in `dir`.
+fn score_all(
+    eval: &Evaluation,
+    networks: &[Network],
+    estimates: &[(Vec<GrayImage>, Vec<DepthEstimate>)],
+    dir: &Path,
+) -> Result<EvalReport> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let ndepth = eval.spec.ndepth();
+    let gt = &eval.truths[0].gt;
+    let first = eval.frames[0];
+    write_index_png(
+        &dir.join(format!("{first:05}_gt.png")),
+        &gt.index,
+        gt,
+        ndepth,
+        true,
+    )?;
+    // Row k of the report is method `order[k]` of the estimates (0: the classical method).
+    let order = (1..=networks.len()).chain(std::iter::once(0));
+    let mut results = Vec::new();
+    for m in order {
+        let (name, file) = match m {
+            0 => (SgmEstimator::NAME.to_string(), "sgm".to_string()),
+            _ => {
+                let stem = networks[m - 1].weights.stem();
+                let name = if networks.len() > 1 {
+                    format!("net ({stem})")
+                } else {
+                    "net".into()
+                };
+                (name, format!("net_{stem}"))
+            }
+        };
+        let mut scores = MethodScores::new(&name, estimates[0].1[m].spec);
+        let mut seconds = 0.0;
+        for (k, &f) in eval.frames.iter().enumerate() {
+            let est = &estimates[k].1[m];
+            let (index, metrics) = eval.score(k, est)?;
+            if k == 0 {
+                write_index_png(
+                    &dir.join(format!("{f:05}_{file}.png")),
+                    &index,
+                    gt,
+                    ndepth,
+                    false,
+                )?;
+            }
+            scores.push(f, metrics);
+            seconds += est.seconds;
+        }
+        results.push(scores.finish(&eval.spec, seconds / eval.frames.len() as f64)?);
     }
+    Ok(EvalReport::new(eval, results))
 }

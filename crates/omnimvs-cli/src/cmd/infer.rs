@@ -1,25 +1,17 @@
 //! `omnimvs infer`: run the OmniMVS network on a dataset's frames.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use omnimvs_camera::fs::write_atomic;
-use omnimvs_data::colormap::{Colormap, colorize};
-use omnimvs_data::gt::write_f32_tiff;
-use omnimvs_data::image_io::write_png_u8;
-use omnimvs_data::metrics::{Protocol, ProtocolMetrics, eval_metrics};
-use omnimvs_data::ply::write_ply;
-use omnimvs_data::{Dataset, FrameRange};
-use omnimvs_net::Backend;
-use omnimvs_net::NetEstimator;
-use omnimvs_net::infer::FrameResult;
+use omnimvs_data::metrics::ProtocolMetrics;
+use omnimvs_data::output::{DepthRun, FrameScene, protocol_tables};
+use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange};
 use omnimvs_net::weights::common_image_size;
-use omnimvs_sweep::{CacheStatus, GrayImage, InvDepthSource, LutCache, compose_panorama};
+use omnimvs_net::{Backend, NetEstimator};
+use omnimvs_sweep::{CacheStatus, GrayImage, LutCache};
 
 use crate::args::{BACKEND_HELP, Preset, Size, parse_backend};
-use crate::cmd::eval::protocol_tables;
-use crate::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 use crate::weights::{BUNDLED, Weights};
 
 /// Estimate 360-degree inverse depth with the OmniMVS network.
@@ -146,22 +138,8 @@ pub fn input_size(
     })
 }
 
-pub fn run(args: &Args) -> Result<()> {
-    let device = args.backend.device()?;
-    let ds = crate::dataset::open_dataset(&args.dataset)?;
-    let mut net = args.weights.load_family(args.preset.name(), &device)?;
-    if let Some(size) = input_size(args.input_size, &args.weights, &ds)? {
-        net.set_input_size(size)
-            .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
-    }
-    let config = net.config().clone();
-    let (mut inference, status) = NetEstimator::new(
-        net,
-        &ds,
-        &LutCache::default_location(),
-        device,
-        args.backend.is_gpu(),
-    )?;
+/// Says where the paper's network's lookup table came from (on standard error).
+pub fn report_cache(status: Option<CacheStatus>) {
     match status {
         Some(CacheStatus::Hit(p)) => eprintln!("lookup table from cache {}", p.display()),
         Some(CacheStatus::Built(p)) => {
@@ -172,25 +150,86 @@ pub fn run(args: &Args) -> Result<()> {
         }
         None => {}
     }
+}
+
+/// The settings of a run, written to `infer.json`.
+pub fn settings(
+    dataset: &Path,
+    weights: &Weights,
+    net: &NetEstimator,
+    backend: &Backend,
+) -> serde_json::Value {
+    let config = net.config();
+    serde_json::json!({
+        "dataset": dataset,
+        "weights": weights,
+        "network": config,
+        "input_size": [config.input_height, config.input_width],
+        "order": net.order(),
+        "backend": backend.to_string(),
+    })
+}
+
+/// One frame's estimate into `run` (its files, its metrics when the frame has ground truth).
+///
+/// # Errors
+/// Unreadable ground truth or a file that cannot be written.
+pub fn frame(
+    ds: &Dataset,
+    net: &NetEstimator,
+    run: &mut DepthRun,
+    frame: u32,
+    images: &[GrayImage],
+    est: &DepthEstimate,
+) -> Result<Option<ProtocolMetrics>> {
+    let truth = ds.eval_truth(frame, &est.spec)?;
+    let scene = FrameScene {
+        rig: &ds.rig,
+        images,
+        masks: net.masks(),
+    };
+    Ok(run.add(frame, est, scene, truth.as_ref())?)
+}
+
+/// Writes the run's metrics and prints their table, when frames had ground truth.
+///
+/// # Errors
+/// A file that cannot be written.
+pub fn finish(net: &NetEstimator, run: DepthRun) -> Result<()> {
+    if let Some(mean) = run.finish()? {
+        let spec = net.spec();
+        out!(
+            "{}x{}, N = {} (the network's grid)\n\n{}",
+            spec.height(),
+            spec.width(),
+            spec.ndepth(),
+            protocol_tables(&[("OmniMVS (burn)".into(), mean)])
+        );
+    }
+    Ok(())
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let device = args.backend.device()?;
+    let ds = crate::dataset::open_dataset(&args.dataset)?;
+    let mut net = args.weights.load_family(args.preset.name(), &device)?;
+    if let Some(size) = input_size(args.input_size, &args.weights, &ds)? {
+        net.set_input_size(size)
+            .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
+    }
+    let (mut inference, status) = NetEstimator::new(
+        net,
+        &ds,
+        &LutCache::default_location(),
+        device,
+        args.backend.is_gpu(),
+    )?;
+    report_cache(status);
     if let Some(order) = &args.order {
         inference.set_order(order)?;
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    let settings = serde_json::json!({
-        "dataset": args.dataset,
-        "weights": args.weights,
-        "network": config,
-        "input_size": [config.input_height, config.input_width],
-        "order": inference.order(),
-        "backend": args.backend.to_string(),
-    });
-    let path = args.out.join("infer.json");
-    write_atomic(
-        &path,
-        (serde_json::to_string_pretty(&settings)? + "\n").as_bytes(),
-    )
-    .with_context(|| format!("writing {}", path.display()))?;
+    let settings = settings(&args.dataset, &args.weights, &inference, &args.backend);
+    let mut run = DepthRun::new(&args.out, "infer.json", &settings, args.ply)?;
 
     let frames: Vec<u32> = args.frames.indices();
     let bar = ProgressBar::new(frames.len() as u64);
@@ -200,119 +239,19 @@ pub fn run(args: &Args) -> Result<()> {
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let mut metrics: Vec<(u32, ProtocolMetrics)> = Vec::new();
-    for &frame in &frames {
-        let images = ds
-            .read_frame(frame)
-            .with_context(|| format!("frame {frame}"))?;
-        let result = inference
-            .run(&images)
-            .with_context(|| format!("frame {frame}"))?;
-        let error = write_frame(args, &ds, &inference, frame, &images, &result)?;
-        if let Some(m) = error {
-            bar.set_message(format!("frame {frame}: MAE {:.3}", m.reference.mae));
-            metrics.push((frame, m));
-        } else {
-            bar.set_message(format!("frame {frame}: {:.2} s", result.seconds));
+    for &f in &frames {
+        let images = ds.read_frame(f).with_context(|| format!("frame {f}"))?;
+        let est = inference
+            .estimate(&images)
+            .with_context(|| format!("frame {f}"))?;
+        match frame(&ds, &inference, &mut run, f, &images, &est)? {
+            Some(m) => bar.set_message(format!("frame {f}: MAE {:.3}", m.reference.mae)),
+            None => bar.set_message(format!("frame {f}: {:.2} s", est.seconds)),
         }
         bar.inc(1);
     }
     bar.finish();
-    if !metrics.is_empty() {
-        let rows: Vec<ProtocolMetrics> = metrics.iter().map(|(_, m)| *m).collect();
-        let mean = ProtocolMetrics::mean(&rows);
-        let json = serde_json::json!({
-            "protocol": Protocol::Reference,
-            "frames": metrics.iter().map(|(f, m)| serde_json::json!({
-                "frame": f,
-                "metrics": m.reference,
-                "metrics_with_sky": m.with_sky,
-            })).collect::<Vec<_>>(),
-            "mean": mean.map(|m| m.reference),
-            "mean_with_sky": mean.map(|m| m.with_sky),
-        });
-        let path = args.out.join("metrics.json");
-        write_atomic(
-            &path,
-            (serde_json::to_string_pretty(&json)? + "\n").as_bytes(),
-        )
-        .with_context(|| format!("writing {}", path.display()))?;
-        if let Some(mean) = mean {
-            let c = inference.config();
-            out!(
-                "{}x{}, N = {} (the network's grid)\n\n{}",
-                c.out_height,
-                c.out_width,
-                c.num_invdepth,
-                protocol_tables(&[("OmniMVS (burn)".into(), mean)])
-            );
-        }
-    }
+    finish(&inference, run)?;
     outln!("wrote {} frames to {}", frames.len(), args.out.display());
     Ok(())
-}
-
-/// Writes every output of one frame; returns its metrics (both protocols) when ground truth
-/// exists.
-fn write_frame(
-    args: &Args,
-    ds: &Dataset,
-    inference: &NetEstimator,
-    frame: u32,
-    images: &[GrayImage],
-    result: &FrameResult,
-) -> Result<Option<ProtocolMetrics>> {
-    let (w, h) = (result.width, result.height);
-    let out = |suffix: &str| args.out.join(format!("{frame:05}{suffix}"));
-    write_f32_tiff(&out(".tiff"), w, h, &result.inv_depth)?;
-    write_f32_tiff(&out("_index.tiff"), w, h, &result.index)?;
-    write_f32_tiff(&out("_entropy.tiff"), w, h, &result.entropy)?;
-    let max_inv = inference.hypotheses().max_inv_depth();
-    let depth_rgb = colorize(&result.inv_depth, 0.0, max_inv, Colormap::Turbo, None);
-    write_png_u8(&out(".png"), w, h, 3, &depth_rgb)?;
-
-    let ndepth = inference.config().num_invdepth;
-    let truth = ds.eval_truth(frame, inference.grid(), inference.hypotheses())?;
-    let metrics = truth
-        .as_ref()
-        .map(|truth| eval_metrics(&result.index, truth, ndepth))
-        .transpose()?;
-
-    let pano = compose_panorama(
-        &ds.rig,
-        inference.grid(),
-        images,
-        Some(inference.masks()),
-        InvDepthSource::Map(&result.inv_depth),
-    )?;
-    let entropy_rgb = colorize(
-        &result.entropy,
-        0.0,
-        (ndepth as f64).ln(),
-        Colormap::Inferno,
-        None,
-    );
-    let mut rows: Vec<Vec<u8>> = vec![
-        fisheye_strip(images, w),
-        gray_to_rgb(&pano.image),
-        depth_rgb,
-        entropy_rgb,
-    ];
-    if let Some(truth) = &truth {
-        rows.push(error_map(&result.index, &truth.gt, ndepth));
-    }
-    let composite: Vec<u8> = rows.concat();
-    write_png_u8(
-        &out("_vis.png"),
-        w,
-        composite.len() / (3 * w),
-        3,
-        &composite,
-    )?;
-
-    if args.ply {
-        let points = point_cloud(inference.grid(), &result.inv_depth, &pano.image.data);
-        write_ply(&out(".ply"), &points)?;
-    }
-    Ok(metrics)
 }

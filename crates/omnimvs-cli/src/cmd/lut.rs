@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use omnimvs_sweep::{EquirectGrid, LookupTable, SphereSet};
+use omnimvs_sweep::{LookupTable, SphereSet};
 
 use crate::args::Size;
 
@@ -42,8 +42,8 @@ pub fn run(args: &Args) -> Result<()> {
             args.ndepth
         );
     }
-    let grid = EquirectGrid::new(args.size.height, args.size.width, args.phi_deg)?;
-    let hyps = ds.hypotheses(args.ndepth)?;
+    let spec = ds.sweep_spec(args.size.height, args.size.width, args.phi_deg, args.ndepth)?;
+    let (grid, hyps) = (spec.grid, spec.hypotheses);
     let set = if args.all_spheres {
         SphereSet::All
     } else {

@@ -166,9 +166,9 @@ fn compare(
             let seconds = start.elapsed().as_secs_f64();
             let reference = reference.get_or_insert_with(|| {
                 shape = (
-                    result.height,
-                    result.width,
-                    inference.net.config.num_invdepth,
+                    result.spec.height(),
+                    result.spec.width(),
+                    result.spec.ndepth(),
                 );
                 result.index.clone()
             });

@@ -102,6 +102,15 @@ pub struct Args {
     /// from the next epoch, `off` stops it.
     #[arg(long, value_enum)]
     pub photometric: Option<Switch>,
+    /// Cascade: context residual pairs at stride 8, dilated 4 and 8 in turn (`context_pairs`
+    /// of the configuration; 0 in the first cascades). They start as the identity, so --init
+    /// with a network without them goes on from its answer.
+    #[arg(long, conflicts_with = "resume")]
+    pub context_pairs: Option<usize>,
+    /// Cascade: refinement stages gated between their answer and their centre
+    /// (`stage_gates`; off in the first cascades). Taken with --init like --context-pairs.
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub stage_gates: Option<Switch>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
@@ -186,8 +195,20 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
             let Some(out) = &args.out else {
                 bail!("--out RUN_DIR is required for a new run");
             };
+            let mut net = args.preset.config();
+            if args.context_pairs.is_some() || args.stage_gates.is_some() {
+                if net.family != Family::Cascade {
+                    bail!("--context-pairs and --stage-gates are options of --preset cascade");
+                }
+                if let Some(pairs) = args.context_pairs {
+                    net.cascade.context_pairs = pairs;
+                }
+                if let Some(gates) = args.stage_gates {
+                    net.cascade.stage_gates = gates == Switch::On;
+                }
+            }
             let config = TrainConfig {
-                net: args.preset.config(),
+                net,
                 data: args.data.clone(),
                 train_frames: args.train_frames.map(|f| (f.start, f.end)),
                 val_frames: args.val_frames.map(|f| (f.start, f.end)),

@@ -29,6 +29,9 @@ pub struct StageTaps {
     pub visibility: Tensor<5>,
     /// Number of camera pairs that see each sample `[1, 1, K, H, W]`.
     pub pair_count: Tensor<5>,
+    /// The previous stage's estimate on this stage's grid `[1, H, W]` (`N` units), around
+    /// which a refinement stage's hypotheses lie; `None` for the coarse stage.
+    pub center: Option<Tensor<3>>,
 }
 
 impl StageTaps {
@@ -87,6 +90,7 @@ impl StageTaps {
             hypotheses: hypothesis_tensor(index, k, h, w, device),
             visibility: volume(visibility),
             pair_count: volume(pairs),
+            center: None,
         })
     }
 
@@ -199,10 +203,16 @@ impl CascadeGeometry {
             p.stage_intervals[stage - 1],
             self.config.num_invdepth,
         );
-        let grids = sampler.grids_window(&index, k, cols)?;
+        let grids = sampler.grids_window(&index, k, cols.clone())?;
         // Stage 1 reads the stride-4 features, stage 2 the stride-2 ones.
         let feature_size = self.config.cascade_feature_sizes()[2 - stage];
-        StageTaps::new(&grids, index, feature_size, &self.device)
+        let mut taps = StageTaps::new(&grids, index, feature_size, &self.device)?;
+        let [h, w] = [sampler.grid().height, cols.len()];
+        taps.center = Some(Tensor::<3>::from_data(
+            TensorData::new(center, [1, h, w]),
+            &self.device,
+        ));
+        Ok(taps)
     }
 }
 

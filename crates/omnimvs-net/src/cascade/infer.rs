@@ -4,35 +4,38 @@
 
 use burn::tensor::Device;
 use omnimvs_camera::ValidityMask;
-use omnimvs_data::Dataset;
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+use omnimvs_data::{Dataset, DepthEstimate, StageObserver};
+use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec};
 
-use super::geometry::{CascadeGeometry, CascadeTimings};
+use super::geometry::CascadeGeometry;
 use super::model::{CascadeNet, read_values};
 use crate::error::NetError;
-use crate::infer::{FrameResult, input_tensors, sweep_geometry};
+use crate::infer::{input_tensors, sweep_spec};
 
 /// A cascade network ready to run on the frames of one rig.
 pub struct CascadeInference {
     net: CascadeNet,
     geometry: CascadeGeometry,
-    grid: EquirectGrid,
+    spec: SweepSpec,
     masks: Vec<ValidityMask>,
     device: Device,
 }
 
 impl CascadeInference {
+    /// The method's name in estimates.
+    pub const NAME: &'static str = "cascade";
+
     /// Prepares `net` for `dataset`'s rig on `device`.
     ///
     /// # Errors
     /// [`NetError`] when the rig does not fit the network or the masks cannot be read.
     pub fn new(net: CascadeNet, dataset: &Dataset, device: Device) -> Result<Self, NetError> {
-        let (grid, hypotheses) = sweep_geometry(&net.config, dataset)?;
-        let geometry = CascadeGeometry::new(&dataset.rig, &net.config, &hypotheses, &device)?;
+        let spec = sweep_spec(&net.config, dataset)?;
+        let geometry = CascadeGeometry::new(&dataset.rig, &net.config, &spec.hypotheses, &device)?;
         Ok(Self {
             net,
             geometry,
-            grid,
+            spec,
             masks: dataset.masks()?,
             device,
         })
@@ -43,9 +46,14 @@ impl CascadeInference {
         &self.net
     }
 
+    /// The output grid and the dataset's hypotheses.
+    pub fn spec(&self) -> &SweepSpec {
+        &self.spec
+    }
+
     /// The output grid.
     pub fn grid(&self) -> &EquirectGrid {
-        &self.grid
+        &self.spec.grid
     }
 
     /// The `N` hypotheses of the dataset.
@@ -58,34 +66,37 @@ impl CascadeInference {
         &self.masks
     }
 
-    /// Runs the network on one frame's gray images (rig order): the final stage's maps, and
-    /// each stage's time when `timed` (which waits for the device after each).
+    /// Runs the network on one frame's gray images (rig order): the final stage's maps, each
+    /// stage's time given to `observer` when it wants them (the device is then waited for
+    /// after each stage).
     ///
     /// # Errors
     /// [`NetError`] for a wrong number of images or a mask of another size.
     pub fn run(
         &self,
         images: &[GrayImage],
-        timed: bool,
-    ) -> Result<(FrameResult, CascadeTimings), NetError> {
+        observer: &mut dyn StageObserver,
+    ) -> Result<DepthEstimate, NetError> {
         let inputs = input_tensors(&self.net.config, images, &self.masks, &self.device)?;
-        let (out, timings) = self.net.forward_timed(&inputs, &self.geometry, timed)?;
+        let timed = observer.wants_timings();
+        let (out, t) = self.net.forward_timed(&inputs, &self.geometry, timed)?;
         let [_, _, fine] = out.stages;
         let entropy = read_values(fine.entropy(), "entropy map")?;
         let index = read_values(fine.index, "index map")?;
-        let hypotheses = self.geometry.hypotheses;
-        let inv_depth = index
-            .iter()
-            .map(|&n| hypotheses.inv_depth(f64::from(n)) as f32)
-            .collect();
-        let result = FrameResult {
-            height: self.grid.height,
-            width: self.grid.width,
+        observer.stages(&[
+            ("features", t.features),
+            ("coarse", t.coarse),
+            ("mid", t.mid),
+            ("fine", t.fine),
+            ("total", t.total),
+        ]);
+        let spec = self.spec;
+        Ok(DepthEstimate::with_entropy(
+            spec,
+            Self::NAME,
             index,
-            inv_depth,
             entropy,
-            seconds: timings.total,
-        };
-        Ok((result, timings))
+            t.total,
+        ))
     }
 }

@@ -3,9 +3,11 @@
 //! encoder-decoder (hypotheses as channels), then two stages of per-pixel hypotheses around the previous estimate.
 
 use burn::module::Module;
+use burn::module::Param;
+use burn::nn::Initializer;
 use burn::nn::conv::{Conv2d, Conv2dConfig, ConvTranspose2d, ConvTranspose2dConfig};
 use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d};
-use burn::tensor::activation::{relu, softmax};
+use burn::tensor::activation::{relu, sigmoid, softmax};
 use burn::tensor::{Device, Tensor, TensorData};
 
 use super::geometry::StageTaps;
@@ -37,12 +39,15 @@ pub struct CascadeFeatures {
     pub down8: ConvBn2d,
     /// Two residual pairs at stride 8, the second dilated by 2.
     pub res8: Vec<ConvBn2d>,
+    /// Context residual pairs at stride 8 (dilated 4 and 8 in turn; none in the first
+    /// cascades), each starting as the identity.
+    pub ctx8: Vec<ConvBn2d>,
     /// Projection of the stride-8 features.
     pub out8: ConvBn2d,
 }
 
 impl CascadeFeatures {
-    fn new(channels: [usize; 3], device: &Device) -> Self {
+    fn new(channels: [usize; 3], context_pairs: usize, device: &Device) -> Self {
         let [c2, c4, c8] = channels;
         let conv = |cin, cout, k, stride, pad, dil| {
             ConvBn2d::new([cin, cout], k, stride, pad, dil, true, true, device)
@@ -62,6 +67,14 @@ impl CascadeFeatures {
                 conv(c8, c8, 3, 1, 2, 2),
                 conv(c8, c8, 3, 1, 2, 2),
             ],
+            ctx8: (0..context_pairs)
+                .flat_map(|i| {
+                    let dilation = if i % 2 == 0 { 4 } else { 8 };
+                    let first = conv(c8, c8, 3, 1, dilation, dilation);
+                    let second = conv(c8, c8, 3, 1, dilation, dilation).zero_residual();
+                    [first, second]
+                })
+                .collect(),
             out8: project(c8),
         }
     }
@@ -84,6 +97,7 @@ impl CascadeFeatures {
         let f4 = self.out4.forward(x.clone(), None);
         let x = self.down8.forward(x, None); // [B, c8, H_I/8, W_I/8]
         let x = Self::residual_pairs(&self.res8, x);
+        let x = Self::residual_pairs(&self.ctx8, x);
         let f8 = self.out8.forward(x, None);
         [f2, f4, f8]
     }
@@ -116,6 +130,24 @@ impl PanoConv2d {
             conv,
             bn: bn_relu.then(|| BatchNormConfig::new(channels[1]).init(device)),
             relu: bn_relu,
+        }
+    }
+
+    /// A convolution whose output starts at `bias` everywhere (zero weights), no batch norm.
+    fn constant(channels: [usize; 2], bias: f32, device: &Device) -> Self {
+        let mut conv = Conv2dConfig::new(channels, [3, 3])
+            .with_padding(PaddingConfig2d::Explicit(1, 0, 1, 0))
+            .with_initializer(Initializer::Zeros)
+            .init(device);
+        conv.bias = Some(Param::from_tensor(Tensor::full(
+            [channels[1]],
+            bias,
+            device,
+        )));
+        Self {
+            conv,
+            bn: None,
+            relu: false,
         }
     }
 
@@ -220,22 +252,33 @@ pub struct StageRegularizer {
     pub convs: Vec<PanoConv2d>,
     /// Final score per hypothesis.
     pub out: PanoConv2d,
+    /// The gate between the stage's answer and its centre (logit), when the stage has one.
+    pub gate: Option<PanoConv2d>,
 }
 
+/// The gate's starting logit: `sigmoid(4) = 0.98`, the stage's own answer almost unchanged.
+const GATE_START_LOGIT: f32 = 4.0;
+
 impl StageRegularizer {
-    fn new(cin: usize, ch: usize, k: usize, device: &Device) -> Self {
+    fn new(cin: usize, ch: usize, k: usize, gate: bool, device: &Device) -> Self {
         Self {
             convs: vec![
                 PanoConv2d::new([cin, ch], 1, true, device),
                 PanoConv2d::new([ch, ch], 1, true, device),
             ],
             out: PanoConv2d::new([ch, k], 1, false, device),
+            gate: gate.then(|| PanoConv2d::constant([ch, 1], GATE_START_LOGIT, device)),
         }
     }
 
-    /// `[B, C, H, W]` -> scores `[B, K, H, W]`.
-    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
-        self.out.forward(run(&self.convs, x)) // [B, K, H, W]
+    /// `[B, C, H, W]` -> scores `[B, K, H, W]` and, with a gate, its value `[B, H, W]`.
+    pub fn forward(&self, x: Tensor<4>) -> (Tensor<4>, Option<Tensor<3>>) {
+        let hidden = run(&self.convs, x); // [B, ch, H, W]
+        let gate = self
+            .gate
+            .as_ref()
+            .map(|g| sigmoid(g.forward(hidden.clone())).squeeze_dim(1)); // [B, H, W]
+        (self.out.forward(hidden), gate) // [B, K, H, W]
     }
 }
 
@@ -294,7 +337,7 @@ impl CascadeNet {
         config.validate()?;
         let p = &config.cascade;
         Ok(Self {
-            features: CascadeFeatures::new(p.feature_channels, device),
+            features: CascadeFeatures::new(p.feature_channels, p.context_pairs, device),
             coarse: CoarseRegularizer::new(
                 (p.groups[2] + 1) * p.coarse_spheres,
                 p.coarse_spheres,
@@ -305,12 +348,14 @@ impl CascadeNet {
                 (p.groups[1] + 1) * p.stage_hypotheses[0],
                 p.stage_channels[0],
                 p.stage_hypotheses[0],
+                p.stage_gates,
                 device,
             ),
             fine: StageRegularizer::new(
                 (p.groups[0] + 1) * p.stage_hypotheses[1],
                 p.stage_channels[1],
                 p.stage_hypotheses[1],
+                p.stage_gates,
                 device,
             ),
             config: config.clone(),
@@ -421,8 +466,20 @@ impl CascadeNet {
         let groups = self.config.cascade.groups[level];
         let volume = Self::correlation(features, taps, groups)?;
         let regularizer = if level == 1 { &self.mid } else { &self.fine };
-        let scores = regularizer.forward(fold_volume(volume)); // [B, K, H, W]
-        Ok(Self::soft_argmax(scores, taps.hypotheses.clone()))
+        let (scores, gate) = regularizer.forward(fold_volume(volume)); // [B, K, H, W]
+        let mut out = Self::soft_argmax(scores, taps.hypotheses.clone());
+        if let Some(gate) = gate {
+            let Some(center) = taps.center.clone() else {
+                return Err(NetError::Shape {
+                    what: "centre of a gated refinement stage (taps without one)".into(),
+                    expected: vec![1, taps.height(), taps.width()],
+                    actual: vec![0],
+                });
+            };
+            // centre + g (answer - centre): where the gate closes, the stage keeps its centre.
+            out.index = center.clone() + gate * (out.index - center); // [B, H, W]
+        }
+        Ok(out)
     }
 }
 

@@ -98,6 +98,18 @@ impl ConvBn2d {
         }
         self
     }
+
+    /// The block with its batch norm's scale at zero: as the second block of a residual pair
+    /// its branch adds nothing at first, so the pair starts as the identity (on non-negative
+    /// inputs, as after a ReLU) and a trained network can grow by it unchanged.
+    pub fn zero_residual(mut self) -> Self {
+        if let Some(bn) = self.bn.as_mut() {
+            let device = bn.gamma.val().device();
+            let channels = bn.gamma.val().dims()[0];
+            bn.gamma = Param::from_tensor(Tensor::zeros([channels], &device));
+        }
+        self
+    }
 }
 
 /// 3D convolution (`k x k x k`, symmetric padding), optional batch norm, optional ReLU.

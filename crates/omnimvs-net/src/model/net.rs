@@ -55,8 +55,12 @@ pub struct StageTimings {
     pub total: f64,
 }
 
-/// Waits for a tensor's computation (backends may be asynchronous).
-fn sync<const D: usize>(tensor: &Tensor<D>) {
+/// Waits for a tensor's computation when `timed` (backends may be asynchronous: a stage's
+/// time is only known once its work is done).
+fn wait<const D: usize>(tensor: &Tensor<D>, timed: bool) {
+    if !timed {
+        return;
+    }
     // Errors surface again when the tensor is read.
     let _ = tensor.device().sync();
 }
@@ -234,6 +238,22 @@ impl OmniMvsNet {
         sweep: SweepInput<'_>,
         order: &[usize],
     ) -> Result<(NetOutput, StageTimings), NetError> {
+        self.infer_with(images, sweep, order, true)
+    }
+
+    /// [`OmniMvsNet::infer_timed_with`] that waits for the device after each stage, and so
+    /// measures the stages, only when `timed` (otherwise only `total` is set, the time to
+    /// queue the work on an asynchronous backend).
+    ///
+    /// # Errors
+    /// See [`OmniMvsNet::infer`].
+    pub fn infer_with(
+        &self,
+        images: &[Tensor<4>],
+        sweep: SweepInput<'_>,
+        order: &[usize],
+        timed: bool,
+    ) -> Result<(NetOutput, StageTimings), NetError> {
         self.check_order(order)?;
         self.check_inputs(images.len(), sweep.len())?;
         let mut timings = StageTimings::default();
@@ -244,7 +264,7 @@ impl OmniMvsNet {
                 let camera = order[slot];
                 let start = Instant::now();
                 let feature = self.features(images[camera].clone()); // [1, CH, H_I/2, W_I/2]
-                sync(&feature);
+                wait(&feature, timed);
                 timings.features += start.elapsed().as_secs_f64();
                 let start = Instant::now();
                 let spherical = match sweep {
@@ -266,19 +286,19 @@ impl OmniMvsNet {
                         Tensor::zeros(self.spherical_dims(), &images[camera].device())
                     }
                 };
-                sync(&spherical);
+                wait(&spherical, timed);
                 timings.sweep += start.elapsed().as_secs_f64();
                 spherical
             });
-            sync(&fused);
+            wait(&fused, timed);
             timings.fusion = total.elapsed().as_secs_f64() - timings.features - timings.sweep;
             let start = Instant::now();
             let fused = self.cost_computes.fusion.finish(fused, None); // [1, 2CH, N/2, H/2, W/2]
-            sync(&fused);
+            wait(&fused, timed);
             timings.fusion_finish = start.elapsed().as_secs_f64();
             let start = Instant::now();
             let cost = self.cost_computes.regularize(fused); // [1, 1, N, H, W]
-            sync(&cost);
+            wait(&cost, timed);
             timings.cost = start.elapsed().as_secs_f64();
             cost
         };
@@ -287,7 +307,7 @@ impl OmniMvsNet {
         }
         let start = Instant::now();
         let out = Self::softargmin(cost);
-        sync(&out.index);
+        wait(&out.index, timed);
         timings.softargmin = start.elapsed().as_secs_f64();
         timings.total = total.elapsed().as_secs_f64();
         Ok((out, timings))

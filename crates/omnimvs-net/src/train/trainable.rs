@@ -144,7 +144,7 @@ impl Trainable for CascadeNet {
 
     fn build(config: &NetConfig, init: Option<&Path>, device: &Device) -> Result<Self, NetError> {
         match init {
-            Some(path) => weights::load_cascade(path, device),
+            Some(path) => weights::load_cascade_grown(path, config, device),
             None => CascadeNet::new(config, device),
         }
     }

@@ -1,9 +1,10 @@
 //! Building blocks of the result pictures (RGB8 rows stacked into one image).
 
-use omnimvs_data::colormap::{Colormap, colorize};
-use omnimvs_data::gt::GroundTruth;
-use omnimvs_data::ply::ColoredPoint;
 use omnimvs_sweep::{EquirectGrid, GrayImage};
+
+use crate::colormap::{Colormap, colorize};
+use crate::gt::GroundTruth;
+use crate::ply::ColoredPoint;
 
 /// Error maps saturate at this error, in percent of N.
 pub const ERROR_MAP_MAX_PCT: f64 = 10.0;

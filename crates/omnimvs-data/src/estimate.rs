@@ -1,0 +1,217 @@
+//! The one interface of every depth method: [`DepthEstimator`] (the classical ZNCC + SGM and
+//! every network implement it), its answer [`DepthEstimate`], per-stage timings through a
+//! [`StageObserver`], and [`EstimateError`], which carries each implementation's own error.
+
+use std::error::Error;
+use std::fmt;
+
+use omnimvs_sweep::{GrayImage, SweepSpec};
+use serde::ser::{Serialize, SerializeMap, Serializer};
+
+/// One frame's depth on a sweep: every map is row-major on `spec.grid`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DepthEstimate {
+    /// The grid and the hypotheses the maps are on.
+    pub spec: SweepSpec,
+    /// Name of the method (`ZNCC+SGM`, `OmniMVS`, `cascade`).
+    pub method: String,
+    /// Inverse depth (1/m) of `index` under `spec.hypotheses`.
+    pub inv_depth: Vec<f32>,
+    /// Fractional hypothesis index `n_hat` in `[0, N - 1]`.
+    pub index: Vec<f32>,
+    /// Confidence in `[0, 1]` (the classical method's `1 - best/second-best cost`).
+    pub confidence: Option<Vec<f32>>,
+    /// Entropy (nats) of the per-pixel distribution over hypotheses (the networks').
+    pub entropy: Option<Vec<f32>>,
+    /// Wall time of the estimate, seconds.
+    pub seconds: f64,
+}
+
+impl DepthEstimate {
+    /// A network's estimate: `index` and its `entropy` on `spec`, the inverse depth computed
+    /// from the hypotheses, in `seconds`.
+    pub fn with_entropy(
+        spec: SweepSpec,
+        method: impl Into<String>,
+        index: Vec<f32>,
+        entropy: Vec<f32>,
+        seconds: f64,
+    ) -> Self {
+        Self {
+            entropy: Some(entropy),
+            seconds,
+            ..Self::from_index(spec, method, index)
+        }
+    }
+
+    /// An estimate of `index` on `spec`, its inverse depth computed from the hypotheses.
+    pub fn from_index(spec: SweepSpec, method: impl Into<String>, index: Vec<f32>) -> Self {
+        Self {
+            inv_depth: spec.inv_depth_of(&index),
+            spec,
+            method: method.into(),
+            index,
+            confidence: None,
+            entropy: None,
+            seconds: 0.0,
+        }
+    }
+}
+
+/// Receives the wall time of each stage of an estimate. Measuring a stage can cost time (a
+/// network waits for its device after each), so an estimator measures only when
+/// [`Self::wants_timings`] says so.
+pub trait StageObserver {
+    /// Whether stages are to be measured.
+    fn wants_timings(&self) -> bool {
+        true
+    }
+
+    /// One stage took `seconds` (in the order they run; `total` last).
+    fn stage(&mut self, name: &'static str, seconds: f64);
+
+    /// Several stages in order, given only when [`Self::wants_timings`].
+    fn stages(&mut self, stages: &[(&'static str, f64)]) {
+        if self.wants_timings() {
+            for &(name, seconds) in stages {
+                self.stage(name, seconds);
+            }
+        }
+    }
+}
+
+/// The observer that measures nothing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoTimings;
+
+impl StageObserver for NoTimings {
+    fn wants_timings(&self) -> bool {
+        false
+    }
+
+    fn stage(&mut self, _name: &'static str, _seconds: f64) {}
+}
+
+/// An observer that keeps the stages in order; serialised as `{"<stage>_s": seconds, ...}`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StageTimes {
+    /// `(stage, seconds)` in the order the stages ran.
+    pub stages: Vec<(&'static str, f64)>,
+}
+
+impl StageTimes {
+    /// The seconds of `name` (0 when it was not reported).
+    pub fn get(&self, name: &str) -> f64 {
+        self.stages
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map_or(0.0, |(_, s)| *s)
+    }
+}
+
+impl StageObserver for StageTimes {
+    fn stage(&mut self, name: &'static str, seconds: f64) {
+        self.stages.push((name, seconds));
+    }
+}
+
+impl Serialize for StageTimes {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.stages.len()))?;
+        for (name, seconds) in &self.stages {
+            map.serialize_entry(&format!("{name}_s"), seconds)?;
+        }
+        map.end()
+    }
+}
+
+/// A depth method prepared for one rig and one sweep (its tables are built once): the
+/// frame's gray images (rig order, any intensity range) in, a [`DepthEstimate`] on
+/// [`Self::spec`] out.
+pub trait DepthEstimator {
+    /// Name of the method.
+    fn name(&self) -> &str;
+
+    /// The grid and hypotheses the estimates are on.
+    fn spec(&self) -> &SweepSpec;
+
+    /// The estimate of one frame, each stage's time given to `observer` when it wants them.
+    ///
+    /// # Errors
+    /// The implementation's error (wrong number or size of images, a failing device).
+    fn estimate_observed(
+        &self,
+        images: &[GrayImage],
+        observer: &mut dyn StageObserver,
+    ) -> Result<DepthEstimate, EstimateError>;
+
+    /// The estimate of one frame, stages not measured.
+    ///
+    /// # Errors
+    /// As [`Self::estimate_observed`].
+    fn estimate(&self, images: &[GrayImage]) -> Result<DepthEstimate, EstimateError> {
+        self.estimate_observed(images, &mut NoTimings)
+    }
+}
+
+/// The error of an estimator: the implementation's own error, whose message it shows and
+/// which [`Self::downcast_ref`] gives back.
+#[derive(Debug)]
+pub struct EstimateError(Box<dyn Error + Send + Sync + 'static>);
+
+impl EstimateError {
+    /// Wraps an implementation's error.
+    pub fn new(error: impl Error + Send + Sync + 'static) -> Self {
+        Self(Box::new(error))
+    }
+
+    /// The implementation's error as `E`, if it is one.
+    pub fn downcast_ref<E: Error + 'static>(&self) -> Option<&E> {
+        self.0.downcast_ref()
+    }
+}
+
+impl fmt::Display for EstimateError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl Error for EstimateError {
+    fn source(&self) -> Option<&(dyn Error + 'static)> {
+        Some(&*self.0)
+    }
+}
+
+impl From<crate::DataError> for EstimateError {
+    fn from(e: crate::DataError) -> Self {
+        Self::new(e)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stage_times_serialise_in_order_with_units() {
+        let mut t = StageTimes::default();
+        t.stage("warp", 1.5);
+        t.stage("total", 2.0);
+        assert_eq!(
+            serde_json::to_string(&t).unwrap(),
+            r#"{"warp_s":1.5,"total_s":2.0}"#
+        );
+        assert_eq!(t.get("total"), 2.0);
+        assert_eq!(t.get("cost"), 0.0);
+        assert!(!NoTimings.wants_timings());
+    }
+
+    #[test]
+    fn errors_keep_the_implementation_error() {
+        let e = EstimateError::new(crate::DataError::mismatch("images", 4, 3));
+        assert!(e.downcast_ref::<crate::DataError>().is_some());
+        assert_eq!(e.to_string(), "images: expected 4, found 3");
+        assert!(e.source().is_some());
+    }
+}

@@ -1,0 +1,152 @@
+//! A trained cascade grows into context pairs at stride 8 and gated refinement stages
+//! without changing its answer (the gates start at 0.98: within 2 % of each refinement's
+//! step), a file of the grown network does not load into the smaller one, and the new
+//! modules receive gradients. Uses the published rig of `sunny_single` from
+//! `../shared/data/omnimvs-samples`.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use burn::optim::GradientsParams;
+use burn::tensor::{Device, Tensor, TensorData};
+use omnimvs_data::Dataset;
+use omnimvs_net::cascade::CascadeGeometry;
+use omnimvs_net::cascade::model::read_values;
+use omnimvs_net::{CascadeNet, NetConfig, weights};
+
+#[path = "../../omnimvs-camera/tests/support/samples.rs"]
+mod samples;
+use samples::sample as sample_dir;
+
+/// The smallest cascade: a `16 x 64` output, `N = 32`, 8 coarse spheres, `48 x 50` inputs.
+fn micro_config() -> NetConfig {
+    let mut config = NetConfig {
+        num_invdepth: 32,
+        out_height: 16,
+        out_width: 64,
+        input_height: 48,
+        input_width: 50,
+        ..NetConfig::cascade()
+    };
+    config.cascade.feature_channels = [4, 4, 8];
+    config.cascade.groups = [2, 2, 4];
+    config.cascade.coarse_spheres = 8;
+    config.cascade.coarse_channels = [4, 4, 8];
+    config.cascade.stage_hypotheses = [4, 3];
+    config.cascade.stage_channels = [4, 4];
+    config
+}
+
+fn images(config: &NetConfig, device: &Device) -> Vec<Tensor<4>> {
+    (0..config.num_cameras)
+        .map(|cam| {
+            let data: Vec<f32> = (0..config.input_height * config.input_width)
+                .map(|i| {
+                    let (r, c) = (
+                        (i / config.input_width) as f32,
+                        (i % config.input_width) as f32,
+                    );
+                    ((0.7 * c + 1.3 * r + cam as f32).sin() + (0.31 * c * r).cos()) * 0.8
+                })
+                .collect();
+            Tensor::<4>::from_data(
+                TensorData::new(data, [1, 1, config.input_height, config.input_width]),
+                device,
+            )
+        })
+        .collect()
+}
+
+fn grown(config: &NetConfig) -> NetConfig {
+    let mut big = config.clone();
+    big.cascade.context_pairs = 2;
+    big.cascade.stage_gates = true;
+    big
+}
+
+#[test]
+fn a_grown_network_answers_as_the_one_it_grew_from() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let config = micro_config();
+    let device = Device::flex();
+    let small = CascadeNet::new(&config, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("small.safetensors");
+    weights::save_module(&small, &config, &path).unwrap();
+
+    let big_config = grown(&config);
+    let big = weights::load_cascade_grown(&path, &big_config, &device).unwrap();
+    assert_eq!(big.features.ctx8.len(), 4);
+    assert!(big.mid.gate.is_some() && big.fine.gate.is_some());
+
+    let geometry = CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap();
+    let inputs = images(&config, &device);
+    let before = small.forward(&inputs, &geometry).unwrap();
+    let after = big.forward(&inputs, &geometry).unwrap();
+    let stage = |out: &omnimvs_net::cascade::CascadeOutput, s: usize| {
+        read_values(out.stages[s].index.clone(), "index").unwrap()
+    };
+    // The context pairs start as the identity: the coarse stage is unchanged.
+    let max_diff = |a: &[f32], b: &[f32]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f32, f32::max)
+    };
+    assert!(max_diff(&stage(&before, 0), &stage(&after, 0)) < 1e-4);
+    // The half stage's centres are the same; its answer moves 2 % of the way to the centre.
+    // Its hypotheses lie within (K - 1) x 2 = 6 index units of the centre (the block of
+    // hypotheses shifts at the ends of the range), so the step is at most 0.018 x 6.
+    let half_diff = max_diff(&stage(&before, 1), &stage(&after, 1));
+    assert!(half_diff <= 0.15, "half stage moved by {half_diff}");
+    assert!(half_diff > 0.0, "the gate changed nothing");
+    // The file of the grown network does not fit the small one, nor another size.
+    let big_path = dir.path().join("big.safetensors");
+    weights::save_module(&big, &big_config, &big_path).unwrap();
+    assert!(weights::load_cascade_grown(&big_path, &config, &device).is_err());
+    let mut other = big_config.clone();
+    other.cascade.stage_channels = [8, 4];
+    assert!(weights::load_cascade_grown(&path, &other, &device).is_err());
+    // The same configuration loads as it was saved.
+    let again = weights::load_cascade_grown(&big_path, &big_config, &device).unwrap();
+    let again_out = again.forward(&inputs, &geometry).unwrap();
+    assert!(max_diff(&stage(&after, 2), &stage(&again_out, 2)) < 1e-5);
+}
+
+#[test]
+fn the_new_modules_learn() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let config = grown(&micro_config());
+    let device = Device::flex().autodiff();
+    let net = CascadeNet::new(&config, &device).unwrap();
+    let geometry = CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap();
+    let out = net.forward(&images(&config, &device), &geometry).unwrap();
+    // Pull every stage towards index 10: the gates and the context pairs get gradients.
+    let loss = out
+        .stages
+        .into_iter()
+        .map(|s| s.index.sub_scalar(10.0).abs().mean())
+        .reduce(|a, b| a + b)
+        .unwrap();
+    let grads = GradientsParams::from_grads(loss.backward(), &net);
+    let norm = |name: &str, grad: Option<Vec<f32>>| {
+        let grad = grad.unwrap_or_else(|| panic!("no gradient for {name}"));
+        let norm: f32 = grad.iter().map(|g| g.abs()).sum();
+        assert!(norm > 0.0 && norm.is_finite(), "{name}: {norm}");
+    };
+    let read4 = |id| grads.get::<4>(id).map(|g| read_values(g, "grad").unwrap());
+    let read1 = |id| grads.get::<1>(id).map(|g| read_values(g, "grad").unwrap());
+    norm(
+        "mid.gate",
+        read4(net.mid.gate.as_ref().unwrap().conv.weight.id),
+    );
+    norm(
+        "fine.gate",
+        read4(net.fine.gate.as_ref().unwrap().conv.weight.id),
+    );
+    // A residual branch that starts at zero learns through its batch norm's scale first.
+    for i in [1, 3] {
+        let bn = net.features.ctx8[i].bn.as_ref().unwrap();
+        norm(&format!("features.ctx8.{i}.bn.gamma"), read1(bn.gamma.id));
+    }
+}
