@@ -31,7 +31,9 @@ pub use error::CameraError;
 pub use mask::ValidityMask;
 pub use model::CameraModel;
 pub use ocam::OcamModel;
-pub use ocam_txt::{parse_ocam_txt, read_ocam_txt_rig, write_ocam_txt_rig};
+pub use ocam_txt::{
+    LengthUnit, parse_ocam_txt, read_ocam_txt_rig, read_ocam_txt_rig_in, write_ocam_txt_rig,
+};
 pub use pixel::Pixel;
 pub use pose::{Pose, isometry_from_pose};
 pub use radial::RadialProjection;

@@ -99,15 +99,84 @@ pub fn parse_ocam_txt(path: &Path, text: &str, max_fov_deg: f64) -> Result<OcamM
     Ok(model)
 }
 
+/// The unit of the translations in a `poses.txt`: centimetres in the released OmniMVS
+/// datasets (OmniThings, OmniHouse, the urban sets), millimetres in SweepNet's
+/// `real_indoor_sample`. Rotations are always radians.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LengthUnit {
+    /// Metres.
+    Metre,
+    /// Centimetres, the released datasets' unit.
+    #[default]
+    Centimetre,
+    /// Millimetres.
+    Millimetre,
+}
+
+impl LengthUnit {
+    /// Units per metre (a division by it converts to metres exactly as `/ 100.0` did).
+    pub fn per_metre(self) -> f64 {
+        match self {
+            Self::Metre => 1.0,
+            Self::Centimetre => 100.0,
+            Self::Millimetre => 1000.0,
+        }
+    }
+
+    /// The unit's symbol: `m`, `cm` or `mm`.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Self::Metre => "m",
+            Self::Centimetre => "cm",
+            Self::Millimetre => "mm",
+        }
+    }
+}
+
+/// Reads `m`, `cm` or `mm`; the error names the three.
+impl std::str::FromStr for LengthUnit {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "m" => Ok(Self::Metre),
+            "cm" => Ok(Self::Centimetre),
+            "mm" => Ok(Self::Millimetre),
+            other => Err(format!(
+                "expected a length unit m, cm or mm, found {other:?}"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for LengthUnit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.symbol())
+    }
+}
+
 /// Reads a rig from a released dataset's folder: `ocam1.txt`, `ocam2.txt`, ...
 /// (as many as exist, consecutively) and `poses.txt` with one line per camera.
-/// Poses are converted from centimetres to metres. Every camera gets
-/// `max_fov_deg` (the text files do not carry it) and `img_dir = camK`.
+/// Poses are converted from centimetres to metres (see [`read_ocam_txt_rig_in`] for
+/// another unit). Every camera gets `max_fov_deg` (the text files do not carry it) and
+/// `img_dir = camK`.
 ///
 /// # Errors
 /// [`CameraError`] naming the file: no `ocam1.txt`, a malformed file, or a
 /// `poses.txt` whose line count differs from the number of `ocamK.txt` files.
 pub fn read_ocam_txt_rig(dir: &Path, max_fov_deg: f64) -> Result<Rig, CameraError> {
+    read_ocam_txt_rig_in(dir, max_fov_deg, LengthUnit::Centimetre)
+}
+
+/// [`read_ocam_txt_rig`] with the translations of `poses.txt` in `pose_unit`.
+///
+/// # Errors
+/// As [`read_ocam_txt_rig`].
+pub fn read_ocam_txt_rig_in(
+    dir: &Path,
+    max_fov_deg: f64,
+    pose_unit: LengthUnit,
+) -> Result<Rig, CameraError> {
     let read = |path: &Path| {
         std::fs::read_to_string(path).map_err(|source| CameraError::Io {
             path: path.to_path_buf(),
@@ -142,14 +211,14 @@ pub fn read_ocam_txt_rig(dir: &Path, max_fov_deg: f64) -> Result<Rig, CameraErro
                 path: poses_path,
                 line,
                 message: format!(
-                    "expected 6 numbers (rx ry rz tx ty tz, cm), found {}",
+                    "expected 6 numbers (rx ry rz tx ty tz, {pose_unit}), found {}",
                     v.len()
                 ),
             });
         }
         poses.push(Pose {
             rvec: [v[0], v[1], v[2]],
-            t_m: [v[3] / 100.0, v[4] / 100.0, v[5] / 100.0],
+            t_m: [v[3], v[4], v[5]].map(|t| t / pose_unit.per_metre()),
         });
     }
     if poses.len() != models.len() {

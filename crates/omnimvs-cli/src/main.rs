@@ -25,6 +25,7 @@ macro_rules! out {
 mod args;
 mod bench;
 mod cmd;
+mod dataset;
 mod out;
 mod weights;
 
@@ -33,7 +34,8 @@ mod weights;
 ///
 /// A DATASET is a folder with a reference-layout `config.yaml` (the rig and
 /// the image file pattern) and the camera images, e.g.
-/// `../shared/data/omnimvs-samples/itbt_sample`. Dataset folders are only
+/// `../shared/data/omnimvs-samples/itbt_sample`, or a folder in the released
+/// datasets' layout (`ocam1.txt`.. and `poses.txt`, see `--pose-unit`). Dataset folders are only
 /// read, never written. Lookup tables are cached in `$OMNIMVS_CACHE_DIR`
 /// (default `~/.cache/omnimvs`).
 #[derive(Debug, Parser)]
@@ -41,6 +43,13 @@ mod weights;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Unit of the translations in a released-layout folder's poses.txt (a folder with
+    /// ocam1.txt.. and poses.txt instead of config.yaml): cm in the released OmniThings,
+    /// OmniHouse and urban sets (the default), mm in SweepNet's real_indoor_sample.
+    /// `omnimvs info` shows the baselines it gives, in metres. A config.yaml's poses are
+    /// always metres. Taken by info, lut, pano, parity, sgm, infer and eval.
+    #[arg(long, global = true, value_enum)]
+    pose_unit: Option<dataset::PoseUnit>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -58,8 +67,33 @@ enum Command {
     Eval(cmd::eval::Args),
 }
 
+/// The commands that do not open their dataset through [`dataset::open_dataset`], so a
+/// stated pose unit would be silently ignored there: `train` (its datasets are opened by the
+/// trainer), `demo` and `synth` (they write their own `config.yaml`), `bench`.
+fn ignores_pose_unit(command: &Command) -> Option<&'static str> {
+    match command {
+        Command::Train(_) => Some("train"),
+        Command::Demo(_) => Some("demo"),
+        Command::Synth(_) => Some("synth"),
+        Command::Bench(_) => Some("bench"),
+        _ => None,
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Some(unit) = cli.pose_unit
+        && let Some(name) = ignores_pose_unit(&cli.command)
+    {
+        eprintln!(
+            "error: --pose-unit {}: `omnimvs {name}` does not take it (info, lut, pano, parity, sgm, infer and eval do); a released-layout folder is read in centimetres there",
+            clap::ValueEnum::to_possible_value(&unit)
+                .map(|v| v.get_name().to_string())
+                .unwrap_or_default()
+        );
+        return ExitCode::from(2);
+    }
+    dataset::set_pose_unit(cli.pose_unit);
     let result = match cli.command {
         Command::Bench(a) => cmd::bench::run(&a),
         Command::Demo(a) => cmd::demo::run(&a),

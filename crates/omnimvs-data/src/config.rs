@@ -3,7 +3,7 @@ use std::path::Path;
 use omnimvs_camera::yaml::{from_value, parse_yaml, to_yaml};
 use omnimvs_camera::{ConfigCamera, Rig};
 use serde::{Deserialize, Serialize};
-use serde_saphyr::DoubleQuoted;
+use serde_saphyr::{DoubleQuoted, FlowSeq};
 
 use crate::DataError;
 
@@ -102,6 +102,26 @@ pub struct DatasetConfig {
     /// `dataset.gt_fmt` if present: printf pattern of a ground-truth file by
     /// frame index, relative to the dataset folder.
     pub gt_fmt: Option<String>,
+    /// `dataset.train_idx`, `test_idx` and `gt_phi` if present: the training split as the
+    /// reference implementation's `Dataset` reads it from `config.yaml`.
+    pub split: Option<Split>,
+}
+
+/// A dataset's train/test frames as the reference implementation's `Dataset` takes them.
+///
+/// The reference knows the published sets' splits by dataset name (`sunny`, `omnithings`,
+/// `omnihouse`, ...); for any other name it copies every key of `config.yaml`'s `dataset:`
+/// section into its options, so a dataset states its own split there: `train_idx`, `test_idx`
+/// (frame numbers), `gt_phi` (latitude range of the ground truth, degrees) and `dtype: gt`
+/// (without which the reference loads no ground truth; written whenever a split is).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Split {
+    /// `dataset.train_idx`: the frames the reference trains on.
+    pub train: Vec<u32>,
+    /// `dataset.test_idx`: the frames it holds out.
+    pub test: Vec<u32>,
+    /// `dataset.gt_phi`, degrees (90 for a 320x640 ground truth covering +-90 degrees).
+    pub gt_phi_deg: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -116,6 +136,9 @@ struct DatasetSection {
     step: Option<u32>,
     end: Option<u32>,
     gt_fmt: Option<String>,
+    train_idx: Option<Vec<u32>>,
+    test_idx: Option<Vec<u32>>,
+    gt_phi: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -176,11 +199,20 @@ impl DatasetConfig {
                 format!("expected end >= start ({start}), found {end}"),
             ));
         }
+        let split = match (s.dataset.train_idx, s.dataset.test_idx) {
+            (None, None) => None,
+            (train, test) => Some(Split {
+                train: train.unwrap_or_default(),
+                test: test.unwrap_or_default(),
+                gt_phi_deg: s.dataset.gt_phi,
+            }),
+        };
         Ok(Self {
             min_depth_m,
             img_fmt: s.dataset.img_fmt,
             frames: FrameRange { start, step, end },
             gt_fmt: s.dataset.gt_fmt,
+            split,
         })
     }
 }
@@ -206,6 +238,14 @@ struct DatasetSectionOut<'a> {
     start: u32,
     step: u32,
     end: u32,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dtype: Option<&'static str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gt_phi: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    train_idx: Option<FlowSeq<&'a [u32]>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    test_idx: Option<FlowSeq<&'a [u32]>>,
 }
 
 /// The text of a reference-layout `config.yaml` for `rig` (the inverse of
@@ -225,6 +265,10 @@ pub fn write_config_yaml(rig: &Rig, config: &DatasetConfig) -> Result<String, Da
             start: config.frames.start,
             step: config.frames.step,
             end: config.frames.end,
+            dtype: config.split.as_ref().map(|_| "gt"),
+            gt_phi: config.split.as_ref().and_then(|s| s.gt_phi_deg),
+            train_idx: config.split.as_ref().map(|s| FlowSeq(s.train.as_slice())),
+            test_idx: config.split.as_ref().map(|s| FlowSeq(s.test.as_slice())),
         },
         cameras: ConfigCamera::of_rig(rig),
     };

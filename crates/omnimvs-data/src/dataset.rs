@@ -37,8 +37,29 @@ impl Dataset {
     /// # Errors
     /// [`DataError`] naming `config.yaml` and the field that is wrong.
     pub fn open(path: &Path) -> Result<Self, DataError> {
-        if path.is_dir() && !path.join("config.yaml").exists() && path.join("ocam1.txt").is_file() {
-            return Self::open_released(path);
+        Self::open_with(path, None)
+    }
+
+    /// Whether `path` is a folder in the released datasets' layout (no `config.yaml`, an
+    /// `ocam1.txt`): what [`Dataset::open`] reads with [`Dataset::open_released`].
+    pub fn is_released_layout(path: &Path) -> bool {
+        path.is_dir() && !path.join("config.yaml").exists() && path.join("ocam1.txt").is_file()
+    }
+
+    /// [`Dataset::open`], the translations of a released-layout folder's `poses.txt` read in
+    /// `pose_unit` (default centimetres, the released sets' unit). A `config.yaml`'s poses are
+    /// metres, as the reference implementation reads them: another unit stated for one is an
+    /// error rather than a silent rescaling.
+    ///
+    /// # Errors
+    /// As [`Dataset::open`]; [`DataError::Field`] naming `config.yaml` when `pose_unit` is not
+    /// metres for a `config.yaml` dataset.
+    pub fn open_with(
+        path: &Path,
+        pose_unit: Option<omnimvs_camera::LengthUnit>,
+    ) -> Result<Self, DataError> {
+        if Self::is_released_layout(path) {
+            return Self::open_released_in(path, pose_unit.unwrap_or_default());
         }
         let (root, config_path) = if path.is_dir() {
             (path.to_path_buf(), path.join("config.yaml"))
@@ -48,6 +69,17 @@ impl Dataset {
         };
         let text =
             std::fs::read_to_string(&config_path).map_err(|e| DataError::io(&config_path, e))?;
+        if let Some(unit) = pose_unit
+            && unit != omnimvs_camera::LengthUnit::Metre
+        {
+            return Err(DataError::Field {
+                path: config_path,
+                field: "cameras[].pose".into(),
+                message: format!(
+                    "a config.yaml's translations are metres (as the reference reads them), not {unit}: a pose unit applies to a released-layout folder's poses.txt"
+                ),
+            });
+        }
         let rig = parse_config_rig(&config_path, &text)?;
         let config = DatasetConfig::parse(&config_path, &text)?;
         Ok(Self {
@@ -69,7 +101,19 @@ impl Dataset {
     /// [`DataError`] naming the file: a missing or malformed `ocamK.txt` or `poses.txt`, or a
     /// `cam1/` folder without numbered images.
     pub fn open_released(dir: &Path) -> Result<Self, DataError> {
-        let rig = omnimvs_camera::read_ocam_txt_rig(dir, RELEASED_MAX_FOV_DEG)?;
+        Self::open_released_in(dir, omnimvs_camera::LengthUnit::Centimetre)
+    }
+
+    /// [`Dataset::open_released`] with the translations of `poses.txt` in `pose_unit`
+    /// (millimetres in SweepNet's `real_indoor_sample`, for one).
+    ///
+    /// # Errors
+    /// As [`Dataset::open_released`].
+    pub fn open_released_in(
+        dir: &Path,
+        pose_unit: omnimvs_camera::LengthUnit,
+    ) -> Result<Self, DataError> {
+        let rig = omnimvs_camera::read_ocam_txt_rig_in(dir, RELEASED_MAX_FOV_DEG, pose_unit)?;
         let cam_dir = dir.join("cam1");
         let entries = std::fs::read_dir(&cam_dir).map_err(|e| DataError::io(&cam_dir, e))?;
         // (digits, extension) -> frames found with that naming.
@@ -113,6 +157,7 @@ impl Dataset {
                 img_fmt: format!("cam%d/%0{digits}d.{ext}"),
                 frames: crate::FrameRange::inclusive(first, last),
                 gt_fmt: None,
+                split: None,
             },
             rig,
         })

@@ -24,7 +24,7 @@ pub mod metrics;
 pub mod output;
 pub mod ply;
 
-pub use config::{DatasetConfig, FrameRange, write_config_yaml};
+pub use config::{DatasetConfig, FrameRange, Split, write_config_yaml};
 pub use dataset::{Dataset, RELEASED_MAX_FOV_DEG, RELEASED_MIN_DEPTH_M};
 pub use error::DataError;
 pub use estimate::{

@@ -24,6 +24,7 @@ fn temp_dataset(img_fmt: &str) -> (tempfile::TempDir, Dataset) {
             end: 3,
         },
         gt_fmt: None,
+        split: None,
     };
     std::fs::write(
         dir.path().join("config.yaml"),
@@ -270,9 +271,19 @@ fn written_config_reads_back_the_same_dataset() {
     let path = std::path::Path::new("written/config.yaml");
     for name in ["sunny_single", "itbt_sample"] {
         let ds = Dataset::open(&samples().join(name)).unwrap();
-        for gt_fmt in [None, Some("omnidepth_gt_640/%05d.tiff".to_string())] {
+        let split = omnimvs_data::Split {
+            train: vec![1, 3],
+            test: vec![2],
+            gt_phi_deg: Some(90.0),
+        };
+        for (gt_fmt, split) in [
+            (None, None),
+            (Some("omnidepth_gt_640/%05d.tiff".to_string()), None),
+            (Some("omnidepth_gt_640/%05d.tiff".to_string()), Some(split)),
+        ] {
             let config = DatasetConfig {
                 gt_fmt,
+                split,
                 ..ds.config.clone()
             };
             let text = write_config_yaml(&ds.rig, &config).unwrap();

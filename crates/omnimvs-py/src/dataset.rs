@@ -26,11 +26,16 @@ pub fn frame_number(frame: i64) -> PyResult<u32> {
 /// reads it. Nothing is ever written into the folder.
 ///
 /// Args:
-///     path: the dataset folder or its `config.yaml` (`str` or `pathlib.Path`).
+///     path: the dataset folder or its `config.yaml` (`str` or `pathlib.Path`), or a folder in
+///         the released datasets' layout (`ocam1.txt`.. and `poses.txt`).
+///     pose_unit: unit of a released-layout folder's `poses.txt` translations, `"m"`, `"cm"`
+///         (the released sets' unit, the default) or `"mm"` (SweepNet's real_indoor_sample);
+///         a `config.yaml`'s poses are metres and take no other unit.
 ///
 /// Raises:
 ///     FileNotFoundError: no `config.yaml` there.
-///     ValueError: a `config.yaml` field is missing or wrong (the message names it).
+///     ValueError: a `config.yaml` field is missing or wrong (the message names it), or an
+///         unknown or inapplicable `pose_unit`.
 #[pyclass(name = "Dataset", module = "omnimvs", frozen)]
 pub struct PyDataset {
     pub inner: Dataset,
@@ -39,8 +44,13 @@ pub struct PyDataset {
 #[pymethods]
 impl PyDataset {
     #[new]
-    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        let inner = detached(py, || Dataset::open(&path).py_err())?;
+    #[pyo3(signature = (path, pose_unit = None))]
+    fn new(py: Python<'_>, path: PathBuf, pose_unit: Option<&str>) -> PyResult<Self> {
+        let unit = pose_unit
+            .map(str::parse::<omnimvs_camera::LengthUnit>)
+            .transpose()
+            .map_err(pyo3::exceptions::PyValueError::new_err)?;
+        let inner = detached(py, || Dataset::open_with(&path, unit).py_err())?;
         Ok(Self { inner })
     }
 

@@ -79,3 +79,41 @@ def test_frame_that_does_not_exist(itbt_path):
         ds.ground_truth(99)
     with pytest.raises(ValueError, match="frame"):
         ds.images(-1)
+
+
+def _released_sunny(sunny_path, folder, factor):
+    """The sunny rig in the released layout, poses.txt translations in metres * factor."""
+    config = yaml.safe_load((sunny_path / "config.yaml").read_text())
+    folder.mkdir()
+    lines = []
+    for k, cam in enumerate(config["cameras"], start=1):
+        (folder / f"cam{k}").mkdir()
+        (folder / f"cam{k}" / "00001.png").write_bytes((sunny_path / f"cam{k}" / "0001.png").read_bytes())
+        poly, inv = cam["poly"], cam["inv_poly"]
+        text = "\n".join([
+            " ".join(str(x) for x in poly),
+            " ".join(str(x) for x in inv),
+            " ".join(str(x) for x in cam["center"]),
+            " ".join(str(x) for x in cam["affine"]),
+            " ".join(str(x) for x in cam["image_size"]),
+        ])
+        (folder / f"ocam{k}.txt").write_text(text + "\n")
+        r, t = cam["pose"][:3], cam["pose"][3:]
+        lines.append(" ".join(str(x) for x in r + [round(v * factor, 9) for v in t]))
+    (folder / "poses.txt").write_text("\n".join(lines) + "\n")
+    return folder
+
+
+def test_released_layout_pose_unit(sunny_path, tmp_path):
+    # The same rig with poses.txt in mm and in cm: read each in its unit, the same lookup
+    # table; the mm folder read in the default cm, another one.
+    in_mm = _released_sunny(sunny_path, tmp_path / "mm", 1000.0)
+    in_cm = _released_sunny(sunny_path, tmp_path / "cm", 100.0)
+    size = dict(height=8, width=16, ndepth=4)
+    reference = omnimvs.lookup_table(omnimvs.Dataset(in_cm), **size)
+    np.testing.assert_array_equal(omnimvs.lookup_table(omnimvs.Dataset(in_mm, pose_unit="mm"), **size), reference)
+    assert not np.array_equal(omnimvs.lookup_table(omnimvs.Dataset(in_mm), **size), reference)
+    with pytest.raises(ValueError, match="m, cm or mm"):
+        omnimvs.Dataset(in_mm, pose_unit="inch")
+    with pytest.raises(ValueError, match="metres"):
+        omnimvs.Dataset(sunny_path, pose_unit="cm")

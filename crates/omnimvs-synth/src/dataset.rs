@@ -1,7 +1,8 @@
 //! Writing a dataset in the reference layout (`FORMATS.md`):
 //!
 //! ```text
-//! <out>/config.yaml                      the rig, min depth, img_fmt, frames
+//! <out>/config.yaml                      the rig, min depth, img_fmt, frames, the train/test
+//!                                         split (`split.rs`: the reference trains on it as is)
 //! <out>/mask1.png ... maskN.png           each camera's `invalid_mask` (non-zero outside the FOV)
 //! <out>/synth.json                       generator settings (checked on resume)
 //! <out>/cam1/00001.png ... camN/         8-bit gray fisheye images
@@ -315,11 +316,14 @@ impl DatasetWriter {
                 .map_err(io(&settings_path, "cannot write"))?;
         }
         let config_path = out.join("config.yaml");
+        let covered = covered_frames(&config_path, frames)?;
         let config = DatasetConfig {
             min_depth_m: rig.min_depth_m,
             img_fmt: IMG_FMT.to_string(),
-            frames: covered_frames(&config_path, frames)?,
+            frames: covered,
             gt_fmt: Some(GT_FMT.to_string()),
+            // The reference implementation's train/test frames (`split.rs`).
+            split: Some(crate::split::published_split(kind, &covered, GT_PHI_DEG)),
         };
         // Every camera names its `invalid_mask` (the reference's reader needs the field) and
         // the mask is written: non-zero outside the field of view, what a reader derives

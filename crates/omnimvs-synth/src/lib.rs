@@ -26,6 +26,7 @@ pub mod render;
 pub mod rig;
 pub mod rng;
 pub mod scene;
+pub mod split;
 pub mod texture;
 pub mod things;
 mod tracer;

@@ -135,7 +135,7 @@ pub fn rows(
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let ds = Dataset::open(&args.data)?;
+    let ds = crate::dataset::open_dataset(&args.data)?;
     let frames: Vec<u32> = args
         .frames
         .indices()

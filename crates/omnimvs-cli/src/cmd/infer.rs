@@ -211,7 +211,7 @@ pub fn finish(net: &NetEstimator, run: DepthRun) -> Result<()> {
 
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
-    let ds = Dataset::open(&args.dataset)?;
+    let ds = crate::dataset::open_dataset(&args.dataset)?;
     let mut net = args.weights.load_family(args.preset.name(), &device)?;
     if let Some(size) = input_size(args.input_size, &args.weights, &ds)? {
         net.set_input_size(size)

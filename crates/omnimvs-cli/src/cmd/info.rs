@@ -6,10 +6,14 @@ use anyhow::Result;
 use omnimvs_camera::Pixel;
 use omnimvs_data::Dataset;
 
+use crate::dataset::{open_dataset, pose_unit};
+
 /// Show a dataset's rig, frames and ground truth.
 ///
 /// Prints each camera (image size, FOV, position, optical axis), the baselines
-/// between cameras, the frames found and whether ground truth exists.
+/// between cameras in metres, the frames found and whether ground truth exists.
+/// For a released-layout folder it says in which unit poses.txt was read
+/// (`--pose-unit`), and flags baselines no camera rig has (a wrong unit).
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Dataset folder (or its config.yaml).
@@ -17,10 +21,16 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let ds = Dataset::open(&args.dataset)?;
+    let ds = open_dataset(&args.dataset)?;
     let cfg = &ds.config;
     outln!("dataset      {}", ds.root.display());
     outln!("config       {}", ds.config_path.display());
+    if Dataset::is_released_layout(&args.dataset) {
+        let unit = pose_unit().unwrap_or_default();
+        outln!(
+            "poses        poses.txt, translations read in {unit} (--pose-unit), shown in metres"
+        );
+    }
     outln!(
         "min depth    {} m (largest inverse depth {:.3} 1/m)",
         cfg.min_depth_m,
@@ -51,8 +61,12 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!("baselines");
-    for (i, j, b) in ds.rig.baselines_m() {
+    let baselines = ds.rig.baselines_m();
+    for &(i, j, b) in &baselines {
         outln!("  cam{}-cam{}: {b:.3} m", i + 1, j + 1);
+    }
+    if let Some(note) = implausible_baselines(baselines.iter().map(|&(_, _, b)| b)) {
+        outln!("  note: {note}");
     }
     let range = cfg.frames.indices();
     let found = ds.frames_found();
@@ -86,4 +100,32 @@ pub fn run(args: &Args) -> Result<()> {
         None => outln!("ground truth none"),
     }
     Ok(())
+}
+
+/// Baselines of a multi-camera rig lie between a centimetre and a few metres; outside that the
+/// poses were most likely read in the wrong unit. Says so, or `None`.
+fn implausible_baselines(baselines: impl Iterator<Item = f64>) -> Option<String> {
+    let (lo, hi) = baselines.fold((f64::INFINITY, 0f64), |(lo, hi), b| (lo.min(b), hi.max(b)));
+    if !hi.is_finite() || hi == 0.0 {
+        return None;
+    }
+    (hi > 5.0 || lo < 0.01).then(|| {
+        format!(
+            "baselines from {lo:.3} m to {hi:.3} m are unlike a camera rig's: are the poses in another unit? (--pose-unit m|cm|mm for a released-layout folder)"
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::implausible_baselines;
+
+    #[test]
+    fn a_rig_in_the_wrong_unit_is_flagged() {
+        // The published rig: 0.6 m from the centre, 0.85 to 1.2 m apart.
+        assert_eq!(implausible_baselines([0.85, 1.2].into_iter()), None);
+        // Its poses in mm read as cm, and in cm read as mm.
+        assert!(implausible_baselines([8.5, 12.0].into_iter()).is_some());
+        assert!(implausible_baselines([0.0085, 0.012].into_iter()).is_some());
+    }
 }

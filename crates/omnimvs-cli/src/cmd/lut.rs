@@ -4,7 +4,6 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use omnimvs_data::Dataset;
 use omnimvs_sweep::{LookupTable, SphereSet};
 
 use crate::args::Size;
@@ -36,7 +35,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let ds = Dataset::open(&args.dataset)?;
+    let ds = crate::dataset::open_dataset(&args.dataset)?;
     if args.ndepth < 2 || (!args.all_spheres && !args.ndepth.is_multiple_of(2)) {
         bail!(
             "--ndepth {}: expected an even number of at least 2 (the file holds every other sphere)",

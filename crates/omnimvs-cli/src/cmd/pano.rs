@@ -3,7 +3,6 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use omnimvs_data::Dataset;
 use omnimvs_data::gt::read_inv_depth;
 use omnimvs_data::image_io::write_gray_png;
 use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
@@ -46,7 +45,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let ds = Dataset::open(&args.dataset)?;
+    let ds = crate::dataset::open_dataset(&args.dataset)?;
     let images = ds.read_frame(args.frame)?;
     let masks = ds.masks()?;
     let map;

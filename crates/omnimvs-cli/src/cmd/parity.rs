@@ -76,7 +76,7 @@ struct Report {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let ds = Dataset::open(&args.dataset)?;
+    let ds = crate::dataset::open_dataset(&args.dataset)?;
     let images = ds
         .read_frame(args.frame)
         .with_context(|| format!("frame {}", args.frame))?;

@@ -158,7 +158,7 @@ pub fn finish(ds: &Dataset, stereo: &SgmEstimator, run: ConfidenceRun, out: &Pat
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let ds = Dataset::open(&args.dataset)?;
+    let ds = crate::dataset::open_dataset(&args.dataset)?;
     let frames: Vec<u32> = match &args.frames {
         Some(range) => range.indices(),
         None => ds.frames_found(),

@@ -46,9 +46,14 @@ class Dataset:
     """A dataset folder in the reference layout (``config.yaml`` + images), read as the
     ``omnimvs`` command reads it; never written to.
 
-    Raises FileNotFoundError when there is no ``config.yaml``, ValueError for a wrong field."""
+    A folder in the released datasets' layout (``ocam1.txt``.. and ``poses.txt``) opens too;
+    ``pose_unit`` (``"m"``, ``"cm"``, the default, or ``"mm"``) is the unit of its
+    ``poses.txt`` translations.
 
-    def __init__(self, path: PathLike) -> None: ...
+    Raises FileNotFoundError when there is no ``config.yaml``, ValueError for a wrong field or
+    an unknown or inapplicable ``pose_unit``."""
+
+    def __init__(self, path: PathLike, pose_unit: Optional[str] = None) -> None: ...
     @property
     def root(self) -> Path:
         """The dataset folder."""
