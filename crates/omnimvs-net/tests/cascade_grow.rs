@@ -6,7 +6,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use burn::optim::GradientsParams;
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::Device;
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::CascadeGeometry;
 use omnimvs_net::cascade::model::read_values;
@@ -16,44 +16,9 @@ use omnimvs_net::{CascadeNet, NetConfig, weights};
 mod samples;
 use samples::sample as sample_dir;
 
-/// The smallest cascade: a `16 x 64` output, `N = 32`, 8 coarse spheres, `48 x 50` inputs.
-fn micro_config() -> NetConfig {
-    let mut config = NetConfig {
-        num_invdepth: 32,
-        out_height: 16,
-        out_width: 64,
-        input_height: 48,
-        input_width: 50,
-        ..NetConfig::cascade()
-    };
-    config.cascade.feature_channels = [4, 4, 8];
-    config.cascade.groups = [2, 2, 4];
-    config.cascade.coarse_spheres = 8;
-    config.cascade.coarse_channels = [4, 4, 8];
-    config.cascade.stage_hypotheses = [4, 3];
-    config.cascade.stage_channels = [4, 4];
-    config
-}
-
-fn images(config: &NetConfig, device: &Device) -> Vec<Tensor<4>> {
-    (0..config.num_cameras)
-        .map(|cam| {
-            let data: Vec<f32> = (0..config.input_height * config.input_width)
-                .map(|i| {
-                    let (r, c) = (
-                        (i / config.input_width) as f32,
-                        (i % config.input_width) as f32,
-                    );
-                    ((0.7 * c + 1.3 * r + cam as f32).sin() + (0.31 * c * r).cos()) * 0.8
-                })
-                .collect();
-            Tensor::<4>::from_data(
-                TensorData::new(data, [1, 1, config.input_height, config.input_width]),
-                device,
-            )
-        })
-        .collect()
-}
+#[path = "support/micro_cascade.rs"]
+mod micro_cascade;
+use micro_cascade::{micro_config, micro_image_tensors as images};
 
 fn grown(config: &NetConfig) -> NetConfig {
     let mut big = config.clone();

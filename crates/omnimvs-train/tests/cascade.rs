@@ -17,45 +17,14 @@ use omnimvs_train::{Learner, Optimizer, Sample, TrainConfig};
 mod samples;
 use samples::sample as sample_dir;
 
+#[path = "../../omnimvs-net/tests/support/micro_cascade.rs"]
+mod micro_cascade;
+use micro_cascade::{micro_config, micro_images};
+
 fn sunny_rig() -> (Rig, InvDepthHypotheses) {
     let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
     let hyps = ds.hypotheses(32).unwrap();
     (ds.rig, hyps)
-}
-
-/// The smallest cascade: a `16 x 64` output, `N = 32`, 8 coarse spheres, `48 x 50` inputs.
-fn micro_config() -> NetConfig {
-    let mut config = NetConfig {
-        num_invdepth: 32,
-        out_height: 16,
-        out_width: 64,
-        input_height: 48,
-        input_width: 50,
-        ..NetConfig::cascade()
-    };
-    config.cascade.feature_channels = [4, 4, 8];
-    config.cascade.groups = [2, 2, 4];
-    config.cascade.coarse_spheres = 8;
-    config.cascade.coarse_channels = [4, 4, 8];
-    config.cascade.stage_hypotheses = [4, 3];
-    config.cascade.stage_channels = [4, 4];
-    config
-}
-
-fn micro_images(config: &NetConfig) -> Vec<Vec<f32>> {
-    (0..config.num_cameras)
-        .map(|cam| {
-            (0..config.input_height * config.input_width)
-                .map(|i| {
-                    let (r, c) = (
-                        (i / config.input_width) as f32,
-                        (i % config.input_width) as f32,
-                    );
-                    ((0.7 * c + 1.3 * r + cam as f32).sin() + (0.31 * c * r).cos()) * 0.8
-                })
-                .collect()
-        })
-        .collect()
 }
 
 fn gt_on(h: usize, w: usize) -> GroundTruth {
