@@ -47,51 +47,24 @@ pub fn bench_train_step(
     steps: usize,
     device: &Device,
 ) -> Result<TrainStepReport> {
-    let train = TrainConfig {
-        net: config.clone(),
-        ..TrainConfig::default()
-    };
+    let train = train_config(config, TrainConfig::default().optimizer);
     let mut learner = Learner::new(&train, device)?;
     let taps = learner.taps(&synthetic_grids(config));
     let cells = config.out_height * config.out_width;
     let n_max = (config.num_invdepth - 1) as f32;
-    let sample = Sample {
-        source: 0,
-        frame: 0,
-        rotation: 0,
-        images: (0..config.num_cameras)
-            .map(|cam| {
-                (0..config.input_height * config.input_width)
-                    .map(|i| ((i * 7 + cam * 13) % 29) as f32 / 14.0 - 1.0)
-                    .collect()
-            })
-            .collect(),
-        gt: GroundTruth {
-            width: config.out_width,
-            height: config.out_height,
-            index: (0..cells).map(|i| (i % 97) as f32 / 96.0 * n_max).collect(),
-            valid: vec![true; cells],
-        },
-        stage_gt: Vec::new(),
-        window: None,
+    let gt = GroundTruth {
+        width: config.out_width,
+        height: config.out_height,
+        index: (0..cells).map(|i| (i % 97) as f32 / 96.0 * n_max).collect(),
+        valid: vec![true; cells],
     };
+    let sample = bench_sample(config, gt, Vec::new());
     let order = learner.net.identity_order();
-    let mut report = TrainStepReport {
-        steps: Vec::new(),
-        losses: Vec::new(),
-        peak_rss_bytes: None,
-    };
-    for step in 0..warmup + steps {
-        let start = Instant::now();
+    time_steps(warmup, steps, || {
         let loss = learner.step(&sample, &taps, &order, 0.003)?; // reads the loss: synchronises
         let _ = learner.device.sync();
-        if step >= warmup {
-            report.steps.push(start.elapsed().as_secs_f64());
-            report.losses.push(loss);
-        }
-    }
-    report.peak_rss_bytes = peak_rss_bytes();
-    Ok(report)
+        Ok(loss)
+    })
 }
 
 /// Times the cascade's training step (forward, the three stages' L1 losses, backward, Adam)
@@ -107,11 +80,7 @@ pub fn bench_cascade_train_step(
     steps: usize,
     device: &Device,
 ) -> Result<TrainStepReport> {
-    let train = TrainConfig {
-        net: config.clone(),
-        optimizer: Optimizer::Adam,
-        ..TrainConfig::default()
-    };
+    let train = train_config(config, Optimizer::Adam);
     let mut learner = Learner::<CascadeNet>::for_model(&train, device)?;
     let hypotheses = InvDepthHypotheses::new(config.num_invdepth, min_depth_m)?;
     let geometry = CascadeGeometry::new(rig, config, &hypotheses, &learner.device)?;
@@ -125,31 +94,64 @@ pub fn bench_cascade_train_step(
         valid: vec![true; h * w],
     };
     let [coarse, mid, fine] = config.cascade_sizes();
-    let sample = Sample {
+    let sample = bench_sample(config, ramp(fine), vec![ramp(coarse), ramp(mid)]);
+    time_steps(warmup, steps, || {
+        let loss = learner.step(&sample, &geometry, &[], 0.001)?; // reads the loss: synchronises
+        let _ = learner.device.sync();
+        Ok(loss)
+    })
+}
+
+/// The training configuration of a benchmark: `config`'s network and `optimizer`.
+fn train_config(config: &NetConfig, optimizer: Optimizer) -> TrainConfig {
+    TrainConfig {
+        net: config.clone(),
+        optimizer,
+        ..TrainConfig::default()
+    }
+}
+
+/// The one sample a benchmark trains on: [`test_images`] with the ground truth `gt` and, for
+/// the cascade, `stage_gt`.
+fn bench_sample(config: &NetConfig, gt: GroundTruth, stage_gt: Vec<GroundTruth>) -> Sample {
+    Sample {
         source: 0,
         frame: 0,
         rotation: 0,
-        images: (0..config.num_cameras)
-            .map(|cam| {
-                (0..config.input_height * config.input_width)
-                    .map(|i| ((i * 7 + cam * 13) % 29) as f32 / 14.0 - 1.0)
-                    .collect()
-            })
-            .collect(),
-        gt: ramp(fine),
-        stage_gt: vec![ramp(coarse), ramp(mid)],
+        images: test_images(config),
+        gt,
+        stage_gt,
         window: None,
-    };
+    }
+}
+
+/// Deterministic images in `[-1, 1]` for every camera of `config`, at its input size.
+fn test_images(config: &NetConfig) -> Vec<Vec<f32>> {
+    (0..config.num_cameras)
+        .map(|cam| {
+            (0..config.input_height * config.input_width)
+                .map(|i| ((i * 7 + cam * 13) % 29) as f32 / 14.0 - 1.0)
+                .collect()
+        })
+        .collect()
+}
+
+/// Runs `step` (one training step, returning its loss) `warmup + steps` times and records the
+/// time and loss of all but the first `warmup`, then the process's peak memory.
+fn time_steps(
+    warmup: usize,
+    steps: usize,
+    mut step: impl FnMut() -> Result<f32>,
+) -> Result<TrainStepReport> {
     let mut report = TrainStepReport {
         steps: Vec::new(),
         losses: Vec::new(),
         peak_rss_bytes: None,
     };
-    for step in 0..warmup + steps {
+    for i in 0..warmup + steps {
         let start = Instant::now();
-        let loss = learner.step(&sample, &geometry, &[], 0.001)?; // reads the loss: synchronises
-        let _ = learner.device.sync();
-        if step >= warmup {
+        let loss = step()?;
+        if i >= warmup {
             report.steps.push(start.elapsed().as_secs_f64());
             report.losses.push(loss);
         }

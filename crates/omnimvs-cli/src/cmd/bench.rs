@@ -136,42 +136,23 @@ fn bench_omnimvs(
         device_sweep,
     };
     let forward = bench_forward(config, &options, device).context("forward benchmark")?;
-    outln!(
-        "{:<8} {:>9} {:>9} {:>9} {:>9} {:>10} {:>9}",
-        "forward",
-        "features",
-        "sweep",
-        "fusion",
-        "cost",
-        "softargmin",
-        "total"
+    print_stage_table(
+        &[
+            ("features", 9),
+            ("sweep", 9),
+            ("fusion", 9),
+            ("cost", 9),
+            ("softargmin", 10),
+            ("total", 9),
+        ],
+        &forward.runs,
+        forward.median().as_ref(),
+        |r| vec![r.features, r.sweep, r.fusion, r.cost, r.softargmin, r.total],
     );
-    let median = forward.median();
-    let rows = forward
-        .runs
-        .iter()
-        .map(|r| ("run", r))
-        .chain(median.as_ref().map(|m| ("median", m)));
-    for (label, r) in rows {
-        outln!(
-            "{label:<8} {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s {:>9.3}s {:>8.3}s",
-            r.features,
-            r.sweep,
-            r.fusion,
-            r.cost,
-            r.softargmin,
-            r.total
-        );
-    }
     print_peak("after the forward passes", forward.peak_rss_bytes);
-    let train_step = if args.train_steps > 0 {
-        let report = bench_train_step(config, args.warmup, args.train_steps, device)
-            .context("train-step benchmark")?;
-        print_steps(&report);
-        Some(report)
-    } else {
-        None
-    };
+    let train_step = train_steps(args, || {
+        bench_train_step(config, args.warmup, args.train_steps, device)
+    })?;
     Ok((Forward::OmniMvs(forward), train_step))
 }
 
@@ -191,34 +172,21 @@ fn bench_cascade(
     )
     .context("forward benchmark")?;
     outln!("{} parameters", forward.params);
-    outln!(
-        "{:<8} {:>9} {:>9} {:>9} {:>9} {:>9}",
-        "forward",
-        "features",
-        "coarse",
-        "half",
-        "full",
-        "total"
+    print_stage_table(
+        &[
+            ("features", 9),
+            ("coarse", 9),
+            ("half", 9),
+            ("full", 9),
+            ("total", 9),
+        ],
+        &forward.runs,
+        forward.median().as_ref(),
+        |r| vec![r.features, r.coarse, r.mid, r.fine, r.total],
     );
-    let median = forward.median();
-    let rows = forward
-        .runs
-        .iter()
-        .map(|r| ("run", r))
-        .chain(median.as_ref().map(|m| ("median", m)));
-    for (label, r) in rows {
-        outln!(
-            "{label:<8} {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s {:>8.3}s",
-            r.features,
-            r.coarse,
-            r.mid,
-            r.fine,
-            r.total
-        );
-    }
     print_peak("after the forward passes", forward.peak_rss_bytes);
-    let train_step = if args.train_steps > 0 {
-        let report = bench_cascade_train_step(
+    let train_step = train_steps(args, || {
+        bench_cascade_train_step(
             config,
             &rig.rig,
             rig.min_depth_m,
@@ -226,13 +194,47 @@ fn bench_cascade(
             args.train_steps,
             device,
         )
-        .context("train-step benchmark")?;
-        print_steps(&report);
-        Some(report)
-    } else {
-        None
-    };
+    })?;
     Ok((Forward::Cascade(forward), train_step))
+}
+
+/// Prints the forward passes' stage timings: a header of `columns` (name, width), a row per
+/// run and one for the `median`, each row's `seconds` in its column's width.
+fn print_stage_table<R>(
+    columns: &[(&str, usize)],
+    runs: &[R],
+    median: Option<&R>,
+    seconds: impl Fn(&R) -> Vec<f64>,
+) {
+    let mut header = format!("{:<8}", "forward");
+    for (name, width) in columns {
+        header += &format!(" {name:>width$}");
+    }
+    outln!("{header}");
+    let rows = runs
+        .iter()
+        .map(|r| ("run", r))
+        .chain(median.map(|m| ("median", m)));
+    for (label, r) in rows {
+        let mut line = format!("{label:<8}");
+        for ((_, width), value) in columns.iter().zip(seconds(r)) {
+            line += &format!(" {value:>w$.3}s", w = width - 1);
+        }
+        outln!("{line}");
+    }
+}
+
+/// The train-step benchmark `bench` and its printed steps, when `--train-steps` asks for any.
+fn train_steps(
+    args: &Args,
+    bench: impl FnOnce() -> Result<TrainStepReport>,
+) -> Result<Option<TrainStepReport>> {
+    if args.train_steps == 0 {
+        return Ok(None);
+    }
+    let report = bench().context("train-step benchmark")?;
+    print_steps(&report);
+    Ok(Some(report))
 }
 
 fn print_steps(report: &TrainStepReport) {
