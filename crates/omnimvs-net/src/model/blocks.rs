@@ -8,9 +8,18 @@ use burn::nn::conv::{
 use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d, PaddingConfig3d};
 use burn::tensor::{Device, Tensor, activation};
 
-/// Applies `x (+ residual)` then ReLU when asked. PyTorch adds the residual after batch norm
-/// and before ReLU.
-fn finish<const D: usize>(x: Tensor<D>, residual: Option<Tensor<D>>, relu: bool) -> Tensor<D> {
+/// Applies the batch norm `bn` when there is one, `+ residual` when given, then ReLU when asked.
+/// PyTorch adds the residual after batch norm and before ReLU.
+fn finish<const D: usize>(
+    x: Tensor<D>,
+    bn: Option<&BatchNorm>,
+    residual: Option<Tensor<D>>,
+    relu: bool,
+) -> Tensor<D> {
+    let x = match bn {
+        Some(bn) => bn.forward(x),
+        None => x,
+    };
     let x = match residual {
         Some(residual) => x + residual,
         None => x,
@@ -26,15 +35,18 @@ fn batch_norm_affine(bn: &BatchNorm) -> (Tensor<1>, Tensor<1>) {
     (scale, shift)
 }
 
-/// Folds an inference-mode batch norm into a convolution's weight (output channels along
-/// `out_dim`) and bias: `w' = w * scale`, `b' = b * scale + shift`.
+/// Folds an inference-mode batch norm, when there is one, into a convolution's weight (output
+/// channels along `out_dim`) and bias: `w' = w * scale`, `b' = b * scale + shift`.
 fn fold_into<const D: usize>(
     weight: &mut Param<Tensor<D>>,
     bias: &mut Option<Param<Tensor<1>>>,
-    bn: &BatchNorm,
+    bn: Option<BatchNorm>,
     out_dim: usize,
 ) {
-    let (scale, shift) = batch_norm_affine(bn);
+    let Some(bn) = bn else {
+        return;
+    };
+    let (scale, shift) = batch_norm_affine(&bn);
     let mut shape = [1usize; D];
     shape[out_dim] = scale.dims()[0];
     let folded = weight.val() * scale.clone().reshape(shape);
@@ -84,18 +96,17 @@ impl ConvBn2d {
     /// `[B, C_in, H, W] -> [B, C_out, H', W']`, adding `residual` before the ReLU.
     pub fn forward(&self, x: Tensor<4>, residual: Option<Tensor<4>>) -> Tensor<4> {
         let x = self.conv.forward(x); // [B, C_out, H', W']
-        let x = match &self.bn {
-            Some(bn) => bn.forward(x),
-            None => x,
-        };
-        finish(x, residual, self.relu)
+        finish(x, self.bn.as_ref(), residual, self.relu)
     }
 
     /// Folds an inference-mode batch norm into the convolution.
     pub fn fold_batch_norm(mut self) -> Self {
-        if let Some(bn) = self.bn.take() {
-            fold_into(&mut self.conv.weight, &mut self.conv.bias, &bn, 0);
-        }
+        fold_into(
+            &mut self.conv.weight,
+            &mut self.conv.bias,
+            self.bn.take(),
+            0,
+        );
         self
     }
 
@@ -151,18 +162,17 @@ impl ConvBn3d {
 
     /// Batch norm, residual and ReLU applied to an already convolved tensor (bias included).
     pub fn finish(&self, x: Tensor<5>, residual: Option<Tensor<5>>) -> Tensor<5> {
-        let x = match &self.bn {
-            Some(bn) => bn.forward(x),
-            None => x,
-        };
-        finish(x, residual, self.relu)
+        finish(x, self.bn.as_ref(), residual, self.relu)
     }
 
     /// Folds an inference-mode batch norm into the convolution.
     pub fn fold_batch_norm(mut self) -> Self {
-        if let Some(bn) = self.bn.take() {
-            fold_into(&mut self.conv.weight, &mut self.conv.bias, &bn, 0);
-        }
+        fold_into(
+            &mut self.conv.weight,
+            &mut self.conv.bias,
+            self.bn.take(),
+            0,
+        );
         self
     }
 }
@@ -204,19 +214,18 @@ impl DeconvBn3d {
     /// `[B, C_in, D, H, W] -> [B, C_out, 2D, 2H, 2W]` for stride 2.
     pub fn forward(&self, x: Tensor<5>, residual: Option<Tensor<5>>) -> Tensor<5> {
         let x = self.conv.forward(x); // [B, C_out, D', H', W']
-        let x = match &self.bn {
-            Some(bn) => bn.forward(x),
-            None => x,
-        };
-        finish(x, residual, self.relu)
+        finish(x, self.bn.as_ref(), residual, self.relu)
     }
 
     /// Folds an inference-mode batch norm into the transposed convolution, whose weight is
     /// `[C_in, C_out, k, k, k]`.
     pub fn fold_batch_norm(mut self) -> Self {
-        if let Some(bn) = self.bn.take() {
-            fold_into(&mut self.conv.weight, &mut self.conv.bias, &bn, 1);
-        }
+        fold_into(
+            &mut self.conv.weight,
+            &mut self.conv.bias,
+            self.bn.take(),
+            1,
+        );
         self
     }
 }
