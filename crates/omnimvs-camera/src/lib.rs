@@ -26,6 +26,11 @@ mod rig;
 pub mod rng;
 pub mod yaml;
 
+// The unit tests' camera, shared with the property tests.
+#[cfg(test)]
+#[path = "../tests/support/sunny_cam1.rs"]
+mod sunny_cam1;
+
 pub use config_yaml::{ConfigCamera, config_cameras_yaml, parse_config_rig, read_config_rig};
 pub use error::CameraError;
 pub use mask::ValidityMask;

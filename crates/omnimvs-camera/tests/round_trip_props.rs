@@ -9,29 +9,12 @@ use omnimvs_camera::nalgebra::Vector3;
 use omnimvs_camera::{CameraModel, OcamModel, Pixel};
 use proptest::prelude::*;
 
-/// Camera 1 of the published "Sunny" rig: 768x800, 220-degree FOV.
+#[path = "support/sunny_cam1.rs"]
+mod sunny;
+
+/// Camera 1 of the published "Sunny" rig, as a camera model.
 fn sunny_cam1() -> CameraModel {
-    CameraModel::Ocam(OcamModel {
-        poly: vec![
-            -1.966560e+02,
-            0.0,
-            3.053428e-03,
-            -9.784996e-06,
-            2.278718e-08,
-        ],
-        inv_poly: vec![
-            300.888356, 180.967781, -21.353055, 14.896848, 31.786100, -12.778866, -10.889768,
-            20.862822, 6.557302, -10.383775, -2.519069, 2.891402, 1.028544,
-        ],
-        center_row: 383.0,
-        center_col: 399.0,
-        c: 1.0,
-        d: 0.0,
-        e: 0.0,
-        width: 800,
-        height: 768,
-        max_fov_deg: 220.0,
-    })
+    CameraModel::Ocam(sunny::sunny_cam1())
 }
 
 /// The unit ray at `alpha` from the optical axis (+z) and azimuth `azimuth`, radians.
