@@ -156,8 +156,6 @@ impl Inference {
         let (out, t) =
             self.net
                 .infer_with(&inputs, sweep, &self.order, observer.wants_timings())?;
-        let entropy = read_values(out.entropy(), "entropy map")?;
-        let index = read_values(out.index, "index map")?;
         observer.stages(&[
             ("features", t.features),
             ("sweep", t.sweep),
@@ -167,15 +165,27 @@ impl Inference {
             ("softargmin", t.softargmin),
             ("total", t.total),
         ]);
-        let spec = self.spec;
-        Ok(DepthEstimate::with_entropy(
-            spec,
-            Self::NAME,
-            index,
-            entropy,
-            t.total,
-        ))
+        entropy_estimate(self.spec, Self::NAME, out.entropy(), out.index, t.total)
     }
+}
+
+/// A network's estimate on `spec`, read from its entropy and index maps `[1, H, W]`, that took
+/// `seconds`.
+///
+/// # Errors
+/// [`NetError::Shape`] when a map cannot be read as `f32`.
+pub(crate) fn entropy_estimate(
+    spec: SweepSpec,
+    method: &str,
+    entropy: Tensor<3>,
+    index: Tensor<3>,
+    seconds: f64,
+) -> Result<DepthEstimate, NetError> {
+    let entropy = read_values(entropy, "entropy map")?;
+    let index = read_values(index, "index map")?;
+    Ok(DepthEstimate::with_entropy(
+        spec, method, index, entropy, seconds,
+    ))
 }
 
 /// Checks that `dataset`'s rig has the network's number of cameras and returns the network's

@@ -8,9 +8,9 @@ use omnimvs_data::{Dataset, DepthEstimate, StageObserver};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec};
 
 use super::geometry::CascadeGeometry;
-use super::model::{CascadeNet, read_values};
+use super::model::CascadeNet;
 use crate::error::NetError;
-use crate::infer::{input_tensors, sweep_spec};
+use crate::infer::{entropy_estimate, input_tensors, sweep_spec};
 
 /// A cascade network ready to run on the frames of one rig.
 pub struct CascadeInference {
@@ -81,8 +81,6 @@ impl CascadeInference {
         let timed = observer.wants_timings();
         let (out, t) = self.net.forward_timed(&inputs, &self.geometry, timed)?;
         let [_, _, fine] = out.stages;
-        let entropy = read_values(fine.entropy(), "entropy map")?;
-        let index = read_values(fine.index, "index map")?;
         observer.stages(&[
             ("features", t.features),
             ("coarse", t.coarse),
@@ -90,13 +88,6 @@ impl CascadeInference {
             ("fine", t.fine),
             ("total", t.total),
         ]);
-        let spec = self.spec;
-        Ok(DepthEstimate::with_entropy(
-            spec,
-            Self::NAME,
-            index,
-            entropy,
-            t.total,
-        ))
+        entropy_estimate(self.spec, Self::NAME, fine.entropy(), fine.index, t.total)
     }
 }
