@@ -3,19 +3,13 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)] // helpers of tests
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
-use omnimvs_synth::rig::{RigSource, preset_rig, resize_rig};
 use omnimvs_synth::{DatasetWriter, FrameEvent, SceneKind, SceneSpec, Shard, SynthError, Tracer};
 
-fn small_rig() -> RigSource {
-    let p = preset_rig().unwrap();
-    RigSource {
-        rig: resize_rig(&p.rig, 48, 50).unwrap(),
-        min_depth_m: p.min_depth_m,
-    }
-}
+#[path = "support/datasets.rs"]
+mod datasets;
+use datasets::{files, small_rig};
 
 fn writer(out: &Path, kind: SceneKind, seed: u64) -> Result<DatasetWriter, SynthError> {
     DatasetWriter::create(
@@ -27,24 +21,6 @@ fn writer(out: &Path, kind: SceneKind, seed: u64) -> Result<DatasetWriter, Synth
         &[],
         &"1..3".parse::<omnimvs_data::FrameRange>().unwrap(),
     )
-}
-
-/// Every file under `dir` (relative path -> bytes).
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
-                out.insert(rel, std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    out
 }
 
 #[test]

@@ -10,20 +10,16 @@ use std::path::Path;
 use omnimvs_sweep::EquirectGrid;
 use omnimvs_synth::camera_effects::apply_all;
 use omnimvs_synth::dataset::{GT_HEIGHT, GT_PHI_DEG, GT_WIDTH, render_scene};
-use omnimvs_synth::rig::{RigSource, preset_rig, resize_rig, rig_radius_m};
+use omnimvs_synth::rig::{preset_rig, rig_radius_m};
 use omnimvs_synth::texture::TextureSpec;
 use omnimvs_synth::{
     DatasetWriter, Difficulty, GenParams, ObjectSpec, Placement, SceneKind, SceneSpec, ShapeSpec,
     SynthError, SynthOptions, Tracer, generate, render_inverse_depth,
 };
 
-fn small_rig() -> RigSource {
-    let p = preset_rig().unwrap();
-    RigSource {
-        rig: resize_rig(&p.rig, 48, 50).unwrap(),
-        min_depth_m: p.min_depth_m,
-    }
-}
+#[path = "support/datasets.rs"]
+mod datasets;
+use datasets::{files, small_rig};
 
 fn writer(
     out: &Path,
@@ -40,24 +36,6 @@ fn writer(
         &options,
         &"1..3".parse::<omnimvs_data::FrameRange>().unwrap(),
     )
-}
-
-/// Every file under `dir` (relative path -> bytes).
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
-                out.insert(rel, std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    out
 }
 
 /// FNV-1a over the sorted names and bytes of `files`.
