@@ -90,14 +90,11 @@ fn floor_texture(rng: &mut Rng) -> TextureSpec {
             seed: rng.seed_i32(),
         },
     };
-    TextureSpec {
-        pattern,
-        lo: (mid - contrast / 2.0).max(0.02),
-        hi: (mid + contrast / 2.0).min(0.98),
-        detail: rng.range(0.0, 0.1) as f32,
-        detail_freq: rng.log_range(6.0, 20.0) as f32,
-        detail_seed: rng.seed_i32(),
-    }
+    TextureSpec::banded(pattern, mid, contrast, [0.02, 0.98]).with_random_detail(
+        rng,
+        [0.0, 0.1],
+        [6.0, 20.0],
+    )
 }
 
 /// One piece of furniture in its own frame: floor at `y = 0`, y down,

@@ -133,6 +133,38 @@ impl TextureSpec {
         }
     }
 
+    /// `pattern` between `mid - contrast / 2` and `mid + contrast / 2`, each end kept inside
+    /// `[floor, ceiling]`, without detail.
+    pub(crate) fn banded(
+        pattern: Pattern,
+        mid: f32,
+        contrast: f32,
+        [floor, ceiling]: [f32; 2],
+    ) -> Self {
+        Self {
+            pattern,
+            lo: (mid - contrast / 2.0).max(floor),
+            hi: (mid + contrast / 2.0).min(ceiling),
+            detail: 0.0,
+            detail_freq: 1.0,
+            detail_seed: 0,
+        }
+    }
+
+    /// The texture with fine detail drawn from `rng`, in this order: its amplitude uniform in
+    /// `amplitude`, its frequency log-uniform in `freq`, its seed.
+    pub(crate) fn with_random_detail(
+        mut self,
+        rng: &mut Rng,
+        amplitude: [f64; 2],
+        freq: [f64; 2],
+    ) -> Self {
+        self.detail = rng.range(amplitude[0], amplitude[1]) as f32;
+        self.detail_freq = rng.log_range(freq[0], freq[1]) as f32;
+        self.detail_seed = rng.seed_i32();
+        self
+    }
+
     /// A random texture in the proportions of photographs (the `hard`
     /// difficulty), where stereo matching is hard: about 30% flat or nearly
     /// so (contrast under 0.06, faint detail), 20% repetitive (sharp periodic
@@ -155,14 +187,11 @@ impl TextureSpec {
                     seed: rng.seed_i32(),
                 }
             };
-            Self {
-                pattern,
-                lo: (mid - contrast / 2.0).max(0.0),
-                hi: (mid + contrast / 2.0).min(1.0),
-                detail: rng.range(0.0, 0.015) as f32,
-                detail_freq: rng.log_range(4.0, 24.0) as f32,
-                detail_seed: rng.seed_i32(),
-            }
+            Self::banded(pattern, mid, contrast, [0.0, 1.0]).with_random_detail(
+                rng,
+                [0.0, 0.015],
+                [4.0, 24.0],
+            )
         } else if roll < 0.5 {
             let freq = rng.log_range(2.0, 10.0) as f32;
             let pattern = if rng.chance(0.5) {
@@ -177,14 +206,7 @@ impl TextureSpec {
             };
             let mid = rng.range(0.3, 0.7) as f32;
             let contrast = (rng.range(0.3, 0.8) * texture_richness) as f32;
-            Self {
-                pattern,
-                lo: (mid - contrast / 2.0).max(0.02),
-                hi: (mid + contrast / 2.0).min(0.98),
-                detail: 0.0,
-                detail_freq: 1.0,
-                detail_seed: 0,
-            }
+            Self::banded(pattern, mid, contrast, [0.02, 0.98])
         } else {
             Self::random(rng, texture_richness)
         };
