@@ -182,11 +182,28 @@ pub fn write_f32_tiff(
     height: usize,
     data: &[f32],
 ) -> Result<(), DataError> {
+    write_tiff_pages(path, width, height, None, data)
+}
+
+/// Writes a TIFF, atomically: the 8-bit RGB `picture` of the map first when given
+/// (uncompressed), then the `f32` values (deflate-compressed).
+fn write_tiff_pages(
+    path: &Path,
+    width: usize,
+    height: usize,
+    picture: Option<&[u8]>,
+    data: &[f32],
+) -> Result<(), DataError> {
     check_map_len(path, width, height, data)?;
     let mut buf = Cursor::new(Vec::new());
     let bad = |e: tiff::TiffError| DataError::format(path, format!("cannot encode TIFF: {e}"));
-    TiffEncoder::new(&mut buf)
-        .map_err(bad)?
+    let mut encoder = TiffEncoder::new(&mut buf).map_err(bad)?;
+    if let Some(picture) = picture {
+        encoder
+            .write_image::<colortype::RGB8>(width as u32, height as u32, picture)
+            .map_err(bad)?;
+    }
+    encoder
         .with_compression(Compression::Deflate(DeflateLevel::Balanced))
         .write_image::<colortype::Gray32Float>(width as u32, height as u32, data)
         .map_err(bad)?;
@@ -219,17 +236,7 @@ pub fn write_gt_tiff(
         crate::colormap::Colormap::Turbo,
         None,
     );
-    let mut buf = Cursor::new(Vec::new());
-    let bad = |e: tiff::TiffError| DataError::format(path, format!("cannot encode TIFF: {e}"));
-    let mut encoder = TiffEncoder::new(&mut buf).map_err(bad)?;
-    encoder
-        .write_image::<colortype::RGB8>(width as u32, height as u32, &picture)
-        .map_err(bad)?;
-    let mut encoder = encoder.with_compression(Compression::Deflate(DeflateLevel::Balanced));
-    encoder
-        .write_image::<colortype::Gray32Float>(width as u32, height as u32, data)
-        .map_err(bad)?;
-    omnimvs_camera::fs::write_atomic(path, buf.get_ref()).map_err(|e| DataError::io(path, e))
+    write_tiff_pages(path, width, height, Some(&picture), data)
 }
 
 /// Writes an inverse-depth map (1/m) as an f32 TIFF, atomically.

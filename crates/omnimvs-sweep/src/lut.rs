@@ -86,6 +86,23 @@ pub fn normalized_position(camera: &Camera, size: (u32, u32), p_cam: &Vector3<f6
 }
 
 impl LookupTable {
+    /// A table of `rig`'s cameras on `grid` and `hypotheses` from its `data`.
+    fn from_parts(
+        grid: &EquirectGrid,
+        hypotheses: &InvDepthHypotheses,
+        sphere_indices: Vec<usize>,
+        rig: &Rig,
+        data: Vec<f32>,
+    ) -> Self {
+        Self {
+            grid: *grid,
+            hypotheses: *hypotheses,
+            sphere_indices,
+            camera_sizes: camera_sizes(rig),
+            data,
+        }
+    }
+
     /// Builds the table for `rig`, in parallel over (camera, sphere) planes.
     ///
     /// # Errors
@@ -130,13 +147,13 @@ impl LookupTable {
                 dst.copy_from_slice(&normalized_position(camera, (w, h), &p_cam));
             }
         });
-        Ok(Self {
-            grid: *grid,
-            hypotheses: *hypotheses,
+        Ok(Self::from_parts(
+            grid,
+            hypotheses,
             sphere_indices,
-            camera_sizes: camera_sizes(rig),
+            rig,
             data,
-        })
+        ))
     }
 
     /// Number of cameras.
@@ -240,12 +257,12 @@ impl LookupTable {
             .chunks_exact(4)
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect();
-        Ok(Self {
-            grid: *grid,
-            hypotheses: *hypotheses,
+        Ok(Self::from_parts(
+            grid,
+            hypotheses,
             sphere_indices,
-            camera_sizes: camera_sizes(rig),
+            rig,
             data,
-        })
+        ))
     }
 }
