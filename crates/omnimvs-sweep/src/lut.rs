@@ -87,7 +87,7 @@ pub fn normalized_position(camera: &Camera, size: (u32, u32), p_cam: &Vector3<f6
 
 impl LookupTable {
     /// A table of `rig`'s cameras on `grid` and `hypotheses` from its `data`.
-    fn from_parts(
+    fn new(
         grid: &EquirectGrid,
         hypotheses: &InvDepthHypotheses,
         sphere_indices: Vec<usize>,
@@ -147,13 +147,7 @@ impl LookupTable {
                 dst.copy_from_slice(&normalized_position(camera, (w, h), &p_cam));
             }
         });
-        Ok(Self::from_parts(
-            grid,
-            hypotheses,
-            sphere_indices,
-            rig,
-            data,
-        ))
+        Ok(Self::new(grid, hypotheses, sphere_indices, rig, data))
     }
 
     /// Number of cameras.
@@ -257,12 +251,6 @@ impl LookupTable {
             .chunks_exact(4)
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect();
-        Ok(Self::from_parts(
-            grid,
-            hypotheses,
-            sphere_indices,
-            rig,
-            data,
-        ))
+        Ok(Self::new(grid, hypotheses, sphere_indices, rig, data))
     }
 }

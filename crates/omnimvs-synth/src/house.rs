@@ -90,11 +90,8 @@ fn floor_texture(rng: &mut Rng) -> TextureSpec {
             seed: rng.seed_i32(),
         },
     };
-    TextureSpec::banded(pattern, mid, contrast, [0.02, 0.98]).with_random_detail(
-        rng,
-        [0.0, 0.1],
-        [6.0, 20.0],
-    )
+    let floor = TextureSpec::banded(pattern, mid, contrast, [0.02, 0.98]);
+    floor.with_random_detail(rng, [0.0, 0.1], [6.0, 20.0])
 }
 
 /// One piece of furniture in its own frame: floor at `y = 0`, y down,

@@ -187,11 +187,8 @@ impl TextureSpec {
                     seed: rng.seed_i32(),
                 }
             };
-            Self::banded(pattern, mid, contrast, [0.0, 1.0]).with_random_detail(
-                rng,
-                [0.0, 0.015],
-                [4.0, 24.0],
-            )
+            let flat = Self::banded(pattern, mid, contrast, [0.0, 1.0]);
+            flat.with_random_detail(rng, [0.0, 0.015], [4.0, 24.0])
         } else if roll < 0.5 {
             let freq = rng.log_range(2.0, 10.0) as f32;
             let pattern = if rng.chance(0.5) {
