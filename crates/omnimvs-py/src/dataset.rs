@@ -132,12 +132,7 @@ impl PyDataset {
     }
 
     fn __repr__(&self) -> String {
-        format!(
-            "omnimvs.Dataset({:?}: {} cameras, min depth {} m)",
-            self.inner.root.display().to_string(),
-            self.inner.rig.len(),
-            self.inner.config.min_depth_m
-        )
+        repr("Dataset", &self.inner.root, &self.inner)
     }
 }
 
@@ -170,12 +165,6 @@ impl PyRig {
         self.inner.rig.len()
     }
 
-    /// Minimum depth of the sweep, metres.
-    #[getter]
-    fn min_depth(&self) -> f64 {
-        self.inner.config.min_depth_m
-    }
-
     /// `(height, width)` of each camera's images, in the rig's order.
     #[getter]
     fn image_sizes(&self) -> Vec<(u32, u32)> {
@@ -187,14 +176,25 @@ impl PyRig {
             .collect()
     }
 
-    fn __repr__(&self) -> String {
-        format!(
-            "omnimvs.Rig({:?}: {} cameras, min depth {} m)",
-            self.inner.config_path.display().to_string(),
-            self.inner.rig.len(),
-            self.inner.config.min_depth_m
-        )
+    /// Minimum depth of the sweep, metres.
+    #[getter]
+    fn min_depth(&self) -> f64 {
+        self.inner.config.min_depth_m
     }
+
+    fn __repr__(&self) -> String {
+        repr("Rig", &self.inner.config_path, &self.inner)
+    }
+}
+
+/// `omnimvs.KIND("PATH": N cameras, min depth D m)`, the `repr` of a dataset or a rig.
+fn repr(kind: &str, path: &std::path::Path, dataset: &Dataset) -> String {
+    format!(
+        "omnimvs.{kind}({:?}: {} cameras, min depth {} m)",
+        path.display().to_string(),
+        dataset.rig.len(),
+        dataset.config.min_depth_m
+    )
 }
 
 /// Where a function's geometry comes from: a `Dataset` or a `Rig`.
