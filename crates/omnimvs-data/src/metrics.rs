@@ -355,17 +355,21 @@ mod tests {
         (a - b).abs() < 1e-4
     }
 
+    /// An inverse-depth map of one row (1/m).
+    fn one_row(data: Vec<f32>) -> crate::gt::InvDepthMap {
+        crate::gt::InvDepthMap {
+            width: data.len(),
+            height: 1,
+            data,
+        }
+    }
+
     #[test]
     fn both_protocols_on_a_hand_made_frame() {
-        use crate::gt::{InvDepthMap, eval_truth_index};
+        use crate::gt::eval_truth_index;
         // One row: two sky pixels, four at 10, 5, 3.33 and 2.5 m. A single row has no hole
         // (the 5x5 closing erodes everything next to the border).
-        let map = InvDepthMap {
-            width: 6,
-            height: 1,
-            data: vec![0.0, 0.0, 0.1, 0.2, 0.3, 0.4],
-        };
-        let truth = eval_truth_index(&map, &hundred());
+        let truth = eval_truth_index(&one_row(vec![0.0, 0.0, 0.1, 0.2, 0.3, 0.4]), &hundred());
         assert_eq!(truth.sky, [true, true, false, false, false, false]);
         assert!(
             truth.gt.valid.iter().all(|&v| v),
@@ -394,14 +398,7 @@ mod tests {
         assert_eq!(frame_metrics(&pred, &truth.gt, 100).unwrap(), w);
         assert_eq!(*m.get(Protocol::Reference), r);
         // A frame of sky only has nothing to score by the reference's rule.
-        let sky = eval_truth_index(
-            &InvDepthMap {
-                width: 3,
-                height: 1,
-                data: vec![0.0; 3],
-            },
-            &hundred(),
-        );
+        let sky = eval_truth_index(&one_row(vec![0.0; 3]), &hundred());
         let err = protocol_metrics(&[0.0; 3], &sky, 100, Protocol::Reference).unwrap_err();
         assert!(err.to_string().contains("reference protocol"), "{err}");
         assert_eq!(

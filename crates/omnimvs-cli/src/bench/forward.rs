@@ -11,7 +11,7 @@ use omnimvs_net::synthetic::synthetic_grids;
 use omnimvs_sweep::InvDepthHypotheses;
 use serde::Serialize;
 
-use super::{median_of, peak_rss_bytes, random_images};
+use super::{median_row, peak_rss_bytes, random_images};
 
 /// Result of [`bench_forward`].
 #[derive(Clone, Debug, Serialize)]
@@ -61,11 +61,7 @@ impl From<StageTimings> for StageTimingsRow {
 impl BenchReport {
     /// Median of each stage over the runs.
     pub fn median(&self) -> Option<StageTimingsRow> {
-        if self.runs.is_empty() {
-            return None;
-        }
-        let med = |f| median_of(&self.runs, f);
-        Some(StageTimingsRow {
+        median_row(&self.runs, |med| StageTimingsRow {
             features: med(|r| r.features),
             sweep: med(|r| r.sweep),
             fusion: med(|r| r.fusion),
@@ -200,11 +196,7 @@ pub struct CascadeBenchReport {
 impl CascadeBenchReport {
     /// Median of each stage over the runs.
     pub fn median(&self) -> Option<CascadeRow> {
-        if self.runs.is_empty() {
-            return None;
-        }
-        let med = |f| median_of(&self.runs, f);
-        Some(CascadeRow {
+        median_row(&self.runs, |med| CascadeRow {
             features: med(|r| r.features),
             coarse: med(|r| r.coarse),
             mid: med(|r| r.mid),

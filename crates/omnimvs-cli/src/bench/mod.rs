@@ -15,10 +15,22 @@ pub use forward::{
 pub use train_step::{TrainStepReport, bench_cascade_train_step, bench_train_step};
 
 /// The median of `f` over `runs` (the upper one for an even count); `runs` is not empty.
-pub(crate) fn median_of<T>(runs: &[T], f: fn(&T) -> f64) -> f64 {
+fn median_of<T>(runs: &[T], f: fn(&T) -> f64) -> f64 {
     let mut v: Vec<f64> = runs.iter().map(f).collect();
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
+}
+
+/// The row of per-stage medians over `runs`, built by `row` from the median of a stage (a
+/// field of a run); `None` for no run.
+pub(crate) fn median_row<T, R>(
+    runs: &[T],
+    row: impl FnOnce(&dyn Fn(fn(&T) -> f64) -> f64) -> R,
+) -> Option<R> {
+    if runs.is_empty() {
+        return None;
+    }
+    Some(row(&|f| median_of(runs, f)))
 }
 
 /// Peak resident set size of this process in bytes (`VmHWM`), `None` off Linux.
