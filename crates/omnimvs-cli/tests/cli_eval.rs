@@ -116,17 +116,10 @@ fn eval_prints_both_protocols_at_one_grid() {
 
     // Without --size/--ndepth, the paper's grid.
     let out = dir.path().join("eval-default");
+    let out_s = out.to_str().unwrap();
     let o = omnimvs(
         &[
-            "eval",
-            "--data",
-            data_s,
-            "--method",
-            "net",
-            "--frames",
-            "1",
-            "--out",
-            out.to_str().unwrap(),
+            "eval", "--data", data_s, "--method", "net", "--frames", "1", "--out", out_s,
         ],
         &cache,
     );

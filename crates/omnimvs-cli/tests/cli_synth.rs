@@ -4,6 +4,9 @@
 
 use std::process::Command;
 
+mod support;
+use support::synth_dataset;
+
 fn omnimvs(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_omnimvs"))
         .args(args)
@@ -110,21 +113,7 @@ fn synth_rejects_bad_input_clearly() {
 #[test]
 fn bundled_model_runs_from_any_folder() {
     let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("things");
-    let o = omnimvs(&[
-        "synth",
-        "--kind",
-        "things",
-        "--frames",
-        "1",
-        "--out",
-        data.to_str().unwrap(),
-        "--size",
-        "96x100",
-        "--seed",
-        "5",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    synth_dataset(dir.path(), "things", "1", "96x100", 5);
     let work = dir.path().join("elsewhere");
     std::fs::create_dir(&work).unwrap();
     let run = |args: &[&str]| {
