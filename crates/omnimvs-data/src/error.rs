@@ -48,12 +48,6 @@ pub enum DataError {
     },
     #[error("frame range {text:?}: {message}")]
     FrameRange { text: String, message: String },
-    #[error("{what}: expected {expected}, found {found}")]
-    Mismatch {
-        what: String,
-        expected: String,
-        found: String,
-    },
 }
 
 impl DataError {
@@ -71,15 +65,12 @@ impl DataError {
         }
     }
 
+    /// A size or count that does not fit, as [`SweepError::mismatch`].
     pub(crate) fn mismatch(
         what: impl Into<String>,
         expected: impl ToString,
         found: impl ToString,
     ) -> Self {
-        Self::Mismatch {
-            what: what.into(),
-            expected: expected.to_string(),
-            found: found.to_string(),
-        }
+        Self::Sweep(SweepError::mismatch(what, expected, found))
     }
 }

@@ -37,7 +37,7 @@ impl InvDepthMap {
     /// `round((H - h) / 2)`, ties to even like Python's `round`).
     ///
     /// # Errors
-    /// [`DataError::Mismatch`] when `height` exceeds the map's height.
+    /// [`SweepError::Mismatch`](omnimvs_sweep::SweepError::Mismatch) when `height` exceeds the map's height.
     pub fn crop_rows_centered(&self, height: usize) -> Result<Self, DataError> {
         if height > self.height {
             return Err(DataError::mismatch(

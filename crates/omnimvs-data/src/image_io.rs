@@ -77,7 +77,7 @@ pub fn read_gray_sized(
 /// image becomes all zeros.
 ///
 /// # Errors
-/// [`DataError::Mismatch`] when the mask size differs from the image's.
+/// [`SweepError::Mismatch`](omnimvs_sweep::SweepError::Mismatch) when the mask size differs from the image's.
 pub fn normalize_for_network(
     img: &GrayImage,
     mask: Option<&ValidityMask>,
@@ -130,7 +130,7 @@ pub fn normalize_for_network(
 /// file atomically.
 ///
 /// # Errors
-/// [`DataError::Io`] naming the file, [`DataError::Mismatch`] for a buffer of
+/// [`DataError::Io`] naming the file, [`SweepError::Mismatch`](omnimvs_sweep::SweepError::Mismatch) for a buffer of
 /// the wrong length.
 pub fn write_png_u8(
     path: &Path,

@@ -87,7 +87,7 @@ pub struct Metrics {
 /// [`protocol_metrics`] scores either protocol.
 ///
 /// # Errors
-/// [`DataError::Mismatch`] when the sizes differ or no pixel is valid.
+/// [`SweepError::Mismatch`](omnimvs_sweep::SweepError::Mismatch) when the sizes differ or no pixel is valid.
 pub fn frame_metrics(
     pred_index: &[f32],
     gt: &GroundTruth,
@@ -102,7 +102,7 @@ pub fn frame_metrics(
 /// `truth` scores under `protocol` ([`EvalTruth::scored`]).
 ///
 /// # Errors
-/// [`DataError::Mismatch`] when the sizes differ or no pixel is scored.
+/// [`SweepError::Mismatch`](omnimvs_sweep::SweepError::Mismatch) when the sizes differ or no pixel is scored.
 pub fn protocol_metrics(
     pred_index: &[f32],
     truth: &EvalTruth,
@@ -216,7 +216,7 @@ impl ProtocolMetrics {
 /// returned as it is. Non-finite values stay non-finite (and are not scored).
 ///
 /// # Errors
-/// [`DataError::Mismatch`] when the map is not `native`'s size, or when the two grids cover
+/// [`SweepError::Mismatch`](omnimvs_sweep::SweepError::Mismatch) when the map is not `native`'s size, or when the two grids cover
 /// different latitudes or the hypotheses different depth ranges (nothing to resample then).
 pub fn index_on_eval_grid(
     index: &[f32],

@@ -35,7 +35,9 @@ pub enum SweepError {
 }
 
 impl SweepError {
-    pub(crate) fn mismatch(
+    /// `what` was expected to be `expected` and was `found`: a size or count that does not
+    /// fit (also what the data crate reports for its own mismatches).
+    pub fn mismatch(
         what: impl Into<String>,
         expected: impl ToString,
         found: impl ToString,

@@ -153,17 +153,16 @@ impl SampleSource {
             augment.apply(&mut images, seed);
         }
         let images = self.inputs(&images)?;
-        let map =
-            self.dataset
-                .read_gt(frame)?
-                .ok_or_else(|| omnimvs_data::DataError::Mismatch {
-                    what: format!(
-                        "{}: ground truth of frame {frame}",
-                        self.dataset.root.display()
-                    ),
-                    expected: "a ground-truth file".into(),
-                    found: "none".into(),
-                })?;
+        let map = self.dataset.read_gt(frame)?.ok_or_else(|| {
+            omnimvs_sweep::SweepError::mismatch(
+                format!(
+                    "{}: ground truth of frame {frame}",
+                    self.dataset.root.display()
+                ),
+                "a ground-truth file",
+                "none",
+            )
+        })?;
         let rotation_matrix = &self.rotations.rotations[rotation];
         let gt = resample_ground_truth(&map, &self.grid, rotation_matrix, &self.hypotheses)?;
         let stage_gt = self

@@ -148,7 +148,7 @@ impl MethodScores {
     /// The row: means over the frames scored at `eval`.
     ///
     /// # Errors
-    /// [`DataError::Mismatch`] when no frame was scored.
+    /// [`SweepError::Mismatch`](omnimvs_sweep::SweepError::Mismatch) when no frame was scored.
     pub fn finish(
         self,
         eval: &SweepSpec,
