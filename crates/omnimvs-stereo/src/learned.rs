@@ -103,7 +103,10 @@ pub fn feature_cost_volume(
         });
     }
     let ch = maps[0].channels;
-    if maps.iter().any(|m| m.channels != ch || m.data.len() != m.width * m.height * ch) {
+    if maps
+        .iter()
+        .any(|m| m.channels != ch || m.data.len() != m.width * m.height * ch)
+    {
         return Err(StereoError::Volume(
             "feature maps: expected the same channel count in every camera".into(),
         ));

@@ -8,11 +8,11 @@ use omnimvs_camera::{Rig, ValidityMask};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use serde::Serialize;
 
+use crate::learned::{FeatureExtractor, feature_cost_volume};
 use crate::{
     AggregatedVolume, CameraView, CostVolume, IndexMap, Matcher, SgmParams, SphereProjector,
     StereoError, aggregate, winner_take_all,
 };
-use crate::learned::{FeatureExtractor, feature_cost_volume};
 
 /// Wall-clock time of each stage of one frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
