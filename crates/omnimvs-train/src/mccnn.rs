@@ -303,10 +303,10 @@ pub fn batch_loss(
     let b = b4 / 4;
     let x = Tensor::<4>::from_data(TensorData::new(patches, [b4, 1, p, p]), device);
     let d = net.describe(x);
-    let pa = d.clone().slice([0..b]);
-    let pb = d.clone().slice([b..2 * b]);
-    let na = d.clone().slice([2 * b..3 * b]);
-    let nb = d.slice([3 * b..4 * b]);
+    let pa = d.clone().narrow(0, 0, b);
+    let pb = d.clone().narrow(0, b, b);
+    let na = d.clone().narrow(0, 2 * b, b);
+    let nb = d.narrow(0, 3 * b, b);
     let cos_pos = (pa * pb).sum_dim(1);
     let cos_neg = (na * nb).sum_dim(1);
     let diff = cos_neg - cos_pos;
@@ -493,7 +493,7 @@ impl CostTrainer {
         let (f0, f1) = self.config.train_frames;
         while self.step < end {
             let step = self.step;
-            if frame.is_none() || step % self.config.frame_every == 0 {
+            if frame.is_none() || step.is_multiple_of(self.config.frame_every) {
                 let mut rng =
                     SplitMix64::for_epoch(self.config.seed, step / self.config.frame_every);
                 let s = rng.below(self.sources.len());
@@ -501,12 +501,13 @@ impl CostTrainer {
                 frame = Some(load_frame(&self.sources, s, f, self.config.net.stride)?);
             }
             let mut rng = SplitMix64::for_epoch(self.config.seed ^ 0xA5A5, step);
-            let patches = draw_batch(
-                &self.sources,
-                frame.as_ref().expect("loaded above"),
-                &self.config,
-                &mut rng,
-            );
+            let Some(current) = frame.as_ref() else {
+                return Err(TrainError::InvalidConfig {
+                    field: "train_frames",
+                    message: "no frame to draw from".into(),
+                });
+            };
+            let patches = draw_batch(&self.sources, current, &self.config, &mut rng);
             if patches.is_empty() {
                 self.step += 1;
                 continue;
@@ -518,7 +519,7 @@ impl CostTrainer {
             let grads = GradientsParams::from_grads(loss.backward(), &self.net);
             self.net = self.optim.step(self.config.lr, self.net.clone(), grads);
             self.step += 1;
-            if self.step % self.config.log_every == 0 || self.step == end {
+            if self.step.is_multiple_of(self.config.log_every) || self.step == end {
                 let inference = self.net.valid();
                 let dev = self.device.clone().without_autodiff();
                 let (mut vl, mut va) = (0f32, 0f32);
