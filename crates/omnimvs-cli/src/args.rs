@@ -79,6 +79,17 @@ pub enum Method {
     Net,
     /// The classical method, ZNCC + SGM.
     Sgm,
+    /// SGM on the bundled MC-CNN-style learned cost (MC-CNN+SGM).
+    Mccnn,
+}
+
+/// `--cost` of `sgm`: the matching cost that SGM regularises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Cost {
+    /// 9x9 ZNCC over every camera pair (the paper's ZNCC+SGM).
+    Zncc,
+    /// The MC-CNN-style learned cost (siamese features, cosine over camera pairs).
+    Mccnn,
 }
 
 /// `--kind` of `synth`: the kinds of scene a dataset can hold.

@@ -12,6 +12,7 @@
 //! - [`weights`]: our safetensors files and the import of reference PyTorch checkpoints.
 //! - [`infer`]: running the paper's network on a dataset's frames.
 //! - [`estimator`]: either family on a dataset's frames, one result type.
+//! - [`mccnn`]: the MC-CNN-style matching-cost network for `omnimvs-stereo`'s SGM (issue 15).
 //! - [`synthetic`]: a lookup table without a rig, for benchmarks and tests.
 //! - [`backend`]: run-time choice of the compute backend (`cpu`, `libtorch`, `wgpu`, ...).
 //!
@@ -24,6 +25,7 @@ pub mod config;
 pub mod error;
 pub mod estimator;
 pub mod infer;
+pub mod mccnn;
 pub mod model;
 pub mod synthetic;
 pub mod taps;

@@ -1,12 +1,14 @@
 //! The classical method behind the workspace's one depth interface, [`DepthEstimator`].
 
+use std::sync::Arc;
+
 use omnimvs_camera::{Rig, ValidityMask};
 use omnimvs_data::{DepthEstimate, DepthEstimator, EstimateError, StageObserver};
 use omnimvs_sweep::{GrayImage, SweepSpec};
 
-use crate::{SgmParams, SphericalStereo, StageTimings, StereoError};
+use crate::{FeatureExtractor, SgmParams, SphericalStereo, StageTimings, StereoError};
 
-/// ZNCC + SGM prepared for one rig, sweep and set of parameters, with the cameras' validity
+/// ZNCC (or a learned cost, [`Self::with_features`]) + SGM prepared for one rig, sweep and set of parameters, with the cameras' validity
 /// masks (pixels marked invalid are never sampled).
 #[derive(Debug, Clone)]
 pub struct SgmEstimator {
@@ -45,6 +47,13 @@ impl SgmEstimator {
         })
     }
 
+    /// The same method with a learned matching cost (`None`: ZNCC); its name becomes the
+    /// extractor's (`MC-CNN+SGM`).
+    pub fn with_features(mut self, extractor: Option<Arc<dyn FeatureExtractor>>) -> Self {
+        self.stereo = self.stereo.with_features(extractor);
+        self
+    }
+
     /// The method's parameters.
     pub fn params(&self) -> &SgmParams {
         &self.stereo.params
@@ -73,7 +82,9 @@ impl From<StereoError> for EstimateError {
 
 impl DepthEstimator for SgmEstimator {
     fn name(&self) -> &str {
-        Self::NAME
+        self.stereo
+            .features()
+            .map_or(Self::NAME, |f| f.method_name())
     }
 
     fn spec(&self) -> &SweepSpec {
@@ -90,7 +101,7 @@ impl DepthEstimator for SgmEstimator {
         out.timings.report(observer);
         Ok(DepthEstimate {
             spec: self.spec,
-            method: Self::NAME.into(),
+            method: self.name().into(),
             inv_depth: out.inv_depth,
             index: out.index.index,
             confidence: Some(out.index.confidence),

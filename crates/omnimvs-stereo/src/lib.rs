@@ -12,6 +12,8 @@
 //!   each camera, computed on the fly (the lookup table of all spheres would
 //!   not fit the memory budget).
 //! * [`Matcher::cost_volume`]: the ZNCC cost volume ([`CostVolume`], 16-bit).
+//! * [`learned`]: learned matching costs (MC-CNN style): per-camera feature maps from a
+//!   [`FeatureExtractor`] compared by cosine similarity, in the same cost volume.
 //! * [`aggregate`]: SGM along 4 or 8 paths that wrap around in longitude.
 //! * [`winner_take_all`]: index with parabola refinement, and confidence.
 //!
@@ -24,6 +26,7 @@
 mod cost;
 mod error;
 mod estimator;
+pub mod learned;
 pub mod params;
 mod pipeline;
 mod projector;
@@ -34,6 +37,7 @@ mod wta;
 pub use cost::{CostTimings, CostVolume, Matcher, NO_PAIR_COST, ZNCC_VARIANCE_EPS};
 pub use error::StereoError;
 pub use estimator::SgmEstimator;
+pub use learned::{FeatureExtractor, FeatureMap, feature_cost_volume};
 pub use params::{COST_SCALE, DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SweepStep};
 pub use pipeline::{SphericalStereo, StageTimings, StereoResult};
 pub use projector::SphereProjector;

@@ -1,12 +1,14 @@
 //! The whole method for one rig and output grid: normalise the images,
 //! match (warp + ZNCC), aggregate (SGM), pick (WTA + parabola).
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use omnimvs_camera::{Rig, ValidityMask};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use serde::Serialize;
 
+use crate::learned::{FeatureExtractor, feature_cost_volume};
 use crate::{
     AggregatedVolume, CameraView, CostVolume, IndexMap, Matcher, SgmParams, SphereProjector,
     StereoError, aggregate, winner_take_all,
@@ -17,7 +19,8 @@ use crate::{
 pub struct StageTimings {
     /// Normalising the gray images.
     pub prepare_s: f64,
-    /// Projecting and sampling the images on all spheres.
+    /// Projecting and sampling the images on all spheres (with a learned cost: the
+    /// network's feature maps).
     pub warp_s: f64,
     /// Window sums, ZNCC, writing the cost volume.
     pub cost_s: f64,
@@ -49,6 +52,8 @@ pub struct SphericalStereo {
     /// `(width, height)` of each camera's images.
     pub camera_sizes: Vec<(usize, usize)>,
     projectors: Vec<SphereProjector>,
+    /// The learned matching cost's feature network; ZNCC when absent.
+    features: Option<Arc<dyn FeatureExtractor>>,
 }
 
 impl SphericalStereo {
@@ -94,7 +99,20 @@ impl SphericalStereo {
                 .map(|c| (c.model.width() as usize, c.model.height() as usize))
                 .collect(),
             projectors,
+            features: None,
         })
+    }
+
+    /// The same method with a learned matching cost: `extractor`'s feature maps compared by
+    /// cosine similarity instead of ZNCC (`None`: ZNCC).
+    pub fn with_features(mut self, extractor: Option<Arc<dyn FeatureExtractor>>) -> Self {
+        self.features = extractor;
+        self
+    }
+
+    /// The learned cost's feature network, if any.
+    pub fn features(&self) -> Option<&Arc<dyn FeatureExtractor>> {
+        self.features.as_ref()
     }
 
     /// Checks the images (and masks) against the rig and prepares them.
@@ -152,6 +170,28 @@ impl SphericalStereo {
         let t0 = Instant::now();
         let views = self.views(images, masks)?;
         let prepare = t0.elapsed();
+        if let Some(extractor) = &self.features {
+            let t1 = Instant::now();
+            let maps = extractor.features(images)?;
+            let network = t1.elapsed();
+            let (volume, t) = feature_cost_volume(
+                &self.grid,
+                &self.projectors,
+                &views,
+                &maps,
+                &self.hypotheses,
+                self.params.sweep,
+            )?;
+            return Ok((
+                volume,
+                StageTimings {
+                    prepare_s: prepare.as_secs_f64(),
+                    warp_s: network.as_secs_f64(),
+                    cost_s: t.cost.as_secs_f64(),
+                    ..StageTimings::default()
+                },
+            ));
+        }
         let matcher = Matcher {
             grid: self.grid,
             projectors: &self.projectors,

@@ -19,6 +19,7 @@ pub mod config;
 pub mod error;
 pub mod learner;
 pub mod loader;
+pub mod mccnn;
 pub mod photometric;
 pub mod plot;
 pub mod rng;

@@ -129,6 +129,21 @@ pub fn rows(
                     SgmParams::default(),
                 )?),
             }),
+            Method::Mccnn => rows.push(Row {
+                name: omnimvs_net::mccnn::McCnnExtractor::NAME.into(),
+                file: "mccnn".into(),
+                estimator: Box::new(crate::cmd::sgm::estimator(
+                    ds,
+                    spec,
+                    crate::args::Cost::Mccnn,
+                    "bundled",
+                    |(p1, p2)| SgmParams {
+                        p1,
+                        p2,
+                        ..SgmParams::default()
+                    },
+                )?),
+            }),
         }
     }
     Ok(rows)

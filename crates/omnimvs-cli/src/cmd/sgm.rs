@@ -3,13 +3,14 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use omnimvs_data::output::ConfidenceRun;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, StageTimes};
 use omnimvs_stereo::{DEFAULT_P1, DEFAULT_P2, Directions, SgmEstimator, SgmParams, SweepStep};
 use omnimvs_sweep::GrayImage;
+use omnimvs_sweep::SweepSpec;
 
-use crate::args::Size;
+use crate::args::{Cost, Size};
 
 /// Depth by the classical method, ZNCC + SGM (no network, no GPU).
 ///
@@ -47,13 +48,23 @@ pub struct Args {
     /// Number of inverse-depth hypotheses N (even).
     #[arg(long, default_value_t = 192)]
     pub ndepth: usize,
+    /// Matching cost: zncc (9x9 ZNCC, the paper's ZNCC+SGM) or mccnn (the MC-CNN-style
+    /// learned cost, MC-CNN+SGM, weights from --cost-weights).
+    #[arg(long, value_enum, default_value_t = Cost::Zncc)]
+    pub cost: Cost,
+    /// Weights of a learned cost: bundled (compiled in), random, or a .safetensors file
+    /// (with its .json) written by `omnimvs train --cost mccnn`.
+    #[arg(long, default_value = "bundled")]
+    pub cost_weights: String,
     /// SGM penalty for a change of one hypothesis, in matching-cost units
-    /// ((1 - zncc) / 2, in [0, 1]).
-    #[arg(long, default_value_t = DEFAULT_P1)]
-    pub p1: f32,
-    /// SGM penalty for larger jumps, same units (>= P1).
-    #[arg(long, default_value_t = DEFAULT_P2)]
-    pub p2: f32,
+    /// ((1 - zncc) / 2 or (1 - cos) / 2, in [0, 1]; default: 0.1 for ZNCC, the learned
+    /// cost's own tuned value otherwise).
+    #[arg(long)]
+    pub p1: Option<f32>,
+    /// SGM penalty for larger jumps, same units (>= P1; default: 2.0 for ZNCC, the learned
+    /// cost's own otherwise).
+    #[arg(long)]
+    pub p2: Option<f32>,
     /// Aggregate along 4 paths instead of 8.
     #[arg(long)]
     pub four_paths: bool,
@@ -64,11 +75,11 @@ pub struct Args {
 }
 
 impl Args {
-    /// The method's parameters.
-    pub fn params(&self) -> SgmParams {
+    /// The method's parameters (`defaults`: the cost's own penalties).
+    pub fn params(&self, defaults: (f32, f32)) -> SgmParams {
         SgmParams {
-            p1: self.p1,
-            p2: self.p2,
+            p1: self.p1.unwrap_or(defaults.0),
+            p2: self.p2.unwrap_or(defaults.1),
             directions: if self.four_paths {
                 Directions::Four
             } else {
@@ -84,11 +95,49 @@ impl Args {
     }
 }
 
+/// The SGM estimator of a matching cost on a dataset's rig: ZNCC, or a learned cost from
+/// `weights` (`bundled`, `random` or a file) on the CPU; `params` gets the cost's default
+/// penalties `(P1, P2)`.
+///
+/// # Errors
+/// Unloadable weights or a rig that does not fit.
+pub fn estimator(
+    ds: &Dataset,
+    spec: SweepSpec,
+    cost: Cost,
+    weights: &str,
+    params: impl Fn((f32, f32)) -> SgmParams,
+) -> Result<SgmEstimator> {
+    let masks = ds.masks()?;
+    match cost {
+        Cost::Zncc => Ok(SgmEstimator::new(
+            &ds.rig,
+            Some(masks),
+            spec,
+            params((DEFAULT_P1, DEFAULT_P2)),
+        )?),
+        Cost::Mccnn => {
+            let device = burn::tensor::Device::flex();
+            let net = omnimvs_net::mccnn::from_name(weights, &device)
+                .with_context(|| format!("--cost-weights {weights}"))?;
+            let p = params((net.config.p1, net.config.p2));
+            let extractor = omnimvs_net::mccnn::McCnnExtractor {
+                net,
+                masks: Some(masks.clone()),
+                device,
+            };
+            Ok(SgmEstimator::new(&ds.rig, Some(masks), spec, p)?
+                .with_features(Some(extractor.shared())))
+        }
+    }
+}
+
 /// The line that presents the method's settings.
 pub fn header(ds: &Dataset, stereo: &SgmEstimator) -> String {
     let (spec, params) = (stereo.spec(), stereo.params());
     format!(
-        "ZNCC+SGM: {} cameras, {}x{} (+-{} deg), N = {}, min depth {} m, P1 = {}, P2 = {}, {} paths, {:?} spheres",
+        "{}: {} cameras, {}x{} (+-{} deg), N = {}, min depth {} m, P1 = {}, P2 = {}, {} paths, {:?} spheres",
+        stereo.name(),
         ds.rig.len(),
         spec.height(),
         spec.width(),
@@ -150,7 +199,7 @@ pub fn frame(
 /// A file that cannot be written.
 pub fn finish(ds: &Dataset, stereo: &SgmEstimator, run: ConfidenceRun, out: &Path) -> Result<()> {
     let written = run.len();
-    if let Some(table) = run.finish(ds, SgmEstimator::NAME, stereo.params(), "sgm.json")? {
+    if let Some(table) = run.finish(ds, stereo.name(), stereo.params(), "sgm.json")? {
         out!("{table}");
     }
     outln!("wrote {written} frames to {}", out.display());
@@ -167,7 +216,7 @@ pub fn run(args: &Args) -> Result<()> {
         bail!("{}: no frame found", ds.root.display());
     }
     let spec = ds.sweep_spec(args.size.height, args.size.width, args.phi_deg, args.ndepth)?;
-    let stereo = SgmEstimator::new(&ds.rig, Some(ds.masks()?), spec, args.params())?;
+    let stereo = estimator(&ds, spec, args.cost, &args.cost_weights, |d| args.params(d))?;
     let mut run = ConfidenceRun::new(&args.out, spec)?;
     outln!("{}", header(&ds, &stereo));
     for &f in &frames {

@@ -8,6 +8,7 @@ use burn::tensor::Device;
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::FrameRange;
 use omnimvs_net::{CascadeNet, Family, OmniMvsNet};
+use omnimvs_train::mccnn::{CostTrainConfig, CostTrainer};
 use omnimvs_train::trainer::read_run_config;
 use omnimvs_train::{
     EpochRecord, Optimizer, PhotometricAugment, StepInfo, TrainConfig, Trainable, Trainer,
@@ -114,8 +115,83 @@ pub struct Args {
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
+    /// Train a matching-cost network for SGM instead of a depth network (issue 15):
+    /// `mccnn`, MC-CNN-fast's siamese tower with its hinge loss on patch pairs drawn
+    /// through the rig at the ground truth's sphere and a wrong one (`--steps` steps of
+    /// `--batch` pairs, Adam at --lr; train frames by --train-frames, validation pairs from
+    /// --val-frames). Also recognised with --resume.
+    #[arg(long, value_enum)]
+    pub cost: Option<CostNet>,
+    /// Matching-cost training: total steps (default 2000; with --resume, raises the total).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Matching-cost training: sample pairs per step.
+    #[arg(long, default_value_t = 128)]
+    pub batch: usize,
     #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
     pub backend: omnimvs_net::Backend,
+}
+
+/// `--cost` values of `train`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CostNet {
+    /// The MC-CNN-fast style siamese network.
+    Mccnn,
+}
+
+/// Whether `dir` holds a matching-cost run.
+fn is_cost_run(dir: &std::path::Path) -> bool {
+    std::fs::read_to_string(dir.join("train_config.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<CostTrainConfig>(&t).ok())
+        .is_some()
+}
+
+fn train_cost(args: &Args, device: &Device) -> Result<()> {
+    let mut trainer = match &args.resume {
+        Some(dir) => CostTrainer::resume(dir, args.steps, device)
+            .with_context(|| format!("resuming {}", dir.display()))?,
+        None => {
+            let Some(out) = &args.out else {
+                bail!("--out RUN_DIR is required for a new run");
+            };
+            let mut config = CostTrainConfig {
+                data: args.data.clone(),
+                steps: args.steps.unwrap_or(2000),
+                batch: args.batch,
+                lr: args.lr,
+                seed: args.seed,
+                ..CostTrainConfig::default()
+            };
+            if let Some(r) = &args.train_frames {
+                config.train_frames = (r.start, r.end);
+            }
+            if let Some(r) = &args.val_frames {
+                config.val_frames = (r.start, r.end);
+            }
+            CostTrainer::create(config, out, device)
+                .with_context(|| format!("creating {}", out.display()))?
+        }
+    };
+    outln!(
+        "matching-cost network: {} steps of {} pairs from step {} into {}",
+        trainer.config.steps,
+        trainer.config.batch,
+        trainer.step(),
+        trainer.run_dir.display()
+    );
+    trainer.run(args.stop_after, |r| {
+        outln!(
+            "step {:5}  train loss {:.4} acc {:.3}  val loss {:.4} acc {:.3}  {:.0} s",
+            r.step,
+            r.train_loss,
+            r.train_acc,
+            r.val_loss,
+            r.val_acc,
+            r.seconds
+        );
+    })?;
+    Ok(())
 }
 
 fn print_epoch(r: &EpochRecord) {
@@ -157,6 +233,9 @@ pub enum OptimizerArg {
 
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
+    if args.cost.is_some() || args.resume.as_deref().is_some_and(is_cost_run) {
+        return train_cost(args, &device);
+    }
     let family = match &args.resume {
         Some(dir) => {
             read_run_config(dir)

@@ -94,6 +94,8 @@ def sgm(
     width: int = 640,
     ndepth: int = 192,
     phi_deg: float = 45.0,
+    *,
+    cost: str = "zncc",
 ) -> FloatMap: ...
 @overload
 def sgm(
@@ -105,6 +107,7 @@ def sgm(
     phi_deg: float = 45.0,
     *,
     rig: Rig,
+    cost: str = "zncc",
 ) -> FloatMap: ...
 @overload
 def infer(

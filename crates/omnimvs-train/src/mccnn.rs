@@ -1,0 +1,555 @@
+//! Training of the MC-CNN-style matching-cost network (`omnimvs_net::mccnn`, issue 15) with
+//! MC-CNN-fast's hinge loss on patch pairs drawn through the real rig.
+//!
+//! Every sample is a ground-truth pixel of the 160x640 grid and two cameras that both see its
+//! 3D point: the positive pair is the two cameras' 9x9 patches (on the stride-downscaled,
+//! normalised fisheye images) around the point's projections, the negative pair the same two
+//! cameras' patches around the projections of the same ray on a wrong sphere, `k` hypotheses
+//! away (`neg_min <= |k| <= neg_max`, as MC-CNN draws negatives a few disparities away). The
+//! loss is `max(0, margin + cos(neg) - cos(pos))` (MC-CNN-fast, margin 0.2); the pair costs
+//! of the cost volume are exactly these cosines, so the network learns what SGM then sees.
+//!
+//! The run folder holds `train_config.json`, `metrics.jsonl` (one line per `log_every` steps:
+//! training and validation loss and ranking accuracy), `model.safetensors` (+ `.json`) and
+//! `checkpoint/` (model, Adam state, `state.json`; written atomically every `log_every`
+//! steps): `--resume` continues from the last checkpoint, the draws of every step seeded by
+//! the step number, so a resumed run makes the same choices.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use burn::module::Module;
+use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::store::{BurnpackStore, ModuleSnapshot};
+use burn::tensor::{Device, Tensor, TensorData, activation};
+use omnimvs_camera::ValidityMask;
+use omnimvs_camera::fs::write_atomic;
+use omnimvs_data::Dataset;
+use omnimvs_data::gt::GroundTruth;
+use omnimvs_net::mccnn::{self, McCnn, McCnnConfig, pool};
+use omnimvs_stereo::SphereProjector;
+use omnimvs_sweep::{GrayImage, SweepSpec};
+use serde::{Deserialize, Serialize};
+
+use crate::error::TrainError;
+use crate::rng::SplitMix64;
+
+/// Everything a matching-cost run needs; written to `train_config.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CostTrainConfig {
+    /// Dataset folders with ground truth.
+    pub data: Vec<PathBuf>,
+    /// Training frames of each dataset, inclusive.
+    pub train_frames: (u32, u32),
+    /// Validation frames of each dataset, inclusive (outside the training frames).
+    pub val_frames: (u32, u32),
+    /// The network.
+    pub net: McCnnConfig,
+    /// Total steps.
+    pub steps: usize,
+    /// Sample pairs per step.
+    pub batch: usize,
+    /// Adam learning rate.
+    pub lr: f64,
+    /// Hinge margin (0.2 in MC-CNN-fast).
+    pub margin: f32,
+    /// Fewest hypotheses between the true and the negative sphere.
+    pub neg_min: usize,
+    /// Most hypotheses between them.
+    pub neg_max: usize,
+    /// Steps on each loaded frame before the next one.
+    pub frame_every: usize,
+    /// Steps between metrics lines and checkpoints.
+    pub log_every: usize,
+    /// Grid and hypotheses of the ground truth (`h`, `w`, `N`).
+    pub grid: (usize, usize, usize),
+    pub seed: u64,
+}
+
+impl Default for CostTrainConfig {
+    fn default() -> Self {
+        Self {
+            data: Vec::new(),
+            train_frames: (1, 400),
+            val_frames: (1191, 1200),
+            net: McCnnConfig::default(),
+            steps: 2000,
+            batch: 128,
+            lr: 1e-3,
+            margin: 0.2,
+            neg_min: 2,
+            neg_max: 24,
+            frame_every: 4,
+            log_every: 100,
+            grid: (160, 640, 192),
+            seed: 0,
+        }
+    }
+}
+
+/// One metrics line.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CostRecord {
+    pub step: usize,
+    pub train_loss: f32,
+    /// Fraction of training pairs where the true sphere matches better than the wrong one.
+    pub train_acc: f32,
+    pub val_loss: f32,
+    pub val_acc: f32,
+    pub seconds: f64,
+}
+
+/// A dataset opened for sampling.
+struct Source {
+    dataset: Dataset,
+    masks: Vec<ValidityMask>,
+    spec: SweepSpec,
+    projectors: Vec<SphereProjector>,
+}
+
+/// One frame ready for drawing samples.
+struct Frame {
+    source: usize,
+    /// Normalised, pooled images.
+    images: Vec<GrayImage>,
+    gt: GroundTruth,
+}
+
+fn io_err(path: &Path) -> impl Fn(std::io::Error) -> TrainError + '_ {
+    move |source| TrainError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn ckpt_err(path: &Path, e: impl std::fmt::Display) -> TrainError {
+    TrainError::Checkpoint {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+fn open_sources(config: &CostTrainConfig) -> Result<Vec<Source>, TrainError> {
+    let (h, w, n) = config.grid;
+    config
+        .data
+        .iter()
+        .map(|path| {
+            let dataset = Dataset::open(path)?;
+            let masks = dataset.masks()?;
+            let spec = dataset.sweep_spec(h, w, 90.0, n)?;
+            let projectors = dataset
+                .rig
+                .cameras
+                .iter()
+                .enumerate()
+                .map(|(i, c)| SphereProjector::new(c, i + 1, &spec.grid))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| TrainError::InvalidConfig {
+                    field: "data",
+                    message: format!("{}: {e}", path.display()),
+                })?;
+            Ok(Source {
+                dataset,
+                masks,
+                spec,
+                projectors,
+            })
+        })
+        .collect()
+}
+
+fn load_frame(
+    sources: &[Source],
+    source: usize,
+    frame: u32,
+    stride: usize,
+) -> Result<Frame, TrainError> {
+    let s = &sources[source];
+    let raw = s.dataset.read_frame(frame)?;
+    let images = raw
+        .iter()
+        .zip(&s.masks)
+        .map(|(img, m)| {
+            Ok(pool(
+                &omnimvs_data::image_io::normalize_for_network(img, Some(m))?,
+                stride,
+            ))
+        })
+        .collect::<Result<Vec<_>, TrainError>>()?;
+    let gt = s
+        .dataset
+        .ground_truth(frame, &s.spec.grid, &s.spec.hypotheses)?
+        .ok_or_else(|| TrainError::InvalidConfig {
+            field: "data",
+            message: format!(
+                "{}: frame {frame} has no ground truth",
+                s.dataset.config_path.display()
+            ),
+        })?;
+    Ok(Frame { source, images, gt })
+}
+
+/// The `patch x patch` patch of a pooled image around full-resolution position `(col, row)`
+/// (bilinear, zero outside), appended to `out`.
+fn push_patch(
+    img: &GrayImage,
+    col: f32,
+    row: f32,
+    stride: usize,
+    patch: usize,
+    out: &mut Vec<f32>,
+) {
+    let s = stride as f32;
+    let cx = (col - (s - 1.0) * 0.5) / s;
+    let cy = (row - (s - 1.0) * 0.5) / s;
+    let r = (patch / 2) as f32;
+    let at = |x: isize, y: isize| -> f32 {
+        if x < 0 || y < 0 || x as usize >= img.width || y as usize >= img.height {
+            0.0
+        } else {
+            img.data[y as usize * img.width + x as usize]
+        }
+    };
+    for dy in 0..patch {
+        for dx in 0..patch {
+            let (x, y) = (cx + dx as f32 - r, cy + dy as f32 - r);
+            let (x0, y0) = (x.floor(), y.floor());
+            let (fx, fy) = (x - x0, y - y0);
+            let (x0, y0) = (x0 as isize, y0 as isize);
+            let top = at(x0, y0) * (1.0 - fx) + at(x0 + 1, y0) * fx;
+            let bottom = at(x0, y0 + 1) * (1.0 - fx) + at(x0 + 1, y0 + 1) * fx;
+            out.push(top * (1.0 - fy) + bottom * fy);
+        }
+    }
+}
+
+/// Where grid pixel `i` on sphere `inv_depth` lands in camera `cam`, if its mask sees it.
+fn seen(src: &Source, cam: usize, i: usize, inv_depth: f32) -> Option<(f32, f32)> {
+    let (c, r) = src.projectors[cam].project(i, inv_depth)?;
+    let m = &src.masks[cam];
+    let (x, y) = (c.round(), r.round());
+    if x < 4.0 || y < 4.0 || x >= m.width as f32 - 4.0 || y >= m.height as f32 - 4.0 {
+        return None;
+    }
+    m.valid[y as usize * m.width as usize + x as usize].then_some((c, r))
+}
+
+/// `batch` samples of a frame: `[4 batch, 1, p, p]` patches in the order positive A,
+/// positive B, negative A, negative B (each `batch` long).
+fn draw_batch(
+    sources: &[Source],
+    frame: &Frame,
+    config: &CostTrainConfig,
+    rng: &mut SplitMix64,
+) -> Vec<f32> {
+    let src = &sources[frame.source];
+    let hyps = &src.spec.hypotheses;
+    let ncam = src.projectors.len();
+    let (p, stride) = (config.net.patch(), config.net.stride);
+    let mut parts: [Vec<f32>; 4] = Default::default();
+    let npix = frame.gt.index.len();
+    let mut done = 0;
+    let mut tries = 0;
+    while done < config.batch && tries < config.batch * 200 {
+        tries += 1;
+        let i = rng.below(npix);
+        let n_true = frame.gt.index[i];
+        // Sky (index 0) has no texture to match.
+        if !frame.gt.valid[i] || n_true < 0.5 {
+            continue;
+        }
+        let (a, b) = {
+            let a = rng.below(ncam);
+            let b = (a + 1 + rng.below(ncam - 1)) % ncam;
+            (a, b)
+        };
+        let k = config.neg_min + rng.below(config.neg_max - config.neg_min + 1);
+        let sign = if rng.below(2) == 0 { -1.0 } else { 1.0 };
+        let n_neg = n_true + sign * k as f32;
+        let n_neg = if (0.0..=(hyps.count - 1) as f32).contains(&n_neg) {
+            n_neg
+        } else {
+            n_true - sign * k as f32
+        };
+        let d_true = hyps.inv_depth(f64::from(n_true)) as f32;
+        let d_neg = hyps.inv_depth(f64::from(n_neg)) as f32;
+        let (Some(pa), Some(pb), Some(na), Some(nb)) = (
+            seen(src, a, i, d_true),
+            seen(src, b, i, d_true),
+            seen(src, a, i, d_neg),
+            seen(src, b, i, d_neg),
+        ) else {
+            continue;
+        };
+        for (part, (cam, (c, r))) in parts.iter_mut().zip([(a, pa), (b, pb), (a, na), (b, nb)]) {
+            push_patch(&frame.images[cam], c, r, stride, p, part);
+        }
+        done += 1;
+    }
+    parts.concat()
+}
+
+/// Hinge loss and ranking accuracy of a batch of `4 b` patches (positive A, positive B,
+/// negative A, negative B, `b` each).
+pub fn batch_loss(
+    net: &McCnn,
+    patches: Vec<f32>,
+    margin: f32,
+    device: &Device,
+) -> (Tensor<1>, f32) {
+    let p = net.config.patch();
+    let b4 = patches.len() / (p * p);
+    let b = b4 / 4;
+    let x = Tensor::<4>::from_data(TensorData::new(patches, [b4, 1, p, p]), device);
+    let d = net.describe(x);
+    let pa = d.clone().narrow(0, 0, b);
+    let pb = d.clone().narrow(0, b, b);
+    let na = d.clone().narrow(0, 2 * b, b);
+    let nb = d.narrow(0, 3 * b, b);
+    let cos_pos = (pa * pb).sum_dim(1);
+    let cos_neg = (na * nb).sum_dim(1);
+    let diff = cos_neg - cos_pos;
+    let acc = diff
+        .clone()
+        .lower_elem(0.0)
+        .float()
+        .mean()
+        .into_scalar::<f32>();
+    let loss = activation::relu(diff.add_scalar(margin)).mean();
+    (loss, acc)
+}
+
+/// Resumable state, `checkpoint/state.json`.
+#[derive(Debug, Serialize, Deserialize)]
+struct State {
+    step: usize,
+}
+
+/// A matching-cost training run.
+pub struct CostTrainer {
+    pub config: CostTrainConfig,
+    pub run_dir: PathBuf,
+    net: McCnn,
+    optim: ModuleOptimizer,
+    device: Device,
+    step: usize,
+    sources: Vec<Source>,
+}
+
+impl CostTrainer {
+    /// A new run in `run_dir` (created; refused if it holds a run already).
+    ///
+    /// # Errors
+    /// [`TrainError`] for unreadable datasets or an existing run.
+    pub fn create(
+        config: CostTrainConfig,
+        run_dir: &Path,
+        device: &Device,
+    ) -> Result<Self, TrainError> {
+        if run_dir.join("train_config.json").exists() {
+            return Err(TrainError::InvalidConfig {
+                field: "out",
+                message: format!("{} holds a run already (resume it)", run_dir.display()),
+            });
+        }
+        if config.batch == 0 || config.neg_max < config.neg_min || config.frame_every == 0 {
+            return Err(TrainError::InvalidConfig {
+                field: "batch",
+                message: "expected batch > 0, neg_max >= neg_min, frame_every > 0".into(),
+            });
+        }
+        std::fs::create_dir_all(run_dir).map_err(io_err(run_dir))?;
+        let path = run_dir.join("train_config.json");
+        let json = serde_json::to_string_pretty(&config).map_err(|source| TrainError::Json {
+            path: path.clone(),
+            source,
+        })?;
+        write_atomic(&path, (json + "\n").as_bytes()).map_err(io_err(&path))?;
+        let device = device.clone().autodiff();
+        device.seed(config.seed);
+        let net = McCnn::new(&config.net, &device)?;
+        let sources = open_sources(&config)?;
+        Ok(Self {
+            optim: AdamConfig::new().init(),
+            config,
+            run_dir: run_dir.to_path_buf(),
+            net,
+            device,
+            step: 0,
+            sources,
+        })
+    }
+
+    /// The run in `run_dir` from its last checkpoint; `steps` raises the total.
+    ///
+    /// # Errors
+    /// [`TrainError`] for a missing or unreadable run.
+    pub fn resume(
+        run_dir: &Path,
+        steps: Option<usize>,
+        device: &Device,
+    ) -> Result<Self, TrainError> {
+        let path = run_dir.join("train_config.json");
+        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let mut config: CostTrainConfig =
+            serde_json::from_str(&text).map_err(|source| TrainError::Json {
+                path: path.clone(),
+                source,
+            })?;
+        if let Some(s) = steps {
+            config.steps = s;
+        }
+        let device = device.clone().autodiff();
+        let mut net = McCnn::new(&config.net, &device)?;
+        let dir = run_dir.join("checkpoint");
+        let mut step = 0;
+        let mut optim = AdamConfig::new().init();
+        let state_path = dir.join("state.json");
+        if state_path.exists() {
+            let text = std::fs::read_to_string(&state_path).map_err(io_err(&state_path))?;
+            let state: State = serde_json::from_str(&text).map_err(|source| TrainError::Json {
+                path: state_path.clone(),
+                source,
+            })?;
+            let model = dir.join("model.bpk");
+            let mut store = BurnpackStore::from_file(&model).auto_extension(false);
+            net.load_from(&mut store).map_err(|e| ckpt_err(&model, e))?;
+            let optim_path = dir.join("optim.bpk");
+            optim = optim
+                .load(&optim_path)
+                .map_err(|e| ckpt_err(&optim_path, e))?;
+            step = state.step;
+        }
+        let sources = open_sources(&config)?;
+        Ok(Self {
+            config,
+            run_dir: run_dir.to_path_buf(),
+            net,
+            optim,
+            device,
+            step,
+            sources,
+        })
+    }
+
+    /// The step the run is at.
+    pub fn step(&self) -> usize {
+        self.step
+    }
+
+    fn save(&self) -> Result<(), TrainError> {
+        let dir = self.run_dir.join("checkpoint");
+        std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
+        let model = dir.join("model.bpk");
+        let mut store = BurnpackStore::from_bytes(None);
+        self.net
+            .save_into(&mut store)
+            .map_err(|e| ckpt_err(&model, e))?;
+        let bytes = store.get_bytes().map_err(|e| ckpt_err(&model, e))?;
+        write_atomic(&model, &bytes).map_err(io_err(&model))?;
+        let optim = dir.join("optim.bpk");
+        let bytes = self.optim.into_bytes().map_err(|e| ckpt_err(&optim, e))?;
+        write_atomic(&optim, &bytes).map_err(io_err(&optim))?;
+        let state = dir.join("state.json");
+        let json = serde_json::to_string(&State { step: self.step }).unwrap_or_default();
+        write_atomic(&state, json.as_bytes()).map_err(io_err(&state))?;
+        mccnn::save(&self.net.valid(), &self.run_dir.join("model.safetensors"))?;
+        Ok(())
+    }
+
+    /// Fixed validation batches: two frames of each dataset's validation range.
+    fn validation(&self) -> Result<Vec<Vec<f32>>, TrainError> {
+        let mut out = Vec::new();
+        let (v0, v1) = self.config.val_frames;
+        for s in 0..self.sources.len() {
+            for (j, f) in [v0, v1].into_iter().enumerate() {
+                let frame = load_frame(&self.sources, s, f, self.config.net.stride)?;
+                let mut rng = SplitMix64::new(0x5EED ^ (s as u64 * 31 + j as u64));
+                out.push(draw_batch(&self.sources, &frame, &self.config, &mut rng));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Trains up to `self.config.steps` (or `stop_after` more steps), calling `report`
+    /// with each metrics line.
+    ///
+    /// # Errors
+    /// [`TrainError`] for unreadable frames or unwritable files.
+    pub fn run(
+        &mut self,
+        stop_after: Option<usize>,
+        mut report: impl FnMut(&CostRecord),
+    ) -> Result<(), TrainError> {
+        let val = self.validation()?;
+        let end = stop_after.map_or(self.config.steps, |s| {
+            (self.step + s).min(self.config.steps)
+        });
+        let metrics = self.run_dir.join("metrics.jsonl");
+        let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
+        let mut frame: Option<Frame> = None;
+        let t0 = Instant::now();
+        let (f0, f1) = self.config.train_frames;
+        while self.step < end {
+            let step = self.step;
+            if frame.is_none() || step.is_multiple_of(self.config.frame_every) {
+                let mut rng =
+                    SplitMix64::for_epoch(self.config.seed, step / self.config.frame_every);
+                let s = rng.below(self.sources.len());
+                let f = f0 + rng.below((f1 - f0 + 1) as usize) as u32;
+                frame = Some(load_frame(&self.sources, s, f, self.config.net.stride)?);
+            }
+            let mut rng = SplitMix64::for_epoch(self.config.seed ^ 0xA5A5, step);
+            let Some(current) = frame.as_ref() else {
+                return Err(TrainError::InvalidConfig {
+                    field: "train_frames",
+                    message: "no frame to draw from".into(),
+                });
+            };
+            let patches = draw_batch(&self.sources, current, &self.config, &mut rng);
+            if patches.is_empty() {
+                self.step += 1;
+                continue;
+            }
+            let (loss, acc) = batch_loss(&self.net, patches, self.config.margin, &self.device);
+            loss_sum += loss.clone().into_scalar::<f32>();
+            acc_sum += acc;
+            count += 1;
+            let grads = GradientsParams::from_grads(loss.backward(), &self.net);
+            self.net = self.optim.step(self.config.lr, self.net.clone(), grads);
+            self.step += 1;
+            if self.step.is_multiple_of(self.config.log_every) || self.step == end {
+                let inference = self.net.valid();
+                let dev = self.device.clone().without_autodiff();
+                let (mut vl, mut va) = (0f32, 0f32);
+                for b in &val {
+                    let (l, a) = batch_loss(&inference, b.clone(), self.config.margin, &dev);
+                    vl += l.into_scalar::<f32>();
+                    va += a;
+                }
+                let record = CostRecord {
+                    step: self.step,
+                    train_loss: loss_sum / count.max(1) as f32,
+                    train_acc: acc_sum / count.max(1) as f32,
+                    val_loss: vl / val.len() as f32,
+                    val_acc: va / val.len() as f32,
+                    seconds: t0.elapsed().as_secs_f64(),
+                };
+                (loss_sum, acc_sum, count) = (0.0, 0.0, 0);
+                let mut text = std::fs::read_to_string(&metrics).unwrap_or_default();
+                text.push_str(&serde_json::to_string(&record).unwrap_or_default());
+                text.push('\n');
+                write_atomic(&metrics, text.as_bytes()).map_err(io_err(&metrics))?;
+                self.save()?;
+                report(&record);
+            }
+        }
+        Ok(())
+    }
+
+    /// The trained network, without autodiff.
+    pub fn net(&self) -> McCnn {
+        self.net.valid()
+    }
+}
