@@ -7,6 +7,32 @@ use omnimvs_synth::SceneKind;
 use omnimvs_synth::SynthError;
 use omnimvs_synth::rig::{PRESET_NAME, RigSource, preset_rig, rig_from_config};
 
+/// The spherical sweep of a command: output grid and hypotheses (`sgm`, `eval`, `lut`), the
+/// paper's by default: 160x640 over +-45 degrees, N = 192.
+#[derive(Debug, Clone, Copy, clap::Args)]
+pub struct SweepArgs {
+    /// Output grid, HEIGHTxWIDTH (`eval` resamples every method's output to it; SGM runs at
+    /// it).
+    #[arg(long, default_value = "160x640")]
+    pub size: Size,
+    /// Latitude range of the grid, +-degrees.
+    #[arg(long, default_value_t = 45.0)]
+    pub phi_deg: f64,
+    /// Number of inverse-depth hypotheses N (`eval`: the unit of its error E).
+    #[arg(long, default_value_t = 192)]
+    pub ndepth: usize,
+}
+
+impl SweepArgs {
+    /// The sweep of `dataset` (its minimum depth) on this grid.
+    pub fn spec(
+        &self,
+        dataset: &omnimvs_data::Dataset,
+    ) -> Result<omnimvs_sweep::SweepSpec, omnimvs_data::DataError> {
+        dataset.sweep_spec(self.size.height, self.size.width, self.phi_deg, self.ndepth)
+    }
+}
+
 /// `HxW`, e.g. `160x640`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Size {

@@ -284,30 +284,7 @@ pub const BUNDLED_WEIGHTS: &[u8] = include_bytes!("../../../models/mccnn.safeten
 /// # Errors
 /// [`NetError`] when a file cannot be written.
 pub fn save(net: &McCnn, path: &Path) -> Result<(), NetError> {
-    let json_path = crate::weights::config_path(path);
-    let json = serde_json::to_string_pretty(&net.config).map_err(|source| NetError::Json {
-        path: json_path.clone(),
-        source,
-    })?;
-    omnimvs_camera::fs::write_atomic(&json_path, (json + "\n").as_bytes()).map_err(|source| {
-        NetError::Io {
-            path: json_path.clone(),
-            source,
-        }
-    })?;
-    let mut store = SafetensorsStore::from_bytes(None);
-    net.save_into(&mut store).map_err(|e| NetError::Weights {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
-    let bytes = store.get_bytes().map_err(|e| NetError::Weights {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
-    omnimvs_camera::fs::write_atomic(path, &bytes).map_err(|source| NetError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    crate::weights::save_with_config(net, &net.config, path)
 }
 
 /// A network from its configuration JSON and safetensors bytes (`name` labels errors).

@@ -83,6 +83,21 @@ pub fn save(net: &OmniMvsNet, path: &Path) -> Result<(), NetError> {
 /// # Errors
 /// [`NetError::Io`] or [`NetError::Weights`] when a file cannot be written.
 pub fn save_module<M: Module>(net: &M, config: &NetConfig, path: &Path) -> Result<(), NetError> {
+    save_with_config(net, config, path)
+}
+
+/// Writes the parameters of `net` to `path` (safetensors) and any serialisable `config` to
+/// [`config_path`]`(path)` (atomically): the one writer of our weight files, whatever the
+/// network's configuration type.
+///
+/// # Errors
+/// [`NetError::Io`], [`NetError::Json`] or [`NetError::Weights`] when a file cannot be
+/// written.
+pub fn save_with_config<M: Module, C: serde::Serialize>(
+    net: &M,
+    config: &C,
+    path: &Path,
+) -> Result<(), NetError> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|source| NetError::Io {
             path: dir.to_path_buf(),

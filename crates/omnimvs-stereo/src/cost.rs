@@ -74,6 +74,24 @@ pub struct CostTimings {
     pub cost: Duration,
 }
 
+/// A cost stage's answer: the `height x width x ndepth` volume of `data` and its timings,
+/// `warp` of the `total` spent sampling the images.
+pub(crate) fn finished_volume(
+    [height, width, ndepth]: [usize; 3],
+    data: Vec<u16>,
+    warp: Duration,
+    total: Duration,
+) -> (CostVolume, CostTimings) {
+    let volume = CostVolume {
+        height,
+        width,
+        ndepth,
+        data,
+    };
+    let cost = total.saturating_sub(warp);
+    (volume, CostTimings { warp, cost })
+}
+
 /// Everything needed to match one frame.
 pub struct Matcher<'a> {
     pub grid: EquirectGrid,
@@ -556,18 +574,7 @@ impl Matcher<'_> {
         );
         let warp_share = if tw + tc > 0.0 { tw / (tw + tc) } else { 0.0 };
         let warp = parallel.mul_f64(warp_share);
-        Ok((
-            CostVolume {
-                height: h,
-                width: w,
-                ndepth: nd,
-                data,
-            },
-            CostTimings {
-                warp,
-                cost: total - warp,
-            },
-        ))
+        Ok(finished_volume([h, w, nd], data, warp, total))
     }
 }
 

@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use rayon::prelude::*;
 
-use crate::cost::NO_PAIR_COST;
+use crate::cost::{NO_PAIR_COST, finished_volume};
 use crate::params::{COST_SCALE, SweepStep};
 use crate::{CameraView, CostTimings, CostVolume, SphereProjector, StereoError};
 
@@ -185,17 +185,11 @@ pub fn feature_cost_volume(
             }
         },
     );
-    Ok((
-        CostVolume {
-            height: h,
-            width: w,
-            ndepth: nd,
-            data,
-        },
-        CostTimings {
-            warp: Duration::ZERO,
-            cost: start.elapsed(),
-        },
+    Ok(finished_volume(
+        [h, w, nd],
+        data,
+        Duration::ZERO,
+        start.elapsed(),
     ))
 }
 

@@ -13,7 +13,7 @@ use omnimvs_net::NetEstimator;
 use omnimvs_stereo::{SgmEstimator, SgmParams};
 use omnimvs_sweep::{LutCache, SweepSpec};
 
-use crate::args::{BACKEND_HELP, Method, Preset, Size, parse_backend};
+use crate::args::{BACKEND_HELP, Method, Preset, SweepArgs, parse_backend};
 use crate::weights::{BUNDLED, Weights};
 
 /// Evaluate methods against ground truth with the paper's metrics.
@@ -51,17 +51,9 @@ pub struct Args {
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
     pub frames: FrameRange,
-    /// Evaluation grid HxW: every output is resampled to it before it is scored; SGM runs
-    /// at it.
-    #[arg(long, default_value = "160x640")]
-    pub size: Size,
-    /// Number of hypotheses N of the evaluation (the unit of E); SGM sweeps as many.
-    #[arg(long, default_value_t = 192)]
-    pub ndepth: usize,
-    /// Latitude range of the evaluation grid, +-degrees (every method's grid must cover the
-    /// same range).
-    #[arg(long, default_value_t = 45.0)]
-    pub phi_deg: f64,
+    /// Output grid and hypotheses.
+    #[command(flatten)]
+    pub sweep: SweepArgs,
     /// Output folder for eval.json / eval.md.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -164,7 +156,7 @@ pub fn run(args: &Args) -> Result<()> {
             ds.root.display()
         );
     }
-    let spec = ds.sweep_spec(args.size.height, args.size.width, args.phi_deg, args.ndepth)?;
+    let spec = args.sweep.spec(&ds)?;
     // The ground truth of the evaluation grid, with its sky mask for the two protocols.
     let eval = Evaluation::new(&ds, &frames, spec)?;
     let pictures = match &args.out {

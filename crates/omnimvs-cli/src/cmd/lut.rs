@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use omnimvs_sweep::{LookupTable, SphereSet};
 
-use crate::args::Size;
+use crate::args::SweepArgs;
 
 /// Build the spherical-sweep lookup table of a dataset's rig (the reference `.hwd` file).
 ///
@@ -17,15 +17,9 @@ use crate::args::Size;
 pub struct Args {
     /// Dataset folder (or its config.yaml).
     pub dataset: PathBuf,
-    /// Output grid, HEIGHTxWIDTH.
-    #[arg(long, default_value = "160x640")]
-    pub size: Size,
-    /// Number of inverse-depth hypotheses N (the file holds every other one).
-    #[arg(long, default_value_t = 192)]
-    pub ndepth: usize,
-    /// Latitude range of the grid, +-degrees.
-    #[arg(long, default_value_t = 45.0)]
-    pub phi_deg: f64,
+    /// Output grid and hypotheses.
+    #[command(flatten)]
+    pub sweep: SweepArgs,
     /// Write all N spheres instead of every other one (not the reference layout).
     #[arg(long)]
     pub all_spheres: bool,
@@ -36,13 +30,13 @@ pub struct Args {
 
 pub fn run(args: &Args) -> Result<()> {
     let ds = crate::dataset::open_dataset(&args.dataset)?;
-    if args.ndepth < 2 || (!args.all_spheres && !args.ndepth.is_multiple_of(2)) {
+    if args.sweep.ndepth < 2 || (!args.all_spheres && !args.sweep.ndepth.is_multiple_of(2)) {
         bail!(
             "--ndepth {}: expected an even number of at least 2 (the file holds every other sphere)",
-            args.ndepth
+            args.sweep.ndepth
         );
     }
-    let spec = ds.sweep_spec(args.size.height, args.size.width, args.phi_deg, args.ndepth)?;
+    let spec = args.sweep.spec(&ds)?;
     let (grid, hyps) = (spec.grid, spec.hypotheses);
     let set = if args.all_spheres {
         SphereSet::All

@@ -10,7 +10,7 @@ use omnimvs_stereo::{DEFAULT_P1, DEFAULT_P2, Directions, SgmEstimator, SgmParams
 use omnimvs_sweep::GrayImage;
 use omnimvs_sweep::SweepSpec;
 
-use crate::args::{Cost, Size};
+use crate::args::{Cost, SweepArgs};
 
 /// Depth by the classical method, ZNCC + SGM (no network, no GPU).
 ///
@@ -39,15 +39,9 @@ pub struct Args {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
-    /// Output grid, HEIGHTxWIDTH.
-    #[arg(long, default_value = "160x640")]
-    pub size: Size,
-    /// Latitude range of the output, +-degrees.
-    #[arg(long, default_value_t = 45.0)]
-    pub phi_deg: f64,
-    /// Number of inverse-depth hypotheses N (even).
-    #[arg(long, default_value_t = 192)]
-    pub ndepth: usize,
+    /// Output grid and hypotheses.
+    #[command(flatten)]
+    pub sweep: SweepArgs,
     /// Matching cost: zncc (9x9 ZNCC, the paper's ZNCC+SGM) or mccnn (the MC-CNN-style
     /// learned cost, MC-CNN+SGM, weights from --cost-weights).
     #[arg(long, value_enum, default_value_t = Cost::Zncc)]
@@ -215,7 +209,7 @@ pub fn run(args: &Args) -> Result<()> {
     if frames.is_empty() {
         bail!("{}: no frame found", ds.root.display());
     }
-    let spec = ds.sweep_spec(args.size.height, args.size.width, args.phi_deg, args.ndepth)?;
+    let spec = args.sweep.spec(&ds)?;
     let stereo = estimator(&ds, spec, args.cost, &args.cost_weights, |d| args.params(d))?;
     let mut run = ConfidenceRun::new(&args.out, spec)?;
     outln!("{}", header(&ds, &stereo));
