@@ -31,14 +31,6 @@ pub enum TrainError {
         /// The cause.
         source: std::io::Error,
     },
-    /// A file of the run (configuration, state, pointer, log) could not be parsed or written.
-    #[error("{path}: {source}")]
-    Json {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        source: serde_json::Error,
-    },
     /// A checkpoint file (model or optimiser state) could not be written, read or applied.
     #[error("{path}: {message}")]
     Checkpoint {
@@ -46,6 +38,14 @@ pub enum TrainError {
         path: PathBuf,
         /// What went wrong.
         message: String,
+    },
+    /// A file of the run (configuration, state, pointer, log) could not be parsed or written.
+    #[error("{path}: {source}")]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: serde_json::Error,
     },
     /// The training curves could not be drawn.
     #[error("drawing the training curves: {0}")]
