@@ -17,7 +17,6 @@ use std::sync::Arc;
 use burn::module::Module;
 use burn::nn::PaddingConfig2d;
 use burn::nn::conv::{Conv2d, Conv2dConfig};
-use burn::store::{ModuleSnapshot, SafetensorsStore};
 use burn::tensor::{Device, Tensor, TensorData, activation};
 use omnimvs_camera::ValidityMask;
 use omnimvs_data::image_io::normalize_for_network;
@@ -297,28 +296,8 @@ pub fn load_bytes(
     safetensors: &[u8],
     device: &Device,
 ) -> Result<McCnn, NetError> {
-    let config: McCnnConfig =
-        serde_json::from_str(config_json).map_err(|source| NetError::Json {
-            path: crate::weights::config_path(name),
-            source,
-        })?;
-    let mut net = McCnn::new(&config, device)?;
-    let mut store = SafetensorsStore::from_bytes(Some(safetensors.to_vec()));
-    let result = net.load_from(&mut store).map_err(|e| NetError::Weights {
-        path: name.to_path_buf(),
-        message: e.to_string(),
-    })?;
-    if !result.missing.is_empty() || !result.errors.is_empty() {
-        return Err(NetError::Weights {
-            path: name.to_path_buf(),
-            message: format!(
-                "{} missing and {} unusable tensors",
-                result.missing.len(),
-                result.errors.len()
-            ),
-        });
-    }
-    Ok(net)
+    let config: McCnnConfig = crate::weights::parse_config(name, config_json)?;
+    crate::weights::apply_bytes(McCnn::new(&config, device)?, name, safetensors)
 }
 
 /// A network saved by [`save`].
@@ -326,16 +305,8 @@ pub fn load_bytes(
 /// # Errors
 /// [`NetError`] when a file is missing or does not fit.
 pub fn load(path: &Path, device: &Device) -> Result<McCnn, NetError> {
-    let json_path = crate::weights::config_path(path);
-    let json = std::fs::read_to_string(&json_path).map_err(|source| NetError::Io {
-        path: json_path,
-        source,
-    })?;
-    let bytes = std::fs::read(path).map_err(|source| NetError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    load_bytes(path, &json, &bytes, device)
+    let config: McCnnConfig = crate::weights::read_json(&crate::weights::config_path(path))?;
+    crate::weights::apply_file(McCnn::new(&config, device)?, path)
 }
 
 /// The bundled network (`models/mccnn.*`).

@@ -129,7 +129,7 @@ pub fn save_with_config<M: Module, C: serde::Serialize>(
 }
 
 /// Applies the safetensors file `path` to `net`, every parameter required.
-fn apply_file<M: Module>(mut net: M, path: &Path) -> Result<M, NetError> {
+pub(crate) fn apply_file<M: Module>(mut net: M, path: &Path) -> Result<M, NetError> {
     if !path.exists() {
         return Err(weights_error(path, "no such weight file"));
     }
@@ -142,7 +142,11 @@ fn apply_file<M: Module>(mut net: M, path: &Path) -> Result<M, NetError> {
 }
 
 /// Applies in-memory safetensors bytes to `net` (`name` labels errors).
-fn apply_bytes<M: Module>(mut net: M, name: &Path, safetensors: &[u8]) -> Result<M, NetError> {
+pub(crate) fn apply_bytes<M: Module>(
+    mut net: M,
+    name: &Path,
+    safetensors: &[u8],
+) -> Result<M, NetError> {
     let mut store = SafetensorsStore::from_bytes(Some(safetensors.to_vec()));
     let result = net
         .load_from(&mut store)
@@ -151,9 +155,26 @@ fn apply_bytes<M: Module>(mut net: M, name: &Path, safetensors: &[u8]) -> Result
     Ok(net)
 }
 
-fn parse_config(name: &Path, config_json: &str) -> Result<NetConfig, NetError> {
+/// Parses the configuration JSON of the weights `name` (any of our networks' configuration
+/// types); errors name [`config_path`]`(name)`.
+pub(crate) fn parse_config<C: serde::de::DeserializeOwned>(
+    name: &Path,
+    config_json: &str,
+) -> Result<C, NetError> {
     serde_json::from_str(config_json).map_err(|source| NetError::Json {
         path: config_path(name),
+        source,
+    })
+}
+
+/// Reads a configuration JSON file of any of our networks' configuration types.
+pub(crate) fn read_json<C: serde::de::DeserializeOwned>(path: &Path) -> Result<C, NetError> {
+    let text = std::fs::read_to_string(path).map_err(|source| NetError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    serde_json::from_str(&text).map_err(|source| NetError::Json {
+        path: path.to_path_buf(),
         source,
     })
 }
@@ -163,14 +184,7 @@ fn parse_config(name: &Path, config_json: &str) -> Result<NetConfig, NetError> {
 /// # Errors
 /// [`NetError::Io`] or [`NetError::Json`].
 pub fn read_config(path: &Path) -> Result<NetConfig, NetError> {
-    let text = std::fs::read_to_string(path).map_err(|source| NetError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    serde_json::from_str(&text).map_err(|source| NetError::Json {
-        path: path.to_path_buf(),
-        source,
-    })
+    read_json(path)
 }
 
 /// Loads a network saved by [`save`]: the configuration beside `path`, then the weights.
@@ -325,7 +339,7 @@ pub fn load_any_bytes(
     safetensors: &[u8],
     device: &Device,
 ) -> Result<AnyNet, NetError> {
-    let config = parse_config(name, config_json)?;
+    let config: NetConfig = parse_config(name, config_json)?;
     Ok(match config.family {
         Family::OmniMvs => AnyNet::OmniMvs(Box::new(apply_bytes(
             OmniMvsNet::new(&config, device)?,
