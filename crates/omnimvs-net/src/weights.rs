@@ -129,14 +129,25 @@ pub fn save_with_config<M: Module, C: serde::Serialize>(
 }
 
 /// Applies the safetensors file `path` to `net`, every parameter required.
-pub(crate) fn apply_file<M: Module>(mut net: M, path: &Path) -> Result<M, NetError> {
+pub(crate) fn apply_file<M: Module>(net: M, path: &Path) -> Result<M, NetError> {
+    apply_file_except(net, path, |_| false)
+}
+
+/// [`apply_file`], where the parameters whose paths `may_miss` accepts may be absent from the
+/// file (they keep their values in `net`).
+fn apply_file_except<M: Module>(
+    mut net: M,
+    path: &Path,
+    may_miss: impl Fn(&str) -> bool,
+) -> Result<M, NetError> {
     if !path.exists() {
         return Err(weights_error(path, "no such weight file"));
     }
-    let mut store = SafetensorsStore::from_file(path);
-    let result = net
+    let mut store = SafetensorsStore::from_file(path).allow_partial(true);
+    let mut result = net
         .load_from(&mut store)
         .map_err(|e| weights_error(path, e.to_string()))?;
+    result.missing.retain(|(p, _)| !may_miss(p));
     check_applied(path, &result)?;
     Ok(net)
 }
@@ -244,17 +255,7 @@ pub fn load_cascade_grown(
                 .and_then(|i| i.parse::<usize>().ok())
                 .is_some_and(|i| i >= old_ctx)
     };
-    if !path.exists() {
-        return Err(weights_error(path, "no such weight file"));
-    }
-    let mut net = CascadeNet::new(config, device)?;
-    let mut store = SafetensorsStore::from_file(path).allow_partial(true);
-    let mut result = net
-        .load_from(&mut store)
-        .map_err(|e| weights_error(path, e.to_string()))?;
-    result.missing.retain(|(p, _)| !is_new(p));
-    check_applied(path, &result)?;
-    Ok(net)
+    apply_file_except(CascadeNet::new(config, device)?, path, is_new)
 }
 
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes
