@@ -107,6 +107,8 @@ pub enum Method {
     Sgm,
     /// SGM on the bundled MC-CNN-style learned cost (MC-CNN+SGM).
     Mccnn,
+    /// SGM on the bundled SweepNet-style learned cost (SweepNet+SGM).
+    Sweepnet,
 }
 
 /// `--cost` of `sgm`: the matching cost that SGM regularises.
@@ -116,6 +118,8 @@ pub enum Cost {
     Zncc,
     /// The MC-CNN-style learned cost (siamese features, cosine over camera pairs).
     Mccnn,
+    /// The SweepNet-style learned cost (a network on the warped images of all cameras).
+    Sweepnet,
 }
 
 /// `--kind` of `synth`: the kinds of scene a dataset can hold.

@@ -78,6 +78,15 @@ pub struct Metrics {
     pub rms: f64,
     /// Number of pixels evaluated (summed over frames for a mean).
     pub valid_pixels: usize,
+    /// Percentage of the pixels the protocol scores that have an answer (a finite
+    /// prediction); the other figures are over those. 100 unless a method leaves pixels
+    /// without an answer (`sgm --min-confidence`).
+    #[serde(default = "full_coverage")]
+    pub coverage_pct: f64,
+}
+
+fn full_coverage() -> f64 {
+    100.0
 }
 
 /// The metrics of one frame: `pred_index` holds `n_hat` for every pixel of
@@ -137,6 +146,10 @@ pub fn eval_metrics(
     })
 }
 
+fn pct_of(part: usize, whole: usize) -> f64 {
+    part as f64 / whole.max(1) as f64 * 100.0
+}
+
 /// The metrics over the pixels `i` with `scored(i)` and a finite prediction.
 fn metrics_where(
     pred_index: &[f32],
@@ -154,8 +167,13 @@ fn metrics_where(
     }
     let (mut n, mut o1, mut o3, mut o5, mut sum, mut sum_sq) =
         (0usize, 0usize, 0usize, 0usize, 0f64, 0f64);
+    let mut asked = 0usize;
     for (i, (&p, &g)) in pred_index.iter().zip(&gt.index).enumerate() {
-        if !scored(i) || !p.is_finite() {
+        if !scored(i) {
+            continue;
+        }
+        asked += 1;
+        if !p.is_finite() {
             continue;
         }
         let e = f64::from((p - g).abs()) / ndepth as f64 * 100.0;
@@ -177,6 +195,7 @@ fn metrics_where(
         mae: sum / n as f64,
         rms: (sum_sq / n as f64).sqrt(),
         valid_pixels: n,
+        coverage_pct: pct_of(n, asked),
     })
 }
 
@@ -285,6 +304,7 @@ pub fn mean_metrics(frames: &[Metrics]) -> Option<Metrics> {
         mae: mean(|m| m.mae),
         rms: mean(|m| m.rms),
         valid_pixels: frames.iter().map(|m| m.valid_pixels).sum(),
+        coverage_pct: mean(|m| m.coverage_pct),
     })
 }
 
@@ -293,8 +313,14 @@ impl Metrics {
     pub const MARKDOWN_HEADER: &'static str =
         "| method | >1 (%) | >3 (%) | >5 (%) | MAE | RMS |\n|---|---:|---:|---:|---:|---:|";
 
-    /// A Markdown table row.
+    /// A Markdown table row; a method that leaves pixels without an answer shows its
+    /// coverage beside its name.
     pub fn markdown_row(&self, method: &str) -> String {
+        let method = if self.coverage_pct < 99.995 {
+            format!("{method} (coverage {:.1} %)", self.coverage_pct)
+        } else {
+            method.to_string()
+        };
         format!(
             "| {method} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} |",
             self.over1_pct, self.over3_pct, self.over5_pct, self.mae, self.rms

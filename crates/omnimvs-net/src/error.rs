@@ -56,6 +56,9 @@ pub enum NetError {
     /// Building or reading the lookup table failed.
     #[error(transparent)]
     Sweep(#[from] omnimvs_sweep::SweepError),
+
+    #[error(transparent)]
+    Stereo(#[from] omnimvs_stereo::StereoError),
     /// A weight file could not be read, written or applied to the model.
     #[error("{path}: {message}")]
     Weights {

@@ -13,6 +13,8 @@
 //! - [`infer`]: running the paper's network on a dataset's frames.
 //! - [`estimator`]: either family on a dataset's frames, one result type.
 //! - [`mccnn`]: the MC-CNN-style matching-cost network for `omnimvs-stereo`'s SGM (issue 15).
+//! - [`learned_sgm`]: SGM on ZNCC or a learned cost, by name.
+//! - [`sweepnet`]: the SweepNet-style matching-cost head for `omnimvs-stereo`'s SGM (issue 15).
 //! - [`synthetic`]: a lookup table without a rig, for benchmarks and tests.
 //! - [`backend`]: run-time choice of the compute backend (`cpu`, `libtorch`, `wgpu`, ...).
 //!
@@ -25,8 +27,10 @@ pub mod config;
 pub mod error;
 pub mod estimator;
 pub mod infer;
+pub mod learned_sgm;
 pub mod mccnn;
 pub mod model;
+pub mod sweepnet;
 pub mod synthetic;
 pub mod taps;
 pub mod weights;

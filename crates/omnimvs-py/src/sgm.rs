@@ -2,7 +2,8 @@
 
 use numpy::PyArray2;
 use omnimvs_data::DepthEstimator;
-use omnimvs_stereo::{SgmEstimator, SgmParams};
+use omnimvs_net::learned_sgm::{MatchingCost, sgm_estimator};
+use omnimvs_stereo::SgmParams;
 use pyo3::prelude::*;
 
 use crate::dataset::PyRig;
@@ -22,8 +23,9 @@ use crate::images::{frame_source, map_to_array};
 ///     ndepth: number of inverse-depth hypotheses N (even).
 ///     phi_deg: latitude range of the output, +-degrees.
 ///     rig: the `omnimvs.Rig` of images given as arrays.
-///     cost: the matching cost, `"zncc"` (ZNCC+SGM) or `"mccnn"` (the bundled MC-CNN-style
-///         learned cost, MC-CNN+SGM, with its own penalties), as `omnimvs sgm --cost`.
+///     cost: the matching cost, `"zncc"` (ZNCC+SGM), `"mccnn"` (the bundled MC-CNN-style
+///         learned cost, MC-CNN+SGM) or `"sweepnet"` (the bundled SweepNet-style learned cost,
+///         SweepNet+SGM), learned costs with their own penalties, as `omnimvs sgm --cost`.
 ///
 /// Raises:
 ///     FileNotFoundError: an image of the frame is missing.
@@ -42,35 +44,21 @@ pub fn sgm<'py>(
     rig: Option<&Bound<'py, PyRig>>,
     cost: &str,
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-    if !matches!(cost, "zncc" | "mccnn") {
-        return Err(crate::error::bad_argument(
-            "cost",
-            format!("{cost:?}: expected \"zncc\" or \"mccnn\""),
-        ));
-    }
+    let cost: MatchingCost = cost
+        .parse()
+        .map_err(|e: omnimvs_net::NetError| crate::error::bad_argument("cost", e.to_string()))?;
     let (ds, images) = frame_source(source, frame, rig)?;
     let inv_depth = detached(py, || {
         let spec = ds.sweep_spec(height, width, phi_deg, ndepth).py_err()?;
         let masks = ds.masks().py_err()?;
-        let stereo = if cost == "mccnn" {
-            let device = burn::tensor::Device::flex();
-            let net = omnimvs_net::mccnn::bundled(&device).py_err()?;
-            let params = SgmParams {
-                p1: net.config.p1,
-                p2: net.config.p2,
+        let stereo = sgm_estimator(&ds.rig, masks, spec, cost, "bundled", |(p1, p2)| {
+            SgmParams {
+                p1,
+                p2,
                 ..SgmParams::default()
-            };
-            let extractor = omnimvs_net::mccnn::McCnnExtractor {
-                net,
-                masks: Some(masks.clone()),
-                device,
-            };
-            SgmEstimator::new(&ds.rig, Some(masks), spec, params)
-                .py_err()?
-                .with_features(Some(extractor.shared()))
-        } else {
-            SgmEstimator::new(&ds.rig, Some(masks), spec, SgmParams::default()).py_err()?
-        };
+            }
+        })
+        .py_err()?;
         let images = images.load(&ds)?;
         Ok(stereo.estimate(&images).py_err()?.inv_depth)
     })?;

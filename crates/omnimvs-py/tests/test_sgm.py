@@ -88,3 +88,18 @@ def test_bad_arguments_name_them(itbt):
         omnimvs.sgm(itbt, 1, H, W, 1)
     with pytest.raises(ValueError, match="odd|even"):
         omnimvs.sgm(itbt, 1, H, W, 31)
+
+
+@pytest.mark.parametrize("cost", ["mccnn", "sweepnet"])
+def test_learned_costs_equal_the_command_line(itbt_path, itbt, cost, cli, tmp_path):
+    ours = omnimvs.sgm(itbt, 2, height=H, width=W, ndepth=N, cost=cost)
+    cli("sgm", itbt_path, "--frames", 2, "--size", f"{H}x{W}", "--ndepth", N, "--cost", cost,
+        "--out", tmp_path)
+    expected = tifffile.imread(tmp_path / "00002.tiff")
+    np.testing.assert_allclose(ours, expected, rtol=1e-6, atol=1e-7)
+    assert np.isfinite(ours).all() and ours.std() > 0.05
+
+
+def test_an_unknown_cost_is_named(itbt):
+    with pytest.raises(ValueError, match="cost.*sweepnet"):
+        omnimvs.sgm(itbt, 1, cost="sad")

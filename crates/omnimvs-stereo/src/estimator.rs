@@ -6,7 +6,7 @@ use omnimvs_camera::{Rig, ValidityMask};
 use omnimvs_data::{DepthEstimate, DepthEstimator, EstimateError, StageObserver};
 use omnimvs_sweep::{GrayImage, SweepSpec};
 
-use crate::{FeatureExtractor, SgmParams, SphericalStereo, StageTimings, StereoError};
+use crate::{FeatureExtractor, LearnedCost, SgmParams, SphericalStereo, StageTimings, StereoError};
 
 /// ZNCC (or a learned cost, [`Self::with_features`]) + SGM prepared for one rig, sweep and set of parameters, with the cameras' validity
 /// masks (pixels marked invalid are never sampled).
@@ -54,6 +54,13 @@ impl SgmEstimator {
         self
     }
 
+    /// The same method with any learned matching cost (`None`: ZNCC); its name becomes the
+    /// cost's (`MC-CNN+SGM`, `SweepNet+SGM`).
+    pub fn with_learned_cost(mut self, learned: Option<LearnedCost>) -> Self {
+        self.stereo = self.stereo.with_learned_cost(learned);
+        self
+    }
+
     /// The method's parameters.
     pub fn params(&self) -> &SgmParams {
         &self.stereo.params
@@ -83,8 +90,8 @@ impl From<StereoError> for EstimateError {
 impl DepthEstimator for SgmEstimator {
     fn name(&self) -> &str {
         self.stereo
-            .features()
-            .map_or(Self::NAME, |f| f.method_name())
+            .learned_cost()
+            .map_or(Self::NAME, LearnedCost::method_name)
     }
 
     fn spec(&self) -> &SweepSpec {

@@ -14,7 +14,10 @@
 //! * [`Matcher::cost_volume`]: the ZNCC cost volume ([`CostVolume`], 16-bit).
 //! * [`learned`]: learned matching costs (MC-CNN style): per-camera feature maps from a
 //!   [`FeatureExtractor`] compared by cosine similarity, in the same cost volume.
+//! * [`sweepnet`]: the SweepNet-style learned cost: a network on the warped images' windows
+//!   of every sphere ([`SweepCostHead`]).
 //! * [`aggregate`]: SGM along 4 or 8 paths that wrap around in longitude.
+//! * [`filter`]: median filter and confidence-based invalidation of the index map.
 //! * [`winner_take_all`]: index with parabola refinement, and confidence.
 //!
 //! Tests, examples and benchmarks render their scenes with `omnimvs-synth`
@@ -26,11 +29,13 @@
 mod cost;
 mod error;
 mod estimator;
+pub mod filter;
 pub mod learned;
 pub mod params;
 mod pipeline;
 mod projector;
 mod sgm;
+pub mod sweepnet;
 mod view;
 mod wta;
 
@@ -38,9 +43,12 @@ pub use cost::{CostTimings, CostVolume, Matcher, NO_PAIR_COST, ZNCC_VARIANCE_EPS
 pub use error::StereoError;
 pub use estimator::SgmEstimator;
 pub use learned::{FeatureExtractor, FeatureMap, feature_cost_volume};
-pub use params::{COST_SCALE, DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SweepStep};
-pub use pipeline::{SphericalStereo, StageTimings, StereoResult};
+pub use params::{
+    COST_SCALE, DEFAULT_MEDIAN, DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SweepStep,
+};
+pub use pipeline::{LearnedCost, SphericalStereo, StageTimings, StereoResult};
 pub use projector::SphereProjector;
 pub use sgm::{AggregatedVolume, aggregate};
+pub use sweepnet::{Mlp, SweepCostHead};
 pub use view::CameraView;
 pub use wta::{IndexMap, winner_take_all};

@@ -16,6 +16,9 @@ pub const DEFAULT_P1: f32 = 0.1;
 /// Tuned with [`DEFAULT_P1`].
 pub const DEFAULT_P2: f32 = 2.0;
 
+/// Default side of the median filter on the index map (issue 15's outlier study, README).
+pub const DEFAULT_MEDIAN: usize = 5;
+
 /// Which SGM paths are aggregated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Directions {
@@ -60,6 +63,12 @@ pub struct SgmParams {
     pub sweep: SweepStep,
     /// Side of the square ZNCC patch, odd (9 in the paper).
     pub patch: usize,
+    /// Side of the median filter applied to the index map after WTA (0 or 1: none).
+    #[serde(default)]
+    pub median: usize,
+    /// Pixels whose confidence is below this get no answer (NaN; 0: every pixel answers).
+    #[serde(default)]
+    pub min_confidence: f32,
 }
 
 impl Default for SgmParams {
@@ -70,6 +79,8 @@ impl Default for SgmParams {
             directions: Directions::Eight,
             sweep: SweepStep::All,
             patch: 9,
+            median: DEFAULT_MEDIAN,
+            min_confidence: 0.0,
         }
     }
 }
@@ -104,6 +115,18 @@ impl SgmParams {
                 "expected P2 <= {max:.2} with {} paths (matching costs are in [0, 1]; \
                  larger penalties overflow the 16-bit aggregation)",
                 self.directions.count()
+            )));
+        }
+        if !(self.min_confidence.is_finite() && (0.0..=1.0).contains(&self.min_confidence)) {
+            return Err(StereoError::Volume(format!(
+                "minimum confidence {}: expected a value in [0, 1]",
+                self.min_confidence
+            )));
+        }
+        if self.median > 1 && self.median.is_multiple_of(2) {
+            return Err(StereoError::Volume(format!(
+                "median filter size {}: expected an odd number of pixels (or 0: none)",
+                self.median
             )));
         }
         if self.patch == 0 || self.patch.is_multiple_of(2) {

@@ -9,6 +9,7 @@ use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use serde::Serialize;
 
 use crate::learned::{FeatureExtractor, feature_cost_volume};
+use crate::sweepnet::{SweepCostHead, sweep_cost_volume};
 use crate::{
     AggregatedVolume, CameraView, CostVolume, IndexMap, Matcher, SgmParams, SphereProjector,
     StereoError, aggregate, winner_take_all,
@@ -52,8 +53,27 @@ pub struct SphericalStereo {
     /// `(width, height)` of each camera's images.
     pub camera_sizes: Vec<(usize, usize)>,
     projectors: Vec<SphereProjector>,
-    /// The learned matching cost's feature network; ZNCC when absent.
-    features: Option<Arc<dyn FeatureExtractor>>,
+    /// The learned matching cost; ZNCC when absent.
+    learned: Option<LearnedCost>,
+}
+
+/// A learned matching cost in place of ZNCC.
+#[derive(Debug, Clone)]
+pub enum LearnedCost {
+    /// MC-CNN style: per-camera feature maps compared by cosine similarity.
+    Features(Arc<dyn FeatureExtractor>),
+    /// SweepNet style: a network on the warped images' windows of every sphere.
+    Sweep(Arc<dyn SweepCostHead>),
+}
+
+impl LearnedCost {
+    /// The method's name in reports.
+    pub fn method_name(&self) -> &str {
+        match self {
+            Self::Features(f) => f.method_name(),
+            Self::Sweep(h) => h.method_name(),
+        }
+    }
 }
 
 impl SphericalStereo {
@@ -99,20 +119,25 @@ impl SphericalStereo {
                 .map(|c| (c.model.width() as usize, c.model.height() as usize))
                 .collect(),
             projectors,
-            features: None,
+            learned: None,
         })
     }
 
     /// The same method with a learned matching cost: `extractor`'s feature maps compared by
     /// cosine similarity instead of ZNCC (`None`: ZNCC).
-    pub fn with_features(mut self, extractor: Option<Arc<dyn FeatureExtractor>>) -> Self {
-        self.features = extractor;
+    pub fn with_features(self, extractor: Option<Arc<dyn FeatureExtractor>>) -> Self {
+        self.with_learned_cost(extractor.map(LearnedCost::Features))
+    }
+
+    /// The same method with a learned matching cost (`None`: ZNCC).
+    pub fn with_learned_cost(mut self, learned: Option<LearnedCost>) -> Self {
+        self.learned = learned;
         self
     }
 
-    /// The learned cost's feature network, if any.
-    pub fn features(&self) -> Option<&Arc<dyn FeatureExtractor>> {
-        self.features.as_ref()
+    /// The learned matching cost, if any.
+    pub fn learned_cost(&self) -> Option<&LearnedCost> {
+        self.learned.as_ref()
     }
 
     /// Checks the images (and masks) against the rig and prepares them.
@@ -170,7 +195,25 @@ impl SphericalStereo {
         let t0 = Instant::now();
         let views = self.views(images, masks)?;
         let prepare = t0.elapsed();
-        if let Some(extractor) = &self.features {
+        if let Some(LearnedCost::Sweep(head)) = &self.learned {
+            let (volume, t) = sweep_cost_volume(
+                &self.grid,
+                &self.projectors,
+                &views,
+                head.as_ref(),
+                &self.hypotheses,
+                self.params.sweep,
+            )?;
+            return Ok((
+                volume,
+                StageTimings {
+                    prepare_s: prepare.as_secs_f64(),
+                    cost_s: t.cost.as_secs_f64(),
+                    ..StageTimings::default()
+                },
+            ));
+        }
+        if let Some(LearnedCost::Features(extractor)) = &self.learned {
             let t1 = Instant::now();
             let maps = extractor.features(images)?;
             let network = t1.elapsed();
@@ -248,8 +291,14 @@ impl SphericalStereo {
         let (agg, aggregation) = self.aggregate(&cost)?;
         drop(cost);
         let t = Instant::now();
-        let index = winner_take_all(&agg);
+        let mut index = winner_take_all(&agg);
         drop(agg);
+        if self.params.min_confidence > 0.0 {
+            crate::filter::invalidate_below(&mut index, self.params.min_confidence);
+        }
+        if self.params.median > 1 {
+            index.index = crate::filter::median_filter(&index, self.params.median);
+        }
         let inv_depth = index
             .index
             .iter()

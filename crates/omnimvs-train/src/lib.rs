@@ -16,6 +16,7 @@
 
 pub mod augment;
 pub mod config;
+mod cost_run;
 pub mod error;
 pub mod learner;
 pub mod loader;
@@ -24,6 +25,7 @@ pub mod photometric;
 pub mod plot;
 pub mod rng;
 pub mod sample;
+pub mod sweepnet;
 pub mod trainable;
 pub mod trainer;
 

@@ -20,17 +20,16 @@ use std::time::Instant;
 
 use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
-use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::{Device, Tensor, TensorData, activation};
-use omnimvs_camera::ValidityMask;
-use omnimvs_camera::fs::write_atomic;
-use omnimvs_data::Dataset;
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::mccnn::{self, McCnn, McCnnConfig, pool};
-use omnimvs_stereo::SphereProjector;
-use omnimvs_sweep::{GrayImage, SweepSpec};
+use omnimvs_sweep::GrayImage;
 use serde::{Deserialize, Serialize};
 
+use crate::cost_run::{
+    Source, append_metrics, create_run, load_checkpoint, open_sources, read_run_config,
+    save_checkpoint,
+};
 use crate::error::TrainError;
 use crate::rng::SplitMix64;
 
@@ -99,64 +98,12 @@ pub struct CostRecord {
     pub seconds: f64,
 }
 
-/// A dataset opened for sampling.
-struct Source {
-    dataset: Dataset,
-    masks: Vec<ValidityMask>,
-    spec: SweepSpec,
-    projectors: Vec<SphereProjector>,
-}
-
 /// One frame ready for drawing samples.
 struct Frame {
     source: usize,
     /// Normalised, pooled images.
     images: Vec<GrayImage>,
     gt: GroundTruth,
-}
-
-fn io_err(path: &Path) -> impl Fn(std::io::Error) -> TrainError + '_ {
-    move |source| TrainError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
-fn ckpt_err(path: &Path, e: impl std::fmt::Display) -> TrainError {
-    TrainError::Checkpoint {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    }
-}
-
-fn open_sources(config: &CostTrainConfig) -> Result<Vec<Source>, TrainError> {
-    let (h, w, n) = config.grid;
-    config
-        .data
-        .iter()
-        .map(|path| {
-            let dataset = Dataset::open(path)?;
-            let masks = dataset.masks()?;
-            let spec = dataset.sweep_spec(h, w, 90.0, n)?;
-            let projectors = dataset
-                .rig
-                .cameras
-                .iter()
-                .enumerate()
-                .map(|(i, c)| SphereProjector::new(c, i + 1, &spec.grid))
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|e| TrainError::InvalidConfig {
-                    field: "data",
-                    message: format!("{}: {e}", path.display()),
-                })?;
-            Ok(Source {
-                dataset,
-                masks,
-                spec,
-                projectors,
-            })
-        })
-        .collect()
 }
 
 fn load_frame(
@@ -320,12 +267,6 @@ pub fn batch_loss(
     (loss, acc)
 }
 
-/// Resumable state, `checkpoint/state.json`.
-#[derive(Debug, Serialize, Deserialize)]
-struct State {
-    step: usize,
-}
-
 /// A matching-cost training run.
 pub struct CostTrainer {
     pub config: CostTrainConfig,
@@ -347,29 +288,17 @@ impl CostTrainer {
         run_dir: &Path,
         device: &Device,
     ) -> Result<Self, TrainError> {
-        if run_dir.join("train_config.json").exists() {
-            return Err(TrainError::InvalidConfig {
-                field: "out",
-                message: format!("{} holds a run already (resume it)", run_dir.display()),
-            });
-        }
         if config.batch == 0 || config.neg_max < config.neg_min || config.frame_every == 0 {
             return Err(TrainError::InvalidConfig {
                 field: "batch",
                 message: "expected batch > 0, neg_max >= neg_min, frame_every > 0".into(),
             });
         }
-        std::fs::create_dir_all(run_dir).map_err(io_err(run_dir))?;
-        let path = run_dir.join("train_config.json");
-        let json = serde_json::to_string_pretty(&config).map_err(|source| TrainError::Json {
-            path: path.clone(),
-            source,
-        })?;
-        write_atomic(&path, (json + "\n").as_bytes()).map_err(io_err(&path))?;
+        create_run(run_dir, &config)?;
         let device = device.clone().autodiff();
         device.seed(config.seed);
         let net = McCnn::new(&config.net, &device)?;
-        let sources = open_sources(&config)?;
+        let sources = open_sources(&config.data, config.grid)?;
         Ok(Self {
             optim: AdamConfig::new().init(),
             config,
@@ -390,38 +319,13 @@ impl CostTrainer {
         steps: Option<usize>,
         device: &Device,
     ) -> Result<Self, TrainError> {
-        let path = run_dir.join("train_config.json");
-        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
-        let mut config: CostTrainConfig =
-            serde_json::from_str(&text).map_err(|source| TrainError::Json {
-                path: path.clone(),
-                source,
-            })?;
+        let mut config: CostTrainConfig = read_run_config(run_dir)?;
         if let Some(s) = steps {
             config.steps = s;
         }
         let device = device.clone().autodiff();
-        let mut net = McCnn::new(&config.net, &device)?;
-        let dir = run_dir.join("checkpoint");
-        let mut step = 0;
-        let mut optim = AdamConfig::new().init();
-        let state_path = dir.join("state.json");
-        if state_path.exists() {
-            let text = std::fs::read_to_string(&state_path).map_err(io_err(&state_path))?;
-            let state: State = serde_json::from_str(&text).map_err(|source| TrainError::Json {
-                path: state_path.clone(),
-                source,
-            })?;
-            let model = dir.join("model.bpk");
-            let mut store = BurnpackStore::from_file(&model).auto_extension(false);
-            net.load_from(&mut store).map_err(|e| ckpt_err(&model, e))?;
-            let optim_path = dir.join("optim.bpk");
-            optim = optim
-                .load(&optim_path)
-                .map_err(|e| ckpt_err(&optim_path, e))?;
-            step = state.step;
-        }
-        let sources = open_sources(&config)?;
+        let (net, optim, step) = load_checkpoint(run_dir, McCnn::new(&config.net, &device)?)?;
+        let sources = open_sources(&config.data, config.grid)?;
         Ok(Self {
             config,
             run_dir: run_dir.to_path_buf(),
@@ -439,21 +343,7 @@ impl CostTrainer {
     }
 
     fn save(&self) -> Result<(), TrainError> {
-        let dir = self.run_dir.join("checkpoint");
-        std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
-        let model = dir.join("model.bpk");
-        let mut store = BurnpackStore::from_bytes(None);
-        self.net
-            .save_into(&mut store)
-            .map_err(|e| ckpt_err(&model, e))?;
-        let bytes = store.get_bytes().map_err(|e| ckpt_err(&model, e))?;
-        write_atomic(&model, &bytes).map_err(io_err(&model))?;
-        let optim = dir.join("optim.bpk");
-        let bytes = self.optim.into_bytes().map_err(|e| ckpt_err(&optim, e))?;
-        write_atomic(&optim, &bytes).map_err(io_err(&optim))?;
-        let state = dir.join("state.json");
-        let json = serde_json::to_string(&State { step: self.step }).unwrap_or_default();
-        write_atomic(&state, json.as_bytes()).map_err(io_err(&state))?;
+        save_checkpoint(&self.run_dir, &self.net, &self.optim, self.step)?;
         mccnn::save(&self.net.valid(), &self.run_dir.join("model.safetensors"))?;
         Ok(())
     }
@@ -486,7 +376,6 @@ impl CostTrainer {
         let end = stop_after.map_or(self.config.steps, |s| {
             (self.step + s).min(self.config.steps)
         });
-        let metrics = self.run_dir.join("metrics.jsonl");
         let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
         let mut frame: Option<Frame> = None;
         let t0 = Instant::now();
@@ -537,10 +426,7 @@ impl CostTrainer {
                     seconds: t0.elapsed().as_secs_f64(),
                 };
                 (loss_sum, acc_sum, count) = (0.0, 0.0, 0);
-                let mut text = std::fs::read_to_string(&metrics).unwrap_or_default();
-                text.push_str(&serde_json::to_string(&record).unwrap_or_default());
-                text.push('\n');
-                write_atomic(&metrics, text.as_bytes()).map_err(io_err(&metrics))?;
+                append_metrics(&self.run_dir, &record)?;
                 self.save()?;
                 report(&record);
             }

@@ -121,21 +121,24 @@ pub fn rows(
                     SgmParams::default(),
                 )?),
             }),
-            Method::Mccnn => rows.push(Row {
-                name: omnimvs_net::mccnn::McCnnExtractor::NAME.into(),
-                file: "mccnn".into(),
-                estimator: Box::new(crate::cmd::sgm::estimator(
-                    ds,
-                    spec,
-                    crate::args::Cost::Mccnn,
-                    "bundled",
-                    |(p1, p2)| SgmParams {
+            Method::Mccnn | Method::Sweepnet => {
+                let (cost, file) = if *method == Method::Mccnn {
+                    (crate::args::Cost::Mccnn, "mccnn")
+                } else {
+                    (crate::args::Cost::Sweepnet, "sweepnet")
+                };
+                let estimator =
+                    crate::cmd::sgm::estimator(ds, spec, cost, "bundled", |(p1, p2)| SgmParams {
                         p1,
                         p2,
                         ..SgmParams::default()
-                    },
-                )?),
-            }),
+                    })?;
+                rows.push(Row {
+                    name: estimator.name().into(),
+                    file: file.into(),
+                    estimator: Box::new(estimator),
+                });
+            }
         }
     }
     Ok(rows)

@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use omnimvs_data::output::ConfidenceRun;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, StageTimes};
-use omnimvs_stereo::{DEFAULT_P1, DEFAULT_P2, Directions, SgmEstimator, SgmParams, SweepStep};
+use omnimvs_net::learned_sgm::{MatchingCost, sgm_estimator};
+use omnimvs_stereo::{Directions, SgmEstimator, SgmParams, SweepStep};
 use omnimvs_sweep::GrayImage;
 use omnimvs_sweep::SweepSpec;
 
@@ -42,12 +43,13 @@ pub struct Args {
     /// Output grid and hypotheses.
     #[command(flatten)]
     pub sweep: SweepArgs,
-    /// Matching cost: zncc (9x9 ZNCC, the paper's ZNCC+SGM) or mccnn (the MC-CNN-style
-    /// learned cost, MC-CNN+SGM, weights from --cost-weights).
+    /// Matching cost: zncc (9x9 ZNCC, the paper's ZNCC+SGM), mccnn (the MC-CNN-style
+    /// learned cost, MC-CNN+SGM) or sweepnet (the SweepNet-style learned cost on the warped
+    /// images, SweepNet+SGM); learned weights from --cost-weights.
     #[arg(long, value_enum, default_value_t = Cost::Zncc)]
     pub cost: Cost,
     /// Weights of a learned cost: bundled (compiled in), random, or a .safetensors file
-    /// (with its .json) written by `omnimvs train --cost mccnn`.
+    /// (with its .json) written by `omnimvs train --cost mccnn|sweepnet`.
     #[arg(long, default_value = "bundled")]
     pub cost_weights: String,
     /// SGM penalty for a change of one hypothesis, in matching-cost units
@@ -66,6 +68,14 @@ pub struct Args {
     /// hypotheses interpolated).
     #[arg(long)]
     pub every_other: bool,
+    /// Side of the median filter on the index map after WTA (odd; 0 or 1: none).
+    #[arg(long, default_value_t = omnimvs_stereo::DEFAULT_MEDIAN)]
+    pub median: usize,
+    /// Leave pixels whose confidence (1 - best / second-best aggregated cost) is below this
+    /// without an answer (NaN in the outputs; the metrics are over the others and report
+    /// their share as coverage). 0: every pixel answers.
+    #[arg(long, default_value_t = 0.0)]
+    pub min_confidence: f32,
 }
 
 impl Args {
@@ -84,6 +94,8 @@ impl Args {
             } else {
                 SweepStep::All
             },
+            median: self.median,
+            min_confidence: self.min_confidence,
             ..SgmParams::default()
         }
     }
@@ -102,28 +114,13 @@ pub fn estimator(
     weights: &str,
     params: impl Fn((f32, f32)) -> SgmParams,
 ) -> Result<SgmEstimator> {
-    let masks = ds.masks()?;
-    match cost {
-        Cost::Zncc => Ok(SgmEstimator::new(
-            &ds.rig,
-            Some(masks),
-            spec,
-            params((DEFAULT_P1, DEFAULT_P2)),
-        )?),
-        Cost::Mccnn => {
-            let device = burn::tensor::Device::flex();
-            let net = omnimvs_net::mccnn::from_name(weights, &device)
-                .with_context(|| format!("--cost-weights {weights}"))?;
-            let p = params((net.config.p1, net.config.p2));
-            let extractor = omnimvs_net::mccnn::McCnnExtractor {
-                net,
-                masks: Some(masks.clone()),
-                device,
-            };
-            Ok(SgmEstimator::new(&ds.rig, Some(masks), spec, p)?
-                .with_features(Some(extractor.shared())))
-        }
-    }
+    let cost = match cost {
+        Cost::Zncc => MatchingCost::Zncc,
+        Cost::Mccnn => MatchingCost::McCnn,
+        Cost::Sweepnet => MatchingCost::SweepNet,
+    };
+    sgm_estimator(&ds.rig, ds.masks()?, spec, cost, weights, params)
+        .with_context(|| format!("--cost-weights {weights}"))
 }
 
 /// The line that presents the method's settings.

@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::FrameRange;
 use omnimvs_net::{CascadeNet, Family, OmniMvsNet};
 use omnimvs_train::mccnn::{CostTrainConfig, CostTrainer};
+use omnimvs_train::sweepnet::{SweepTrainConfig, SweepTrainer};
 use omnimvs_train::trainer::read_run_config;
 use omnimvs_train::{
     EpochRecord, Optimizer, PhotometricAugment, StepInfo, TrainConfig, Trainable, Trainer,
@@ -119,7 +120,9 @@ pub struct Args {
     /// `mccnn`, MC-CNN-fast's siamese tower with its hinge loss on patch pairs drawn
     /// through the rig at the ground truth's sphere and a wrong one (`--steps` steps of
     /// `--batch` pairs, Adam at --lr; train frames by --train-frames, validation pairs from
-    /// --val-frames). Also recognised with --resume.
+    /// --val-frames); `sweepnet`, the SweepNet-style head on the warped images' window
+    /// features, with a softmin cross-entropy over all spheres (`--batch` pixels per step).
+    /// Also recognised with --resume.
     #[arg(long, value_enum)]
     pub cost: Option<CostNet>,
     /// Matching-cost training: total steps (default 2000; with --resume, raises the total).
@@ -137,6 +140,8 @@ pub struct Args {
 pub enum CostNet {
     /// The MC-CNN-fast style siamese network.
     Mccnn,
+    /// The SweepNet-style network on the warped images.
+    Sweepnet,
 }
 
 /// Whether `dir` holds a matching-cost run.
@@ -145,6 +150,63 @@ fn is_cost_run(dir: &std::path::Path) -> bool {
         .ok()
         .and_then(|t| serde_json::from_str::<CostTrainConfig>(&t).ok())
         .is_some()
+}
+
+/// Whether `dir` holds a SweepNet run.
+fn is_sweep_run(dir: &std::path::Path) -> bool {
+    std::fs::read_to_string(dir.join("train_config.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<SweepTrainConfig>(&t).ok())
+        .is_some()
+}
+
+fn train_sweepnet(args: &Args, device: &Device) -> Result<()> {
+    let mut trainer = match &args.resume {
+        Some(dir) => SweepTrainer::resume(dir, args.steps, device)
+            .with_context(|| format!("resuming {}", dir.display()))?,
+        None => {
+            let Some(out) = &args.out else {
+                bail!("--out RUN_DIR is required for a new run");
+            };
+            let mut config = SweepTrainConfig {
+                data: args.data.clone(),
+                steps: args.steps.unwrap_or(3000),
+                batch: args.batch,
+                lr: args.lr,
+                seed: args.seed,
+                ..SweepTrainConfig::default()
+            };
+            if let Some(r) = &args.train_frames {
+                config.train_frames = (r.start, r.end);
+            }
+            if let Some(r) = &args.val_frames {
+                config.val_frames = (r.start, r.end);
+            }
+            SweepTrainer::create(config, out, device)
+                .with_context(|| format!("creating {}", out.display()))?
+        }
+    };
+    outln!(
+        "SweepNet cost: {} steps of {} pixels x {} spheres from step {} into {}",
+        trainer.config.steps,
+        trainer.config.batch,
+        trainer.config.grid.2,
+        trainer.step(),
+        trainer.run_dir.display()
+    );
+    trainer.run(args.stop_after, |r| {
+        outln!(
+            "step {:5}  train loss {:.4} within-1 {:.3}  val loss {:.4} within-1 {:.3} (ZNCC {:.3})  {:.0} s",
+            r.step,
+            r.train_loss,
+            r.train_acc,
+            r.val_loss,
+            r.val_acc,
+            r.val_zncc_acc,
+            r.seconds
+        );
+    })?;
+    Ok(())
 }
 
 fn train_cost(args: &Args, device: &Device) -> Result<()> {
@@ -233,6 +295,9 @@ pub enum OptimizerArg {
 
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
+    if args.cost == Some(CostNet::Sweepnet) || args.resume.as_deref().is_some_and(is_sweep_run) {
+        return train_sweepnet(args, &device);
+    }
     if args.cost.is_some() || args.resume.as_deref().is_some_and(is_cost_run) {
         return train_cost(args, &device);
     }

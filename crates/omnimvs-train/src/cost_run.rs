@@ -1,0 +1,161 @@
+//! What the matching-cost trainers (`mccnn`, `sweepnet`) share: the datasets opened for
+//! drawing samples through the rig, and the run folder (configuration, metrics lines and a
+//! resumable checkpoint, every file written atomically).
+
+use std::path::{Path, PathBuf};
+
+use burn::module::Module;
+use burn::optim::{AdamConfig, ModuleOptimizer};
+use burn::store::{BurnpackStore, ModuleSnapshot};
+use omnimvs_camera::ValidityMask;
+use omnimvs_camera::fs::write_atomic;
+use omnimvs_data::Dataset;
+use omnimvs_stereo::SphereProjector;
+use omnimvs_sweep::SweepSpec;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+use crate::error::TrainError;
+
+/// A dataset opened for sampling: its masks, the sweep of the ground truth and the fast
+/// projectors of that sweep's grid.
+pub(crate) struct Source {
+    pub dataset: Dataset,
+    pub masks: Vec<ValidityMask>,
+    pub spec: SweepSpec,
+    pub projectors: Vec<SphereProjector>,
+}
+
+pub(crate) fn io_err(path: &Path) -> impl Fn(std::io::Error) -> TrainError + '_ {
+    move |source| TrainError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+pub(crate) fn ckpt_err(path: &Path, e: impl std::fmt::Display) -> TrainError {
+    TrainError::Checkpoint {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// Opens every dataset of `data` for the grid `(h, w, N)` over +-45 degrees.
+pub(crate) fn open_sources(
+    data: &[PathBuf],
+    (h, w, n): (usize, usize, usize),
+) -> Result<Vec<Source>, TrainError> {
+    data.iter()
+        .map(|path| {
+            let dataset = Dataset::open(path)?;
+            let masks = dataset.masks()?;
+            let spec = dataset.sweep_spec(h, w, 90.0, n)?;
+            let projectors = dataset
+                .rig
+                .cameras
+                .iter()
+                .enumerate()
+                .map(|(i, c)| SphereProjector::new(c, i + 1, &spec.grid))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| TrainError::InvalidConfig {
+                    field: "data",
+                    message: format!("{}: {e}", path.display()),
+                })?;
+            Ok(Source {
+                dataset,
+                masks,
+                spec,
+                projectors,
+            })
+        })
+        .collect()
+}
+
+/// Starts a run in `run_dir` (created) with `config` as `train_config.json`; refused if the
+/// folder holds a run already.
+pub(crate) fn create_run<C: Serialize>(run_dir: &Path, config: &C) -> Result<(), TrainError> {
+    let path = run_dir.join("train_config.json");
+    if path.exists() {
+        return Err(TrainError::InvalidConfig {
+            field: "out",
+            message: format!("{} holds a run already (resume it)", run_dir.display()),
+        });
+    }
+    std::fs::create_dir_all(run_dir).map_err(io_err(run_dir))?;
+    let json = serde_json::to_string_pretty(config).map_err(|source| TrainError::Json {
+        path: path.clone(),
+        source,
+    })?;
+    write_atomic(&path, (json + "\n").as_bytes()).map_err(io_err(&path))
+}
+
+/// The `train_config.json` of the run in `run_dir`.
+pub(crate) fn read_run_config<C: DeserializeOwned>(run_dir: &Path) -> Result<C, TrainError> {
+    let path = run_dir.join("train_config.json");
+    let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+    serde_json::from_str(&text).map_err(|source| TrainError::Json { path, source })
+}
+
+/// Resumable state, `checkpoint/state.json`.
+#[derive(Debug, Serialize, Deserialize)]
+struct State {
+    step: usize,
+}
+
+/// Writes `checkpoint/` (model, Adam state, step) under `run_dir`, each file atomically.
+pub(crate) fn save_checkpoint<M: Module>(
+    run_dir: &Path,
+    net: &M,
+    optim: &ModuleOptimizer,
+    step: usize,
+) -> Result<(), TrainError> {
+    let dir = run_dir.join("checkpoint");
+    std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
+    let model = dir.join("model.bpk");
+    let mut store = BurnpackStore::from_bytes(None);
+    net.save_into(&mut store).map_err(|e| ckpt_err(&model, e))?;
+    let bytes = store.get_bytes().map_err(|e| ckpt_err(&model, e))?;
+    write_atomic(&model, &bytes).map_err(io_err(&model))?;
+    let optim_path = dir.join("optim.bpk");
+    let bytes = optim.into_bytes().map_err(|e| ckpt_err(&optim_path, e))?;
+    write_atomic(&optim_path, &bytes).map_err(io_err(&optim_path))?;
+    let state = dir.join("state.json");
+    let json = serde_json::to_string(&State { step }).unwrap_or_default();
+    write_atomic(&state, json.as_bytes()).map_err(io_err(&state))
+}
+
+/// The network, Adam state and step of the last checkpoint under `run_dir`; a fresh Adam and
+/// step 0 when there is none yet.
+pub(crate) fn load_checkpoint<M: Module>(
+    run_dir: &Path,
+    mut net: M,
+) -> Result<(M, ModuleOptimizer, usize), TrainError> {
+    let dir = run_dir.join("checkpoint");
+    let state_path = dir.join("state.json");
+    if !state_path.exists() {
+        return Ok((net, AdamConfig::new().init(), 0));
+    }
+    let text = std::fs::read_to_string(&state_path).map_err(io_err(&state_path))?;
+    let state: State = serde_json::from_str(&text).map_err(|source| TrainError::Json {
+        path: state_path.clone(),
+        source,
+    })?;
+    let model = dir.join("model.bpk");
+    let mut store = BurnpackStore::from_file(&model).auto_extension(false);
+    net.load_from(&mut store).map_err(|e| ckpt_err(&model, e))?;
+    let optim_path = dir.join("optim.bpk");
+    let optim = AdamConfig::new()
+        .init()
+        .load(&optim_path)
+        .map_err(|e| ckpt_err(&optim_path, e))?;
+    Ok((net, optim, state.step))
+}
+
+/// Appends one line to the run's `metrics.jsonl` (rewritten atomically).
+pub(crate) fn append_metrics<R: Serialize>(run_dir: &Path, record: &R) -> Result<(), TrainError> {
+    let metrics = run_dir.join("metrics.jsonl");
+    let mut text = std::fs::read_to_string(&metrics).unwrap_or_default();
+    text.push_str(&serde_json::to_string(record).unwrap_or_default());
+    text.push('\n');
+    write_atomic(&metrics, text.as_bytes()).map_err(io_err(&metrics))
+}

@@ -1,0 +1,471 @@
+//! Training of the SweepNet-style matching cost (`omnimvs_net::sweepnet`, issue 15).
+//!
+//! A sample is one ground-truth pixel of the 160x640 grid with the window features of the
+//! warped images on every one of the `N` spheres (`omnimvs_stereo::sweepnet::band_features`,
+//! exactly what inference computes). The loss asks the costs along the sweep to pick the true
+//! sphere: a softmin over the `N` costs (`softmax(-T cost)`, `T` the configuration's
+//! temperature) scored by cross-entropy against the ground-truth index, split linearly
+//! between its two neighbouring spheres. Sky pixels (index below 0.5) are not drawn. Every
+//! step draws `batch` pixels from one band of `band_rows` grid rows of one frame.
+//!
+//! The run folder holds `train_config.json`, `metrics.jsonl` (training and validation loss,
+//! the share of pixels whose lowest cost is within one hypothesis of the truth, and that share
+//! for the plain ZNCC cost on the same validation pixels), `model.safetensors` (+ `.json`) and
+//! `checkpoint/`; `--resume` continues from the last checkpoint, every draw seeded by the step.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use burn::module::Module;
+use burn::optim::GradientsParams;
+use burn::tensor::{Device, Tensor, TensorData, activation};
+use omnimvs_data::gt::GroundTruth;
+use omnimvs_net::sweepnet::{self, SweepNet, SweepNetConfig};
+use omnimvs_stereo::CameraView;
+use omnimvs_stereo::sweepnet::{BandScratch, FeatureLayout, band_features};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::cost_run::{
+    Source, append_metrics, create_run, load_checkpoint, open_sources, read_run_config,
+    save_checkpoint,
+};
+use crate::error::TrainError;
+use crate::rng::SplitMix64;
+
+/// Everything a SweepNet run needs; written to `train_config.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SweepTrainConfig {
+    /// Dataset folders with ground truth.
+    pub data: Vec<PathBuf>,
+    /// Training frames of each dataset, inclusive.
+    pub train_frames: (u32, u32),
+    /// Validation frames of each dataset, inclusive (outside the training frames).
+    pub val_frames: (u32, u32),
+    /// The network.
+    pub net: SweepNetConfig,
+    /// Total steps.
+    pub steps: usize,
+    /// Pixels per step (each with all `N` spheres).
+    pub batch: usize,
+    /// Grid rows of the band a step draws its pixels from.
+    pub band_rows: usize,
+    /// Adam learning rate.
+    pub lr: f64,
+    /// Steps on each loaded frame before the next one.
+    pub frame_every: usize,
+    /// Steps between metrics lines and checkpoints.
+    pub log_every: usize,
+    /// Grid and hypotheses of the ground truth (`h`, `w`, `N`).
+    pub grid: (usize, usize, usize),
+    pub seed: u64,
+}
+
+impl Default for SweepTrainConfig {
+    fn default() -> Self {
+        Self {
+            data: Vec::new(),
+            train_frames: (1, 400),
+            val_frames: (1191, 1200),
+            net: SweepNetConfig::default(),
+            steps: 3000,
+            batch: 256,
+            band_rows: 8,
+            lr: 1e-3,
+            frame_every: 4,
+            log_every: 100,
+            grid: (160, 640, 192),
+            seed: 0,
+        }
+    }
+}
+
+/// One metrics line.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SweepRecord {
+    pub step: usize,
+    pub train_loss: f32,
+    /// Share of training pixels whose lowest cost is within one hypothesis of the truth.
+    pub train_acc: f32,
+    pub val_loss: f32,
+    pub val_acc: f32,
+    /// The same share for the plain ZNCC cost on the validation pixels.
+    pub val_zncc_acc: f32,
+    pub seconds: f64,
+}
+
+/// One frame ready for drawing samples.
+struct Frame {
+    source: usize,
+    views: Vec<CameraView>,
+    gt: GroundTruth,
+}
+
+fn load_frame(sources: &[Source], source: usize, frame: u32) -> Result<Frame, TrainError> {
+    let s = &sources[source];
+    let images = s.dataset.read_frame(frame)?;
+    let views = images
+        .iter()
+        .zip(&s.masks)
+        .enumerate()
+        .map(|(i, (img, m))| CameraView::new(img, Some(m), i + 1))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| TrainError::InvalidConfig {
+            field: "data",
+            message: format!("{}: frame {frame}: {e}", s.dataset.root.display()),
+        })?;
+    let gt = s
+        .dataset
+        .ground_truth(frame, &s.spec.grid, &s.spec.hypotheses)?
+        .ok_or_else(|| TrainError::InvalidConfig {
+            field: "data",
+            message: format!(
+                "{}: frame {frame} has no ground truth",
+                s.dataset.config_path.display()
+            ),
+        })?;
+    Ok(Frame { source, views, gt })
+}
+
+/// Pixels with the window features of every sphere.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepBatch {
+    /// `[pixel][sphere][feature]`.
+    pub features: Vec<f32>,
+    /// Ground-truth index of each pixel.
+    pub target: Vec<f32>,
+    pub ndepth: usize,
+    pub dim: usize,
+}
+
+impl SweepBatch {
+    /// Number of pixels.
+    pub fn len(&self) -> usize {
+        self.target.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.target.is_empty()
+    }
+}
+
+fn draw_batch(
+    sources: &[Source],
+    frame: &Frame,
+    config: &SweepTrainConfig,
+    rng: &mut SplitMix64,
+) -> SweepBatch {
+    let src = &sources[frame.source];
+    let grid = &src.spec.grid;
+    let hyps = &src.spec.hypotheses;
+    let (w, h, nd) = (grid.width, grid.height, hyps.count);
+    let dim = config.net.layout().dim();
+    let rows = config.band_rows.min(h);
+    let r0 = rng.below(h - rows + 1);
+    let mut candidates: Vec<usize> = (r0 * w..(r0 + rows) * w)
+        .filter(|&i| frame.gt.valid[i] && frame.gt.index[i] >= 0.5)
+        .collect();
+    // A partial Fisher-Yates shuffle picks the batch.
+    let take = config.batch.min(candidates.len());
+    for k in 0..take {
+        let j = k + rng.below(candidates.len() - k);
+        candidates.swap(k, j);
+    }
+    let picked = &candidates[..take];
+    let spec = config.net.spec();
+    let per_sphere: Vec<Vec<f32>> = (0..nd)
+        .into_par_iter()
+        .map_init(
+            || (BandScratch::default(), vec![0f32; rows * w * dim]),
+            |(scratch, band), n| {
+                band_features(
+                    grid,
+                    &src.projectors,
+                    &frame.views,
+                    &spec,
+                    r0..r0 + rows,
+                    hyps.inv_depth(n as f64) as f32,
+                    scratch,
+                    band,
+                );
+                picked
+                    .iter()
+                    .flat_map(|&i| band[(i - r0 * w) * dim..][..dim].iter().copied())
+                    .collect()
+            },
+        )
+        .collect();
+    let mut features = vec![0f32; take * nd * dim];
+    for (n, sphere) in per_sphere.iter().enumerate() {
+        for b in 0..take {
+            features[(b * nd + n) * dim..][..dim].copy_from_slice(&sphere[b * dim..][..dim]);
+        }
+    }
+    SweepBatch {
+        features,
+        target: picked.iter().map(|&i| frame.gt.index[i]).collect(),
+        ndepth: nd,
+        dim,
+    }
+}
+
+/// Share of pixels whose lowest cost (`costs` is `[pixel][sphere]`) is within one hypothesis
+/// of `target`.
+pub fn within_one(costs: &[f32], target: &[f32], ndepth: usize) -> f32 {
+    let hits = costs
+        .chunks_exact(ndepth)
+        .zip(target)
+        .filter(|(c, t)| {
+            let best = c
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1.total_cmp(b.1))
+                .map_or(0, |(n, _)| n);
+            (best as f32 - **t).abs() <= 1.0
+        })
+        .count();
+    hits as f32 / target.len().max(1) as f32
+}
+
+/// The plain ZNCC cost (`(1 - zncc) / 2` averaged over complete pairs) of every feature
+/// vector of a batch, `[pixel][sphere]`.
+pub fn zncc_costs(batch: &SweepBatch, layout: FeatureLayout) -> Vec<f32> {
+    batch
+        .features
+        .chunks_exact(batch.dim)
+        .map(|f| {
+            let (mut sum, mut count) = (0f32, 0f32);
+            for p in 0..layout.pairs() {
+                if f[layout.pair_complete(0, p)] > 0.5 {
+                    sum += 0.5 * (1.0 - f[layout.zncc(0, p)]);
+                    count += 1.0;
+                }
+            }
+            if count > 0.0 { sum / count } else { 0.5 }
+        })
+        .collect()
+}
+
+/// Cross-entropy of the softmin over the spheres against the ground truth, and the share of
+/// pixels whose lowest cost is within one hypothesis of it.
+pub fn batch_loss(net: &SweepNet, batch: &SweepBatch, device: &Device) -> (Tensor<1>, f32) {
+    let (b, nd, dim) = (batch.len(), batch.ndepth, batch.dim);
+    let x = Tensor::<2>::from_data(
+        TensorData::new(batch.features.clone(), [b * nd, dim]),
+        device,
+    );
+    let costs = net.costs(x).reshape([b, nd]);
+    let logp = activation::log_softmax(costs.clone().mul_scalar(-net.config.temperature), 1);
+    let mut soft = vec![0f32; b * nd];
+    for (k, &t) in batch.target.iter().enumerate() {
+        let t = t.clamp(0.0, (nd - 1) as f32);
+        let lo = t.floor() as usize;
+        let frac = t - lo as f32;
+        soft[k * nd + lo] += 1.0 - frac;
+        if lo + 1 < nd {
+            soft[k * nd + lo + 1] += frac;
+        }
+    }
+    let target = Tensor::<2>::from_data(TensorData::new(soft, [b, nd]), device);
+    let loss = (target * logp).sum_dim(1).mean().neg();
+    let values = costs.into_data().try_into_vec::<f32>().unwrap_or_default();
+    let acc = within_one(&values, &batch.target, nd);
+    (loss, acc)
+}
+
+/// A SweepNet training run.
+pub struct SweepTrainer {
+    pub config: SweepTrainConfig,
+    pub run_dir: PathBuf,
+    net: SweepNet,
+    optim: burn::optim::ModuleOptimizer,
+    device: Device,
+    step: usize,
+    sources: Vec<Source>,
+}
+
+impl SweepTrainer {
+    /// A new run in `run_dir` (created; refused if it holds a run already).
+    ///
+    /// # Errors
+    /// [`TrainError`] for unreadable datasets, a bad configuration or an existing run.
+    pub fn create(
+        config: SweepTrainConfig,
+        run_dir: &Path,
+        device: &Device,
+    ) -> Result<Self, TrainError> {
+        if config.batch == 0 || config.band_rows == 0 || config.frame_every == 0 {
+            return Err(TrainError::InvalidConfig {
+                field: "batch",
+                message: "expected batch > 0, band_rows > 0, frame_every > 0".into(),
+            });
+        }
+        let sources = open_sources(&config.data, config.grid)?;
+        if let Some(s) = sources
+            .iter()
+            .find(|s| s.dataset.rig.len() != config.net.cameras)
+        {
+            return Err(TrainError::InvalidConfig {
+                field: "data",
+                message: format!(
+                    "{}: {} cameras, the network reads {}",
+                    s.dataset.root.display(),
+                    s.dataset.rig.len(),
+                    config.net.cameras
+                ),
+            });
+        }
+        create_run(run_dir, &config)?;
+        let device = device.clone().autodiff();
+        device.seed(config.seed);
+        let net = SweepNet::new(&config.net, &device)?;
+        Ok(Self {
+            optim: burn::optim::AdamConfig::new().init(),
+            config,
+            run_dir: run_dir.to_path_buf(),
+            net,
+            device,
+            step: 0,
+            sources,
+        })
+    }
+
+    /// The run in `run_dir` from its last checkpoint; `steps` raises the total.
+    ///
+    /// # Errors
+    /// [`TrainError`] for a missing or unreadable run.
+    pub fn resume(
+        run_dir: &Path,
+        steps: Option<usize>,
+        device: &Device,
+    ) -> Result<Self, TrainError> {
+        let mut config: SweepTrainConfig = read_run_config(run_dir)?;
+        if let Some(s) = steps {
+            config.steps = s;
+        }
+        let device = device.clone().autodiff();
+        let (net, optim, step) = load_checkpoint(run_dir, SweepNet::new(&config.net, &device)?)?;
+        let sources = open_sources(&config.data, config.grid)?;
+        Ok(Self {
+            config,
+            run_dir: run_dir.to_path_buf(),
+            net,
+            optim,
+            device,
+            step,
+            sources,
+        })
+    }
+
+    /// The step the run is at.
+    pub fn step(&self) -> usize {
+        self.step
+    }
+
+    fn save(&self) -> Result<(), TrainError> {
+        save_checkpoint(&self.run_dir, &self.net, &self.optim, self.step)?;
+        sweepnet::save(&self.net.valid(), &self.run_dir.join("model.safetensors"))?;
+        Ok(())
+    }
+
+    /// Fixed validation batches: two bands of two frames of each dataset's validation range.
+    fn validation(&self) -> Result<Vec<SweepBatch>, TrainError> {
+        let mut out = Vec::new();
+        let (v0, v1) = self.config.val_frames;
+        for s in 0..self.sources.len() {
+            for (j, f) in [v0, v1].into_iter().enumerate() {
+                let frame = load_frame(&self.sources, s, f)?;
+                for k in 0..2u64 {
+                    let mut rng = SplitMix64::new(0x5EED ^ (s as u64 * 31 + j as u64 * 7 + k));
+                    let batch = draw_batch(&self.sources, &frame, &self.config, &mut rng);
+                    if !batch.is_empty() {
+                        out.push(batch);
+                    }
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Trains up to `self.config.steps` (or `stop_after` more steps), calling `report` with
+    /// each metrics line.
+    ///
+    /// # Errors
+    /// [`TrainError`] for unreadable frames or unwritable files.
+    pub fn run(
+        &mut self,
+        stop_after: Option<usize>,
+        mut report: impl FnMut(&SweepRecord),
+    ) -> Result<(), TrainError> {
+        let val = self.validation()?;
+        let layout = self.config.net.layout();
+        let zncc_acc = val
+            .iter()
+            .map(|b| within_one(&zncc_costs(b, layout), &b.target, b.ndepth))
+            .sum::<f32>()
+            / val.len().max(1) as f32;
+        let end = stop_after.map_or(self.config.steps, |s| {
+            (self.step + s).min(self.config.steps)
+        });
+        let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
+        let mut frame: Option<Frame> = None;
+        let t0 = Instant::now();
+        let (f0, f1) = self.config.train_frames;
+        while self.step < end {
+            let step = self.step;
+            if frame.is_none() || step.is_multiple_of(self.config.frame_every) {
+                let mut rng =
+                    SplitMix64::for_epoch(self.config.seed, step / self.config.frame_every);
+                let s = rng.below(self.sources.len());
+                let f = f0 + rng.below((f1 - f0 + 1) as usize) as u32;
+                frame = Some(load_frame(&self.sources, s, f)?);
+            }
+            let Some(current) = frame.as_ref() else {
+                return Err(TrainError::InvalidConfig {
+                    field: "train_frames",
+                    message: "no frame to draw from".into(),
+                });
+            };
+            let mut rng = SplitMix64::for_epoch(self.config.seed ^ 0xA5A5, step);
+            let batch = draw_batch(&self.sources, current, &self.config, &mut rng);
+            if !batch.is_empty() {
+                let (loss, acc) = batch_loss(&self.net, &batch, &self.device);
+                loss_sum += loss.clone().into_scalar::<f32>();
+                acc_sum += acc;
+                count += 1;
+                let grads = GradientsParams::from_grads(loss.backward(), &self.net);
+                self.net = self.optim.step(self.config.lr, self.net.clone(), grads);
+            }
+            self.step += 1;
+            if self.step.is_multiple_of(self.config.log_every) || self.step == end {
+                let inference = self.net.valid();
+                let dev = self.device.clone().without_autodiff();
+                let (mut vl, mut va) = (0f32, 0f32);
+                for b in &val {
+                    let (l, a) = batch_loss(&inference, b, &dev);
+                    vl += l.into_scalar::<f32>();
+                    va += a;
+                }
+                let record = SweepRecord {
+                    step: self.step,
+                    train_loss: loss_sum / count.max(1) as f32,
+                    train_acc: acc_sum / count.max(1) as f32,
+                    val_loss: vl / val.len().max(1) as f32,
+                    val_acc: va / val.len().max(1) as f32,
+                    val_zncc_acc: zncc_acc,
+                    seconds: t0.elapsed().as_secs_f64(),
+                };
+                (loss_sum, acc_sum, count) = (0.0, 0.0, 0);
+                append_metrics(&self.run_dir, &record)?;
+                self.save()?;
+                report(&record);
+            }
+        }
+        Ok(())
+    }
+
+    /// The trained network, without autodiff.
+    pub fn net(&self) -> SweepNet {
+        self.net.valid()
+    }
+}
