@@ -480,9 +480,8 @@ impl Matcher<'_> {
     /// The costs of one output row from the column sums, wrapping around in
     /// longitude.
     ///
-    /// `out` holds the `[row][col]` planes of the spheres in `s`'s lanes,
-    /// one after the other; only the first `spheres` lanes are written.
-    fn cost_row(&self, s: &mut Scratch, row: usize, spheres: usize, out: &mut [u16]) {
+    /// `out` is `[row][col][lane]`: the costs of all of `s`'s lanes.
+    fn cost_row(&self, s: &mut Scratch, row: usize, out: &mut [u16]) {
         let (gw, h, r) = (self.grid.width, self.grid.height, self.radius);
         let ncam = s.ncam;
         if s.lanes == INTERLEAVE {
@@ -540,27 +539,20 @@ impl Matcher<'_> {
                 s.pair_count[x] += used;
             }
         }
-        let lanes = s.lanes;
-        let plane = gw * h;
-        for (x, (sums, counts)) in s
-            .cost_sum
-            .chunks_exact(lanes)
-            .zip(s.pair_count.chunks_exact(lanes))
-            .enumerate()
-        {
-            for (g, (&sum, &count)) in sums.iter().zip(counts).enumerate().take(spheres) {
-                let cost = if count > 0.0 {
-                    sum / count
-                } else {
-                    NO_PAIR_COST
-                };
-                out[g * plane + row * gw + x] = (cost * COST_SCALE + 0.5) as u16;
-            }
+        let out = &mut out[row * w..(row + 1) * w];
+        for ((dst, &sum), &count) in out.iter_mut().zip(&s.cost_sum).zip(&s.pair_count) {
+            let cost = if count > 0.0 {
+                sum / count
+            } else {
+                NO_PAIR_COST
+            };
+            *dst = (cost * COST_SCALE + 0.5) as u16;
         }
     }
 
-    /// The `[row][col]` cost slices of a few spheres (`inv_depths`, 1/m, at
-    /// most `s.lanes`) into consecutive planes of `out`; returns the time
+    /// The costs of a few spheres (`inv_depths`, 1/m, at most `s.lanes`)
+    /// into `out`, `[row][col][lane]` (so that moving them into the volume
+    /// reads a few neighbouring values per pixel); returns the time
     /// spent warping and matching. The spheres are computed side by side, as
     /// the lanes of `s`: for one grid row, neighbouring spheres sample nearly
     /// the same fisheye pixels, so the images stay in cache, and their window
@@ -576,7 +568,7 @@ impl Matcher<'_> {
         let (mut warp, mut cost) = (Duration::ZERO, Duration::ZERO);
         s.colsum.fill(0.0);
         // Lanes without a sphere of their own (a short last group) stay
-        // empty: every sample missing, so no pair, and never written out.
+        // empty: every sample missing, so no pair (their costs are not read).
         if spheres < s.lanes {
             s.values.fill(0.0);
             s.missing.fill(1.0);
@@ -600,7 +592,7 @@ impl Matcher<'_> {
             let t1 = Instant::now();
             let leave = (row > r).then(|| (row - r - 1) % s.slots);
             s.update(leave, (add < h).then(|| add % s.slots));
-            self.cost_row(s, row, spheres, out);
+            self.cost_row(s, row, out);
             warp += t1 - t0;
             cost += t1.elapsed();
         }
@@ -642,10 +634,12 @@ impl Matcher<'_> {
         let start = Instant::now();
         let mut transpose = Duration::ZERO;
         let group_len = SPHERE_GROUP.min(computed.len());
-        let mut slices = vec![0u16; group_len * plane];
+        // `[chunk of INTERLEAVE spheres][row][col][sphere in the chunk]`.
+        let chunk = INTERLEAVE * plane;
+        let mut slices = vec![0u16; group_len.div_ceil(INTERLEAVE) * chunk];
         for group in computed.chunks(group_len) {
-            slices[..group.len() * plane]
-                .par_chunks_mut(INTERLEAVE * plane)
+            slices[..group.len().div_ceil(INTERLEAVE) * chunk]
+                .par_chunks_mut(chunk)
                 .zip(group.par_chunks(INTERLEAVE))
                 .for_each_init(
                     || Scratch::new(ncam, self.patch(), w, INTERLEAVE),
@@ -666,8 +660,11 @@ impl Matcher<'_> {
                 .for_each(|(row, dst)| {
                     for (x, px) in dst.chunks_exact_mut(nd).enumerate() {
                         let i = row * w + x;
-                        for (g, &n) in group.iter().enumerate() {
-                            px[n] = slices[g * plane + i];
+                        for (k, ns) in group.chunks(INTERLEAVE).enumerate() {
+                            let src = &slices[k * chunk + i * INTERLEAVE..][..INTERLEAVE];
+                            for (&n, &c) in ns.iter().zip(src) {
+                                px[n] = c;
+                            }
                         }
                     }
                 });
