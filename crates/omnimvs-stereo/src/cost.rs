@@ -441,6 +441,152 @@ fn row_window_sums_reference(colsum: &[f32], boxsum: &mut [f32], w: usize, r: us
     }
 }
 
+/// One camera's window sums along a row: of its samples, their squares and
+/// its missing samples.
+struct WindowSums<'a> {
+    sum: &'a [f32],
+    sq: &'a [f32],
+    miss: &'a [f32],
+}
+
+impl WindowSums<'_> {
+    /// Window mean and `1 / std` (0 where a sample is missing) from column
+    /// `start` on, `inv_n` being 1 / the window's sample count.
+    #[inline(always)]
+    fn moments(&self, start: usize, inv_n: f32, mean: &mut [f32], inv_std: &mut [f32]) {
+        let (sum, sq, miss) = (&self.sum[start..], &self.sq[start..], &self.miss[start..]);
+        let (mean, inv_std) = (&mut mean[start..], &mut inv_std[start..]);
+        for ((((m, is), &a), &b), &k) in mean.iter_mut().zip(inv_std).zip(sum).zip(sq).zip(miss) {
+            let mu = a * inv_n;
+            let var = (b * inv_n - mu * mu).max(0.0);
+            *m = mu;
+            // A window with a missing sample gets inv_std = 0 and is
+            // skipped by the pairs.
+            *is = if k < 0.5 {
+                1.0 / (var + ZNCC_VARIANCE_EPS).sqrt()
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// [`Self::moments`] eight columns at a time with AVX2, the same
+    /// operations in the same order; returns how many leading columns it did.
+    #[cfg(target_arch = "x86_64")]
+    fn moments_v3(
+        &self,
+        simd: pulp::x86::V3,
+        inv_n: f32,
+        mean: &mut [f32],
+        inv_std: &mut [f32],
+    ) -> usize {
+        use pulp::{as_arrays, as_arrays_mut, bytemuck::cast};
+        simd.vectorize(
+            #[inline(always)]
+            || {
+                let (sum, _) = as_arrays::<8, f32>(self.sum);
+                let (sq, _) = as_arrays::<8, f32>(self.sq);
+                let (miss, _) = as_arrays::<8, f32>(self.miss);
+                let (mean, _) = as_arrays_mut::<8, f32>(mean);
+                let (inv_std, _) = as_arrays_mut::<8, f32>(inv_std);
+                let n = sum
+                    .len()
+                    .min(sq.len())
+                    .min(miss.len())
+                    .min(mean.len())
+                    .min(inv_std.len());
+                let inv_n = simd.splat_f32x8(inv_n);
+                let zero = simd.splat_f32x8(0.0);
+                let one = simd.splat_f32x8(1.0);
+                let half = simd.splat_f32x8(0.5);
+                let eps = simd.splat_f32x8(ZNCC_VARIANCE_EPS);
+                for i in 0..n {
+                    let mu = simd.mul_f32x8(cast(sum[i]), inv_n);
+                    let b = simd.mul_f32x8(cast(sq[i]), inv_n);
+                    let var = simd.max_f32x8(simd.sub_f32x8(b, simd.mul_f32x8(mu, mu)), zero);
+                    mean[i] = cast(mu);
+                    let is = simd.div_f32x8(one, simd.sqrt_f32x8(simd.add_f32x8(var, eps)));
+                    let complete = simd.cmp_lt_f32x8(cast(miss[i]), half);
+                    inv_std[i] = cast(simd.select_f32x8(complete, is, zero));
+                }
+                n * 8
+            },
+        )
+    }
+}
+
+/// A pair of cameras' window sums of products, means and `1 / std`s along a row.
+struct PairSums<'a> {
+    prod: &'a [f32],
+    mean: [&'a [f32]; 2],
+    inv_std: [&'a [f32]; 2],
+}
+
+impl PairSums<'_> {
+    /// Adds the pair's cost `(1 - zncc) / 2` and 1 to `cost_sum` and
+    /// `pair_count` from column `start` on, where both windows are complete.
+    #[inline(always)]
+    fn add_costs(&self, start: usize, inv_n: f32, cost_sum: &mut [f32], pair_count: &mut [f32]) {
+        let ([ma, mb], [ia, ib]) = (self.mean, self.inv_std);
+        for x in start..cost_sum.len() {
+            let norm = ia[x] * ib[x];
+            let cov = self.prod[x] * inv_n - ma[x] * mb[x];
+            let zncc = (cov * norm).clamp(-1.0, 1.0);
+            let used = if norm > 0.0 { 1.0 } else { 0.0 };
+            cost_sum[x] += used * 0.5 * (1.0 - zncc);
+            pair_count[x] += used;
+        }
+    }
+
+    /// [`Self::add_costs`] eight columns at a time with AVX2, the same
+    /// operations in the same order; returns how many leading columns it did.
+    #[cfg(target_arch = "x86_64")]
+    fn add_costs_v3(
+        &self,
+        simd: pulp::x86::V3,
+        inv_n: f32,
+        cost_sum: &mut [f32],
+        pair_count: &mut [f32],
+    ) -> usize {
+        use pulp::{as_arrays, as_arrays_mut, bytemuck::cast};
+        simd.vectorize(
+            #[inline(always)]
+            || {
+                let (prod, _) = as_arrays::<8, f32>(self.prod);
+                let (ma, _) = as_arrays::<8, f32>(self.mean[0]);
+                let (mb, _) = as_arrays::<8, f32>(self.mean[1]);
+                let (ia, _) = as_arrays::<8, f32>(self.inv_std[0]);
+                let (ib, _) = as_arrays::<8, f32>(self.inv_std[1]);
+                let (cost_sum, _) = as_arrays_mut::<8, f32>(cost_sum);
+                let (pair_count, _) = as_arrays_mut::<8, f32>(pair_count);
+                let n = cost_sum.len().min(pair_count.len()).min(prod.len());
+                let n = n.min(ma.len()).min(mb.len()).min(ia.len()).min(ib.len());
+                let inv_n = simd.splat_f32x8(inv_n);
+                let zero = simd.splat_f32x8(0.0);
+                let one = simd.splat_f32x8(1.0);
+                let minus_one = simd.splat_f32x8(-1.0);
+                let half = simd.splat_f32x8(0.5);
+                for i in 0..n {
+                    let norm = simd.mul_f32x8(cast(ia[i]), cast(ib[i]));
+                    let cov = simd.sub_f32x8(
+                        simd.mul_f32x8(cast(prod[i]), inv_n),
+                        simd.mul_f32x8(cast(ma[i]), cast(mb[i])),
+                    );
+                    // clamp(-1, 1) as `f32::clamp` does it (NaN stays NaN).
+                    let z = simd.mul_f32x8(cov, norm);
+                    let z = simd.select_f32x8(simd.cmp_lt_f32x8(z, minus_one), minus_one, z);
+                    let z = simd.select_f32x8(simd.cmp_gt_f32x8(z, one), one, z);
+                    let used = simd.select_f32x8(simd.cmp_gt_f32x8(norm, zero), one, zero);
+                    let cost = simd.mul_f32x8(simd.mul_f32x8(used, half), simd.sub_f32x8(one, z));
+                    cost_sum[i] = cast(simd.add_f32x8(cast(cost_sum[i]), cost));
+                    pair_count[i] = cast(simd.add_f32x8(cast(pair_count[i]), used));
+                }
+                n * 8
+            },
+        )
+    }
+}
+
 impl Matcher<'_> {
     fn patch(&self) -> usize {
         2 * self.radius + 1
@@ -501,43 +647,40 @@ impl Matcher<'_> {
         // ZNCC, vectorised along the row.
         let rows = (row + r).min(h - 1) - row.saturating_sub(r) + 1;
         let inv_n = 1.0 / (rows * self.patch()) as f32;
+        #[cfg(target_arch = "x86_64")]
+        let v3 = pulp::x86::V3::try_new();
         for c in 0..ncam {
-            let sum = &s.boxsum[s.quantity(c)];
-            let sq = &s.boxsum[s.quantity(ncam + c)];
-            let miss = &s.boxsum[s.quantity(2 * ncam + c)];
+            let stats = WindowSums {
+                sum: &s.boxsum[s.quantity(c)],
+                sq: &s.boxsum[s.quantity(ncam + c)],
+                miss: &s.boxsum[s.quantity(2 * ncam + c)],
+            };
             let mean = &mut s.mean[c * w..(c + 1) * w];
             let inv_std = &mut s.inv_std[c * w..(c + 1) * w];
-            for ((((m, is), &a), &b), &k) in mean.iter_mut().zip(inv_std).zip(sum).zip(sq).zip(miss)
-            {
-                let mu = a * inv_n;
-                let var = (b * inv_n - mu * mu).max(0.0);
-                *m = mu;
-                // A window with a missing sample gets inv_std = 0 and is
-                // skipped below.
-                *is = if k < 0.5 {
-                    1.0 / (var + ZNCC_VARIANCE_EPS).sqrt()
-                } else {
-                    0.0
-                };
-            }
+            #[cfg(target_arch = "x86_64")]
+            let done = v3.map_or(0, |simd| stats.moments_v3(simd, inv_n, mean, inv_std));
+            #[cfg(not(target_arch = "x86_64"))]
+            let done = 0;
+            stats.moments(done, inv_n, mean, inv_std);
         }
         s.cost_sum.fill(0.0);
         s.pair_count.fill(0.0);
         for (k, &(a, b)) in s.pairs.iter().enumerate() {
-            let prod = &s.boxsum[s.quantity(3 * ncam + k)];
-            let (ma, mb) = (&s.mean[a * w..(a + 1) * w], &s.mean[b * w..(b + 1) * w]);
-            let (ia, ib) = (
-                &s.inv_std[a * w..(a + 1) * w],
-                &s.inv_std[b * w..(b + 1) * w],
-            );
-            for x in 0..w {
-                let norm = ia[x] * ib[x];
-                let cov = prod[x] * inv_n - ma[x] * mb[x];
-                let zncc = (cov * norm).clamp(-1.0, 1.0);
-                let used = if norm > 0.0 { 1.0 } else { 0.0 };
-                s.cost_sum[x] += used * 0.5 * (1.0 - zncc);
-                s.pair_count[x] += used;
-            }
+            let pair = PairSums {
+                prod: &s.boxsum[s.quantity(3 * ncam + k)],
+                mean: [&s.mean[a * w..(a + 1) * w], &s.mean[b * w..(b + 1) * w]],
+                inv_std: [
+                    &s.inv_std[a * w..(a + 1) * w],
+                    &s.inv_std[b * w..(b + 1) * w],
+                ],
+            };
+            #[cfg(target_arch = "x86_64")]
+            let done = v3.map_or(0, |simd| {
+                pair.add_costs_v3(simd, inv_n, &mut s.cost_sum, &mut s.pair_count)
+            });
+            #[cfg(not(target_arch = "x86_64"))]
+            let done = 0;
+            pair.add_costs(done, inv_n, &mut s.cost_sum, &mut s.pair_count);
         }
         let out = &mut out[row * w..(row + 1) * w];
         for ((dst, &sum), &count) in out.iter_mut().zip(&s.cost_sum).zip(&s.pair_count) {
@@ -747,6 +890,63 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn avx2_window_moments_and_pair_costs_equal_the_plain_loops_bit_for_bit() {
+        let Some(simd) = pulp::x86::V3::try_new() else {
+            eprintln!("no AVX2 here: only the plain loops run");
+            return;
+        };
+        let mut rng = SplitMix64::new(17);
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for w in [3, 8, 37, 2560] {
+            let mut random = |lo: f64, hi: f64| -> Vec<f32> {
+                (0..w)
+                    .map(|_| (lo + rng.next_f64() * (hi - lo)) as f32)
+                    .collect()
+            };
+            let inv_n = 1.0 / 81.0;
+            let sum = random(-81.0, 81.0);
+            // Some windows nearly flat (variance at or below 0 by rounding).
+            let mut sq = random(0.0, 300.0);
+            for (q, &a) in sq.iter_mut().zip(&sum).step_by(5) {
+                *q = a * a * inv_n;
+            }
+            let miss: Vec<f32> = (0..w)
+                .map(|x| if x % 7 == 3 { (x % 3 + 1) as f32 } else { 0.0 })
+                .collect();
+            let stats = WindowSums {
+                sum: &sum,
+                sq: &sq,
+                miss: &miss,
+            };
+            let (mut m_fast, mut i_fast) = (vec![f32::NAN; w], vec![f32::NAN; w]);
+            let (mut m_plain, mut i_plain) = (vec![f32::NAN; w], vec![f32::NAN; w]);
+            let done = stats.moments_v3(simd, inv_n, &mut m_fast, &mut i_fast);
+            assert_eq!(done, w / 8 * 8);
+            stats.moments(done, inv_n, &mut m_fast, &mut i_fast);
+            stats.moments(0, inv_n, &mut m_plain, &mut i_plain);
+            assert_eq!(bits(&m_fast), bits(&m_plain), "mean, width {w}");
+            assert_eq!(bits(&i_fast), bits(&i_plain), "1 / std, width {w}");
+            assert!(i_plain.contains(&0.0) || w < 4);
+            // Pairs, with correlations beyond +-1 (clamped) and missing windows.
+            let (mb, ib) = (random(-2.0, 2.0), random(0.0, 3.0));
+            let prod = random(-400.0, 400.0);
+            let pair = PairSums {
+                prod: &prod,
+                mean: [&m_plain, &mb],
+                inv_std: [&i_plain, &ib],
+            };
+            let (mut c_fast, mut n_fast) = (random(0.0, 3.0), random(0.0, 3.0));
+            let (mut c_plain, mut n_plain) = (c_fast.clone(), n_fast.clone());
+            let done = pair.add_costs_v3(simd, inv_n, &mut c_fast, &mut n_fast);
+            pair.add_costs(done, inv_n, &mut c_fast, &mut n_fast);
+            pair.add_costs(0, inv_n, &mut c_plain, &mut n_plain);
+            assert_eq!(bits(&c_fast), bits(&c_plain), "cost sums, width {w}");
+            assert_eq!(bits(&n_fast), bits(&n_plain), "pair counts, width {w}");
         }
     }
 

@@ -379,4 +379,45 @@ mod tests {
         }
         assert!(worst < 2e-3, "worst difference {worst} px");
     }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn avx2_directions_equal_the_plain_loop_bit_for_bit() {
+        let Some(simd) = pulp::x86::V3::try_new() else {
+            eprintln!("no AVX2 here: only the plain loop runs");
+            return;
+        };
+        let preset = omnimvs_synth::rig::preset_rig().unwrap().rig;
+        let grid = EquirectGrid::new(20, 84, 45.0).unwrap();
+        let n = grid.len();
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for (cam, camera) in preset.cameras.iter().enumerate() {
+            let p = SphereProjector::new(camera, cam + 1, &grid).unwrap();
+            // Odd start and length: a tail for the plain loop.
+            for (start, len, d) in [(0, n, 0.0), (5, n - 9, 0.3), (84, 83, 0.61)] {
+                let mut fast = [vec![0f32; len], vec![0f32; len], vec![0f32; len]];
+                let mut plain = fast.clone();
+                let [c, r, t] = &mut fast;
+                let done = p.directions_v3(simd, start, d, c, r, t);
+                assert_eq!(done, len / 8 * 8);
+                p.directions(
+                    start + done,
+                    d,
+                    &mut c[done..],
+                    &mut r[done..],
+                    &mut t[done..],
+                );
+                let [c, r, t] = &mut plain;
+                p.directions(start, d, c, r, t);
+                for k in 0..3 {
+                    assert_eq!(
+                        bits(&fast[k]),
+                        bits(&plain[k]),
+                        "cam {cam} start {start} d {d}"
+                    );
+                }
+                assert!(plain[2].contains(&-1.0), "some points outside the FOV");
+            }
+        }
+    }
 }
