@@ -20,6 +20,7 @@ use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
 use crate::params::{COST_SCALE, SweepStep};
+use crate::view::Taps;
 use crate::{CameraView, SphereProjector, StereoError};
 
 /// Cost where fewer than two cameras see the whole window.
@@ -135,6 +136,8 @@ struct Scratch {
     pos_col: Vec<f32>,
     pos_row: Vec<f32>,
     table_pos: Vec<f32>,
+    /// `[col]`: their texels and offsets in the camera's image.
+    taps: Taps,
 }
 
 impl Scratch {
@@ -166,6 +169,7 @@ impl Scratch {
             pos_col: vec![0.0; cols],
             pos_row: vec![0.0; cols],
             table_pos: vec![0.0; cols],
+            taps: Taps::new(cols),
         }
     }
 
@@ -608,13 +612,20 @@ impl Matcher<'_> {
                     &mut s.pos_row,
                     &mut s.table_pos,
                 );
+                #[cfg(target_arch = "x86_64")]
+                let done = pulp::x86::V3::try_new().map_or(0, |simd| {
+                    view.taps_v3(simd, &s.pos_col, &s.pos_row, &mut s.taps)
+                });
+                #[cfg(not(target_arch = "x86_64"))]
+                let done = 0;
+                view.taps(done, &s.pos_col, &s.pos_row, &mut s.taps);
                 let r = s.row_slice(cam, slot);
                 let (vals, miss) = (&mut s.values[r.clone()], &mut s.missing[r]);
                 let texels = vals
                     .chunks_exact_mut(lanes)
                     .zip(miss.chunks_exact_mut(lanes));
-                for ((v, m), (&c, &r)) in texels.zip(s.pos_col.iter().zip(&s.pos_row)) {
-                    (v[g], m[g]) = match view.sample(c, r) {
+                for (x, (v, m)) in texels.enumerate() {
+                    (v[g], m[g]) = match view.sample_at(&s.taps, x) {
                         Some(v) => (v, 0.0),
                         None => (0.0, 1.0),
                     };
