@@ -624,8 +624,9 @@ impl Matcher<'_> {
                 let texels = vals
                     .chunks_exact_mut(lanes)
                     .zip(miss.chunks_exact_mut(lanes));
-                for (x, (v, m)) in texels.enumerate() {
-                    (v[g], m[g]) = match view.sample_at(&s.taps, x) {
+                let taps = s.taps.index.iter().zip(&s.taps.fx).zip(&s.taps.fy);
+                for ((v, m), ((&i, &fx), &fy)) in texels.zip(taps) {
+                    (v[g], m[g]) = match view.sample_at(i, fx, fy) {
                         Some(v) => (v, 0.0),
                         None => (0.0, 1.0),
                     };

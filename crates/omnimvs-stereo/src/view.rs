@@ -167,24 +167,18 @@ impl CameraView {
     }
 
     /// The second half of [`Self::sample`]: the normalised bilinear sample
-    /// of tap `i` of `taps`, `None` where it is outside or touches an
-    /// invalid pixel.
+    /// of one tap (`index`, `fx`, `fy` as [`Self::taps`] wrote them), `None`
+    /// where it is outside or touches an invalid pixel.
     #[inline]
-    pub fn sample_at(&self, taps: &Taps, i: usize) -> Option<f32> {
-        let i0 = usize::try_from(taps.index[i]).ok()?;
-        let t00 = self.texels[i0];
+    pub fn sample_at(&self, index: i32, fx: f32, fy: f32) -> Option<f32> {
+        let i0 = usize::try_from(index).ok()?;
+        let [t00, t01] = *self.texels.get(i0..)?.first_chunk::<2>()?;
         if t00 & 1 == 0 {
             return None;
         }
-        let j = i0 + self.width;
+        let [t10, t11] = *self.texels.get(i0 + self.width..)?.first_chunk::<2>()?;
         let v = |t: u16| f32::from(t >> 1);
-        let (a, b, c, d) = (
-            v(t00),
-            v(self.texels[i0 + 1]),
-            v(self.texels[j]),
-            v(self.texels[j + 1]),
-        );
-        let (fx, fy) = (taps.fx[i], taps.fy[i]);
+        let (a, b, c, d) = (v(t00), v(t01), v(t10), v(t11));
         let top = a + fx * (b - a);
         let bottom = c + fx * (d - c);
         let gray = (top + fy * (bottom - top)) * (1.0 / TEXEL_SCALE);
@@ -298,7 +292,10 @@ mod tests {
         let mut taps = Taps::new(cols.len());
         v.taps(0, &cols, &rows, &mut taps);
         let two_step: Vec<Option<u32>> = (0..cols.len())
-            .map(|i| v.sample_at(&taps, i).map(f32::to_bits))
+            .map(|i| {
+                v.sample_at(taps.index[i], taps.fx[i], taps.fy[i])
+                    .map(f32::to_bits)
+            })
             .collect();
         assert_eq!(two_step, plain);
         #[cfg(target_arch = "x86_64")]
@@ -308,7 +305,10 @@ mod tests {
             assert_eq!(done, 200);
             v.taps(done, &cols, &rows, &mut taps);
             let vector: Vec<Option<u32>> = (0..cols.len())
-                .map(|i| v.sample_at(&taps, i).map(f32::to_bits))
+                .map(|i| {
+                    v.sample_at(taps.index[i], taps.fx[i], taps.fy[i])
+                        .map(f32::to_bits)
+                })
                 .collect();
             assert_eq!(vector, plain);
         }
