@@ -20,8 +20,7 @@ use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
 use crate::params::{COST_SCALE, SweepStep};
-use crate::view::Taps;
-use crate::{CameraView, SphereProjector, StereoError};
+use crate::{CameraView, SphereProjector, StereoError, Taps};
 
 /// Cost where fewer than two cameras see the whole window.
 pub const NO_PAIR_COST: f32 = 0.5;

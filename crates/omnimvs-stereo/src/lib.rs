@@ -42,5 +42,5 @@ pub use params::{COST_SCALE, DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, Swee
 pub use pipeline::{SphericalStereo, StageTimings, StereoResult};
 pub use projector::SphereProjector;
 pub use sgm::{AggregatedVolume, aggregate};
-pub use view::CameraView;
+pub use view::{CameraView, Taps};
 pub use wta::{IndexMap, winner_take_all};
