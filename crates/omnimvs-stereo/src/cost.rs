@@ -20,7 +20,7 @@ use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
 use crate::params::{COST_SCALE, SweepStep};
-use crate::{CameraView, SphereProjector, StereoError};
+use crate::{CameraView, SphereProjector, StereoError, Taps};
 
 /// Cost where fewer than two cameras see the whole window.
 pub const NO_PAIR_COST: f32 = 0.5;
@@ -101,9 +101,16 @@ pub struct Matcher<'a> {
     pub radius: usize,
 }
 
-/// Per-thread buffers of one sphere's computation.
+/// Per-thread buffers of a few spheres' computation (`lanes` of them, side
+/// by side): every per-column array holds, for each grid column, one value
+/// per sphere (`[col][lane]`, so a row is `width = cols * lanes` floats).
+/// All the arithmetic is element by element along such rows, except the
+/// window sums along a row, which run the spheres' chains as one vector.
 struct Scratch {
     ncam: usize,
+    /// Spheres side by side.
+    lanes: usize,
+    /// Floats per row: grid columns times `lanes`.
     width: usize,
     /// Rows in the ring of samples: the window's `patch` and the one that
     /// is leaving it, so that a new row can be warped before the old one is
@@ -124,14 +131,17 @@ struct Scratch {
     /// `[col]`: sum of pair costs and number of pairs.
     cost_sum: Vec<f32>,
     pair_count: Vec<f32>,
-    /// `[col]`: fisheye positions of the row being warped.
+    /// `[col]`: fisheye positions of the row being warped (one sphere).
     pos_col: Vec<f32>,
     pos_row: Vec<f32>,
     table_pos: Vec<f32>,
+    /// `[col]`: their texels and offsets in the camera's image.
+    taps: Taps,
 }
 
 impl Scratch {
-    fn new(ncam: usize, patch: usize, width: usize) -> Self {
+    fn new(ncam: usize, patch: usize, cols: usize, lanes: usize) -> Self {
+        let width = cols * lanes;
         let mut pairs = Vec::new();
         for a in 0..ncam {
             for b in a + 1..ncam {
@@ -143,6 +153,7 @@ impl Scratch {
         let q = 3 * ncam + pairs.len();
         Self {
             ncam,
+            lanes,
             width,
             pairs,
             slots: patch + 1,
@@ -154,9 +165,10 @@ impl Scratch {
             inv_std: vec![0.0; ncam * width],
             cost_sum: vec![0.0; width],
             pair_count: vec![0.0; width],
-            pos_col: vec![0.0; width],
-            pos_row: vec![0.0; width],
-            table_pos: vec![0.0; width],
+            pos_col: vec![0.0; cols],
+            pos_row: vec![0.0; cols],
+            table_pos: vec![0.0; cols],
+            taps: Taps::new(cols),
         }
     }
 
@@ -255,26 +267,36 @@ impl Scratch {
 const LANES: usize = 6;
 
 /// Window sums along one grid row for every quantity: `boxsum[j][x]` is the
-/// sum of `colsum[j][x - r ..= x + r]`, columns taken round the ring.
-/// `colsum` and `boxsum` are `[quantity][col]` with rows of `w`, `w > 2 r + 1`.
+/// sum of `colsum[j][x - r ..= x + r]`, columns taken round the ring, for
+/// each of the `L` spheres side by side (`[quantity][col][lane]`, rows of
+/// `w * L` floats, `w > 2 r + 1`).
 ///
-/// Each quantity is one running sum from column 0, in exactly the order of
-/// [`row_window_sums_reference`] (so the results are bit-identical), but the
-/// columns entering and leaving the window are read from contiguous slices:
-/// the row splits into three runs where neither index wraps.
+/// Each quantity of each sphere is one running sum from column 0, in exactly
+/// the order of [`row_window_sums_reference`] (so the results are
+/// bit-identical); the `L` spheres' chains advance as one vector and
+/// [`LANES`] quantities' vectors side by side. The columns entering and
+/// leaving the window are read from contiguous slices: the row splits into
+/// three runs where neither index wraps.
 #[inline(always)]
-fn row_window_sums(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
-    debug_assert!(w > 2 * r + 1 && colsum.len() == boxsum.len() && colsum.len().is_multiple_of(w));
+fn row_window_sums<const L: usize>(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
+    let span = w * L;
+    debug_assert!(
+        w > 2 * r + 1 && colsum.len() == boxsum.len() && colsum.len().is_multiple_of(span)
+    );
     // (first column, first entering column, first leaving column, length).
     let runs = [
         (0, r + 1, w - r, r),
         (r, 2 * r + 1, 0, w - 2 * r - 1),
         (w - r - 1, 0, w - 2 * r - 1, r + 1),
     ];
-    let mut rows = colsum.chunks_exact(w).zip(boxsum.chunks_exact_mut(w));
+    let mut rows = colsum.chunks_exact(span).map(|c| c.as_chunks::<L>().0).zip(
+        boxsum
+            .chunks_exact_mut(span)
+            .map(|b| b.as_chunks_mut::<L>().0),
+    );
     loop {
-        let mut c: [&[f32]; LANES] = [&[]; LANES];
-        let mut b: [&mut [f32]; LANES] = Default::default();
+        let mut c: [&[[f32; L]]; LANES] = [&[]; LANES];
+        let mut b: [&mut [[f32; L]]; LANES] = Default::default();
         let mut lanes = 0;
         for (cj, bj) in rows.by_ref().take(LANES) {
             c[lanes] = cj;
@@ -284,23 +306,104 @@ fn row_window_sums(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
         if lanes == 0 {
             break;
         }
-        let mut acc = [0f32; LANES];
+        let mut acc = [[0f32; L]; LANES];
         for k in 0..2 * r + 1 {
             let x = (k + w - r) % w;
             for l in 0..lanes {
-                acc[l] += c[l][x];
+                for g in 0..L {
+                    acc[l][g] += c[l][x][g];
+                }
             }
         }
         for &(x0, enter, leave, len) in &runs {
             if lanes == LANES {
                 // The common case: all lanes' chains in one loop body.
-                let e: [&[f32]; LANES] = std::array::from_fn(|l| &c[l][enter..enter + len]);
-                let v: [&[f32]; LANES] = std::array::from_fn(|l| &c[l][leave..leave + len]);
+                let e: [&[[f32; L]]; LANES] = std::array::from_fn(|l| &c[l][enter..enter + len]);
+                let v: [&[[f32; L]]; LANES] = std::array::from_fn(|l| &c[l][leave..leave + len]);
                 let o = b.each_mut().map(|bl| &mut bl[x0..x0 + len]);
                 for i in 0..len {
                     for l in 0..LANES {
                         o[l][i] = acc[l];
-                        acc[l] += e[l][i] - v[l][i];
+                        for g in 0..L {
+                            acc[l][g] += e[l][i][g] - v[l][i][g];
+                        }
+                    }
+                }
+                continue;
+            }
+            for l in 0..lanes {
+                let (bl, cl) = (&mut b[l][x0..x0 + len], c[l]);
+                let (e, v) = (&cl[enter..enter + len], &cl[leave..leave + len]);
+                let mut a = acc[l];
+                for ((o, ein), out) in bl.iter_mut().zip(e).zip(v) {
+                    *o = a;
+                    for g in 0..L {
+                        a[g] += ein[g] - out[g];
+                    }
+                }
+                acc[l] = a;
+            }
+        }
+    }
+}
+
+/// [`row_window_sums`] for four spheres side by side with SSE (part of every
+/// x86-64): each quantity's four chains are one `__m128`, added with the same
+/// operations in the same order (the compiler keeps the generic version's
+/// `[f32; 4]` chains in memory, lane by lane).
+#[cfg(target_arch = "x86_64")]
+fn row_window_sums_x4(
+    sse: pulp::core_arch::x86::Sse,
+    colsum: &[f32],
+    boxsum: &mut [f32],
+    w: usize,
+    r: usize,
+) {
+    use pulp::bytemuck::cast;
+    use std::arch::x86_64::__m128;
+    let span = w * 4;
+    debug_assert!(
+        w > 2 * r + 1 && colsum.len() == boxsum.len() && colsum.len().is_multiple_of(span)
+    );
+    let runs = [
+        (0, r + 1, w - r, r),
+        (r, 2 * r + 1, 0, w - 2 * r - 1),
+        (w - r - 1, 0, w - 2 * r - 1, r + 1),
+    ];
+    let mut rows = colsum.chunks_exact(span).map(|c| c.as_chunks::<4>().0).zip(
+        boxsum
+            .chunks_exact_mut(span)
+            .map(|b| b.as_chunks_mut::<4>().0),
+    );
+    loop {
+        let mut c: [&[[f32; 4]]; LANES] = [&[]; LANES];
+        let mut b: [&mut [[f32; 4]]; LANES] = Default::default();
+        let mut lanes = 0;
+        for (cj, bj) in rows.by_ref().take(LANES) {
+            c[lanes] = cj;
+            b[lanes] = bj;
+            lanes += 1;
+        }
+        if lanes == 0 {
+            break;
+        }
+        let mut acc: [__m128; LANES] = [sse._mm_setzero_ps(); LANES];
+        for k in 0..2 * r + 1 {
+            let x = (k + w - r) % w;
+            for l in 0..lanes {
+                acc[l] = sse._mm_add_ps(acc[l], cast(c[l][x]));
+            }
+        }
+        for &(x0, enter, leave, len) in &runs {
+            if lanes == LANES {
+                let e: [&[[f32; 4]]; LANES] = std::array::from_fn(|l| &c[l][enter..enter + len]);
+                let v: [&[[f32; 4]]; LANES] = std::array::from_fn(|l| &c[l][leave..leave + len]);
+                let o = b.each_mut().map(|bl| &mut bl[x0..x0 + len]);
+                for i in 0..len {
+                    for l in 0..LANES {
+                        o[l][i] = cast(acc[l]);
+                        acc[l] =
+                            sse._mm_add_ps(acc[l], sse._mm_sub_ps(cast(e[l][i]), cast(v[l][i])));
                     }
                 }
                 continue;
@@ -310,8 +413,8 @@ fn row_window_sums(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
                 let (e, v) = (&cl[enter..enter + len], &cl[leave..leave + len]);
                 let mut a = acc[l];
                 for ((o, &ein), &out) in bl.iter_mut().zip(e).zip(v) {
-                    *o = a;
-                    a += ein - out;
+                    *o = cast(a);
+                    a = sse._mm_add_ps(a, sse._mm_sub_ps(cast(ein), cast(out)));
                 }
                 acc[l] = a;
             }
@@ -319,24 +422,171 @@ fn row_window_sums(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
     }
 }
 
-/// [`row_window_sums`] written plainly (the reference of its tests):
-/// every quantity's running sum, indices taken modulo the width.
+/// [`row_window_sums`] written plainly (the reference of its tests): every
+/// quantity's and sphere's running sum, one at a time, indices taken modulo
+/// the width; `lanes` spheres side by side.
 #[cfg(test)]
-fn row_window_sums_reference(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize) {
-    let mut window = vec![0f32; colsum.len() / w];
-    for k in 0..2 * r + 1 {
-        let x = (k + w - r) % w;
-        for (j, acc) in window.iter_mut().enumerate() {
-            *acc += colsum[j * w + x];
+fn row_window_sums_reference(colsum: &[f32], boxsum: &mut [f32], w: usize, r: usize, lanes: usize) {
+    let at = |j: usize, x: usize, g: usize| (j * w + x) * lanes + g;
+    for j in 0..colsum.len() / (w * lanes) {
+        for g in 0..lanes {
+            let mut acc = 0f32;
+            for k in 0..2 * r + 1 {
+                acc += colsum[at(j, (k + w - r) % w, g)];
+            }
+            for x in 0..w {
+                let enter = (x + r + 1) % w;
+                let leave = (x + w - r) % w;
+                boxsum[at(j, x, g)] = acc;
+                acc += colsum[at(j, enter, g)] - colsum[at(j, leave, g)];
+            }
         }
     }
-    for x in 0..w {
-        let enter = (x + r + 1) % w;
-        let leave = (x + w - r) % w;
-        for (j, acc) in window.iter_mut().enumerate() {
-            boxsum[j * w + x] = *acc;
-            *acc += colsum[j * w + enter] - colsum[j * w + leave];
+}
+
+/// One camera's window sums along a row: of its samples, their squares and
+/// its missing samples.
+struct WindowSums<'a> {
+    sum: &'a [f32],
+    sq: &'a [f32],
+    miss: &'a [f32],
+}
+
+impl WindowSums<'_> {
+    /// Window mean and `1 / std` (0 where a sample is missing) from column
+    /// `start` on, `inv_n` being 1 / the window's sample count.
+    #[inline(always)]
+    fn moments(&self, start: usize, inv_n: f32, mean: &mut [f32], inv_std: &mut [f32]) {
+        let (sum, sq, miss) = (&self.sum[start..], &self.sq[start..], &self.miss[start..]);
+        let (mean, inv_std) = (&mut mean[start..], &mut inv_std[start..]);
+        for ((((m, is), &a), &b), &k) in mean.iter_mut().zip(inv_std).zip(sum).zip(sq).zip(miss) {
+            let mu = a * inv_n;
+            let var = (b * inv_n - mu * mu).max(0.0);
+            *m = mu;
+            // A window with a missing sample gets inv_std = 0 and is
+            // skipped by the pairs.
+            *is = if k < 0.5 {
+                1.0 / (var + ZNCC_VARIANCE_EPS).sqrt()
+            } else {
+                0.0
+            };
         }
+    }
+
+    /// [`Self::moments`] eight columns at a time with AVX2, the same
+    /// operations in the same order; returns how many leading columns it did.
+    #[cfg(target_arch = "x86_64")]
+    fn moments_v3(
+        &self,
+        simd: pulp::x86::V3,
+        inv_n: f32,
+        mean: &mut [f32],
+        inv_std: &mut [f32],
+    ) -> usize {
+        use pulp::{as_arrays, as_arrays_mut, bytemuck::cast};
+        simd.vectorize(
+            #[inline(always)]
+            || {
+                let (sum, _) = as_arrays::<8, f32>(self.sum);
+                let (sq, _) = as_arrays::<8, f32>(self.sq);
+                let (miss, _) = as_arrays::<8, f32>(self.miss);
+                let (mean, _) = as_arrays_mut::<8, f32>(mean);
+                let (inv_std, _) = as_arrays_mut::<8, f32>(inv_std);
+                let n = sum
+                    .len()
+                    .min(sq.len())
+                    .min(miss.len())
+                    .min(mean.len())
+                    .min(inv_std.len());
+                let inv_n = simd.splat_f32x8(inv_n);
+                let zero = simd.splat_f32x8(0.0);
+                let one = simd.splat_f32x8(1.0);
+                let half = simd.splat_f32x8(0.5);
+                let eps = simd.splat_f32x8(ZNCC_VARIANCE_EPS);
+                for i in 0..n {
+                    let mu = simd.mul_f32x8(cast(sum[i]), inv_n);
+                    let b = simd.mul_f32x8(cast(sq[i]), inv_n);
+                    let var = simd.max_f32x8(simd.sub_f32x8(b, simd.mul_f32x8(mu, mu)), zero);
+                    mean[i] = cast(mu);
+                    let is = simd.div_f32x8(one, simd.sqrt_f32x8(simd.add_f32x8(var, eps)));
+                    let complete = simd.cmp_lt_f32x8(cast(miss[i]), half);
+                    inv_std[i] = cast(simd.select_f32x8(complete, is, zero));
+                }
+                n * 8
+            },
+        )
+    }
+}
+
+/// A pair of cameras' window sums of products, means and `1 / std`s along a row.
+struct PairSums<'a> {
+    prod: &'a [f32],
+    mean: [&'a [f32]; 2],
+    inv_std: [&'a [f32]; 2],
+}
+
+impl PairSums<'_> {
+    /// Adds the pair's cost `(1 - zncc) / 2` and 1 to `cost_sum` and
+    /// `pair_count` from column `start` on, where both windows are complete.
+    #[inline(always)]
+    fn add_costs(&self, start: usize, inv_n: f32, cost_sum: &mut [f32], pair_count: &mut [f32]) {
+        let ([ma, mb], [ia, ib]) = (self.mean, self.inv_std);
+        for x in start..cost_sum.len() {
+            let norm = ia[x] * ib[x];
+            let cov = self.prod[x] * inv_n - ma[x] * mb[x];
+            let zncc = (cov * norm).clamp(-1.0, 1.0);
+            let used = if norm > 0.0 { 1.0 } else { 0.0 };
+            cost_sum[x] += used * 0.5 * (1.0 - zncc);
+            pair_count[x] += used;
+        }
+    }
+
+    /// [`Self::add_costs`] eight columns at a time with AVX2, the same
+    /// operations in the same order; returns how many leading columns it did.
+    #[cfg(target_arch = "x86_64")]
+    fn add_costs_v3(
+        &self,
+        simd: pulp::x86::V3,
+        inv_n: f32,
+        cost_sum: &mut [f32],
+        pair_count: &mut [f32],
+    ) -> usize {
+        use pulp::{as_arrays, as_arrays_mut, bytemuck::cast};
+        simd.vectorize(
+            #[inline(always)]
+            || {
+                let (prod, _) = as_arrays::<8, f32>(self.prod);
+                let (ma, _) = as_arrays::<8, f32>(self.mean[0]);
+                let (mb, _) = as_arrays::<8, f32>(self.mean[1]);
+                let (ia, _) = as_arrays::<8, f32>(self.inv_std[0]);
+                let (ib, _) = as_arrays::<8, f32>(self.inv_std[1]);
+                let (cost_sum, _) = as_arrays_mut::<8, f32>(cost_sum);
+                let (pair_count, _) = as_arrays_mut::<8, f32>(pair_count);
+                let n = cost_sum.len().min(pair_count.len()).min(prod.len());
+                let n = n.min(ma.len()).min(mb.len()).min(ia.len()).min(ib.len());
+                let inv_n = simd.splat_f32x8(inv_n);
+                let zero = simd.splat_f32x8(0.0);
+                let one = simd.splat_f32x8(1.0);
+                let minus_one = simd.splat_f32x8(-1.0);
+                let half = simd.splat_f32x8(0.5);
+                for i in 0..n {
+                    let norm = simd.mul_f32x8(cast(ia[i]), cast(ib[i]));
+                    let cov = simd.sub_f32x8(
+                        simd.mul_f32x8(cast(prod[i]), inv_n),
+                        simd.mul_f32x8(cast(ma[i]), cast(mb[i])),
+                    );
+                    // clamp(-1, 1) as `f32::clamp` does it (NaN stays NaN).
+                    let z = simd.mul_f32x8(cov, norm);
+                    let z = simd.select_f32x8(simd.cmp_lt_f32x8(z, minus_one), minus_one, z);
+                    let z = simd.select_f32x8(simd.cmp_gt_f32x8(z, one), one, z);
+                    let used = simd.select_f32x8(simd.cmp_gt_f32x8(norm, zero), one, zero);
+                    let cost = simd.mul_f32x8(simd.mul_f32x8(used, half), simd.sub_f32x8(one, z));
+                    cost_sum[i] = cast(simd.add_f32x8(cast(cost_sum[i]), cost));
+                    pair_count[i] = cast(simd.add_f32x8(cast(pair_count[i]), used));
+                }
+                n * 8
+            },
+        )
     }
 }
 
@@ -345,76 +595,105 @@ impl Matcher<'_> {
         2 * self.radius + 1
     }
 
-    /// Samples grid row `row` of camera `cam` on the sphere `inv_depth`
-    /// into the ring slot of that row.
-    fn warp_row(&self, s: &mut Scratch, cam: usize, row: usize, inv_depth: f32) {
+    /// Samples grid row `row` of every camera on the spheres `inv_depths`
+    /// (one per lane of `s`; lanes beyond them are left as they are) into
+    /// the ring slot of that row.
+    fn warp_rows(&self, s: &mut Scratch, row: usize, inv_depths: &[f32]) {
         let w = self.grid.width;
+        let lanes = s.lanes;
         let slot = row % s.slots;
-        let view = &self.views[cam];
-        self.projectors[cam].project_run(
-            row * w,
-            inv_depth,
-            &mut s.pos_col,
-            &mut s.pos_row,
-            &mut s.table_pos,
-        );
-        let r = s.row_slice(cam, slot);
-        let (vals, miss) = (&mut s.values[r.clone()], &mut s.missing[r]);
-        for (((v, m), &c), &r) in vals.iter_mut().zip(miss).zip(&s.pos_col).zip(&s.pos_row) {
-            (*v, *m) = match view.sample(c, r) {
-                Some(v) => (v, 0.0),
-                None => (0.0, 1.0),
-            };
+        for (cam, view) in self.views.iter().enumerate() {
+            for (g, &d) in inv_depths.iter().enumerate().take(lanes) {
+                self.projectors[cam].project_run(
+                    row * w,
+                    d,
+                    &mut s.pos_col,
+                    &mut s.pos_row,
+                    &mut s.table_pos,
+                );
+                #[cfg(target_arch = "x86_64")]
+                let done = pulp::x86::V3::try_new().map_or(0, |simd| {
+                    view.taps_v3(simd, &s.pos_col, &s.pos_row, &mut s.taps)
+                });
+                #[cfg(not(target_arch = "x86_64"))]
+                let done = 0;
+                view.taps(done, &s.pos_col, &s.pos_row, &mut s.taps);
+                let r = s.row_slice(cam, slot);
+                let (vals, miss) = (&mut s.values[r.clone()], &mut s.missing[r]);
+                let texels = vals
+                    .chunks_exact_mut(lanes)
+                    .zip(miss.chunks_exact_mut(lanes));
+                let taps = s.taps.index.iter().zip(&s.taps.fx).zip(&s.taps.fy);
+                for ((v, m), ((&i, &fx), &fy)) in texels.zip(taps) {
+                    (v[g], m[g]) = match view.sample_at(i, fx, fy) {
+                        Some(v) => (v, 0.0),
+                        None => (0.0, 1.0),
+                    };
+                }
+            }
         }
     }
 
     /// The costs of one output row from the column sums, wrapping around in
     /// longitude.
+    ///
+    /// `out` is `[row][col][lane]`: the costs of all of `s`'s lanes.
     fn cost_row(&self, s: &mut Scratch, row: usize, out: &mut [u16]) {
-        let (w, h, r) = (self.grid.width, self.grid.height, self.radius);
+        let (gw, h, r) = (self.grid.width, self.grid.height, self.radius);
         let ncam = s.ncam;
-        row_window_sums(&s.colsum, &mut s.boxsum, w, r);
+        if s.lanes == INTERLEAVE {
+            #[cfg(target_arch = "x86_64")]
+            match pulp::core_arch::x86::Sse::try_new() {
+                Some(sse) => row_window_sums_x4(sse, &s.colsum, &mut s.boxsum, gw, r),
+                None => row_window_sums::<INTERLEAVE>(&s.colsum, &mut s.boxsum, gw, r),
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            row_window_sums::<INTERLEAVE>(&s.colsum, &mut s.boxsum, gw, r);
+        } else {
+            debug_assert_eq!(s.lanes, 1);
+            row_window_sums::<1>(&s.colsum, &mut s.boxsum, gw, r);
+        }
+        // From here on element by element along the `[col][lane]` rows.
+        let w = s.width;
         // ZNCC, vectorised along the row.
         let rows = (row + r).min(h - 1) - row.saturating_sub(r) + 1;
         let inv_n = 1.0 / (rows * self.patch()) as f32;
+        #[cfg(target_arch = "x86_64")]
+        let v3 = pulp::x86::V3::try_new();
         for c in 0..ncam {
-            let sum = &s.boxsum[s.quantity(c)];
-            let sq = &s.boxsum[s.quantity(ncam + c)];
-            let miss = &s.boxsum[s.quantity(2 * ncam + c)];
+            let stats = WindowSums {
+                sum: &s.boxsum[s.quantity(c)],
+                sq: &s.boxsum[s.quantity(ncam + c)],
+                miss: &s.boxsum[s.quantity(2 * ncam + c)],
+            };
             let mean = &mut s.mean[c * w..(c + 1) * w];
             let inv_std = &mut s.inv_std[c * w..(c + 1) * w];
-            for ((((m, is), &a), &b), &k) in mean.iter_mut().zip(inv_std).zip(sum).zip(sq).zip(miss)
-            {
-                let mu = a * inv_n;
-                let var = (b * inv_n - mu * mu).max(0.0);
-                *m = mu;
-                // A window with a missing sample gets inv_std = 0 and is
-                // skipped below.
-                *is = if k < 0.5 {
-                    1.0 / (var + ZNCC_VARIANCE_EPS).sqrt()
-                } else {
-                    0.0
-                };
-            }
+            #[cfg(target_arch = "x86_64")]
+            let done = v3.map_or(0, |simd| stats.moments_v3(simd, inv_n, mean, inv_std));
+            #[cfg(not(target_arch = "x86_64"))]
+            let done = 0;
+            stats.moments(done, inv_n, mean, inv_std);
         }
         s.cost_sum.fill(0.0);
         s.pair_count.fill(0.0);
         for (k, &(a, b)) in s.pairs.iter().enumerate() {
-            let prod = &s.boxsum[s.quantity(3 * ncam + k)];
-            let (ma, mb) = (&s.mean[a * w..(a + 1) * w], &s.mean[b * w..(b + 1) * w]);
-            let (ia, ib) = (
-                &s.inv_std[a * w..(a + 1) * w],
-                &s.inv_std[b * w..(b + 1) * w],
-            );
-            for x in 0..w {
-                let norm = ia[x] * ib[x];
-                let cov = prod[x] * inv_n - ma[x] * mb[x];
-                let zncc = (cov * norm).clamp(-1.0, 1.0);
-                let used = if norm > 0.0 { 1.0 } else { 0.0 };
-                s.cost_sum[x] += used * 0.5 * (1.0 - zncc);
-                s.pair_count[x] += used;
-            }
+            let pair = PairSums {
+                prod: &s.boxsum[s.quantity(3 * ncam + k)],
+                mean: [&s.mean[a * w..(a + 1) * w], &s.mean[b * w..(b + 1) * w]],
+                inv_std: [
+                    &s.inv_std[a * w..(a + 1) * w],
+                    &s.inv_std[b * w..(b + 1) * w],
+                ],
+            };
+            #[cfg(target_arch = "x86_64")]
+            let done = v3.map_or(0, |simd| {
+                pair.add_costs_v3(simd, inv_n, &mut s.cost_sum, &mut s.pair_count)
+            });
+            #[cfg(not(target_arch = "x86_64"))]
+            let done = 0;
+            pair.add_costs(done, inv_n, &mut s.cost_sum, &mut s.pair_count);
         }
+        let out = &mut out[row * w..(row + 1) * w];
         for ((dst, &sum), &count) in out.iter_mut().zip(&s.cost_sum).zip(&s.pair_count) {
             let cost = if count > 0.0 {
                 sum / count
@@ -425,39 +704,34 @@ impl Matcher<'_> {
         }
     }
 
-    /// The `[row][col]` cost slices of a few spheres (`inv_depths`, 1/m)
-    /// into consecutive planes of `out`; returns the time spent warping and
-    /// matching. The spheres are interleaved row by row: for one grid row,
-    /// neighbouring spheres sample nearly the same fisheye pixels, so the
-    /// images stay in cache.
+    /// The costs of a few spheres (`inv_depths`, 1/m, at most `s.lanes`)
+    /// into `out`, `[row][col][lane]` (so that moving them into the volume
+    /// reads a few neighbouring values per pixel); returns the time
+    /// spent warping and matching. The spheres are computed side by side, as
+    /// the lanes of `s`: for one grid row, neighbouring spheres sample nearly
+    /// the same fisheye pixels, so the images stay in cache, and their window
+    /// sums along the row run as one vector.
     fn sphere_group(
         &self,
-        scratch: &mut [Scratch],
+        s: &mut Scratch,
         inv_depths: &[f32],
         out: &mut [u16],
     ) -> (Duration, Duration) {
-        let (w, h, r) = (self.grid.width, self.grid.height, self.radius);
-        let ncam = self.views.len();
-        let plane = w * h;
+        let (h, r) = (self.grid.height, self.radius);
+        let spheres = inv_depths.len().min(s.lanes);
         let (mut warp, mut cost) = (Duration::ZERO, Duration::ZERO);
-        let scratch = &mut scratch[..inv_depths.len()];
-        for s in scratch.iter_mut() {
-            s.colsum.fill(0.0);
+        s.colsum.fill(0.0);
+        // Lanes without a sphere of their own (a short last group) stay
+        // empty: every sample missing, so no pair (their costs are not read).
+        if spheres < s.lanes {
+            s.values.fill(0.0);
+            s.missing.fill(1.0);
         }
-        let warp_rows = |scratch: &mut [Scratch], row: usize| {
-            for cam in 0..ncam {
-                for (s, &d) in scratch.iter_mut().zip(inv_depths) {
-                    self.warp_row(s, cam, row, d);
-                }
-            }
-        };
         for row in 0..r.min(h) {
             let t0 = Instant::now();
-            warp_rows(scratch, row);
+            self.warp_rows(s, row, &inv_depths[..spheres]);
             let t1 = Instant::now();
-            for s in scratch.iter_mut() {
-                s.accumulate(row % s.slots, 1.0);
-            }
+            s.accumulate(row % s.slots, 1.0);
             warp += t1 - t0;
             cost += t1.elapsed();
         }
@@ -467,15 +741,12 @@ impl Matcher<'_> {
             let t0 = Instant::now();
             let add = row + r;
             if add < h {
-                warp_rows(scratch, add);
+                self.warp_rows(s, add, &inv_depths[..spheres]);
             }
             let t1 = Instant::now();
-            for (g, s) in scratch.iter_mut().enumerate() {
-                let leave = (row > r).then(|| (row - r - 1) % s.slots);
-                s.update(leave, (add < h).then(|| add % s.slots));
-                let dst = g * plane + row * w;
-                self.cost_row(s, row, &mut out[dst..dst + w]);
-            }
+            let leave = (row > r).then(|| (row - r - 1) % s.slots);
+            s.update(leave, (add < h).then(|| add % s.slots));
+            self.cost_row(s, row, out);
             warp += t1 - t0;
             cost += t1.elapsed();
         }
@@ -517,17 +788,15 @@ impl Matcher<'_> {
         let start = Instant::now();
         let mut transpose = Duration::ZERO;
         let group_len = SPHERE_GROUP.min(computed.len());
-        let mut slices = vec![0u16; group_len * plane];
+        // `[chunk of INTERLEAVE spheres][row][col][sphere in the chunk]`.
+        let chunk = INTERLEAVE * plane;
+        let mut slices = vec![0u16; group_len.div_ceil(INTERLEAVE) * chunk];
         for group in computed.chunks(group_len) {
-            slices[..group.len() * plane]
-                .par_chunks_mut(INTERLEAVE * plane)
+            slices[..group.len().div_ceil(INTERLEAVE) * chunk]
+                .par_chunks_mut(chunk)
                 .zip(group.par_chunks(INTERLEAVE))
                 .for_each_init(
-                    || {
-                        (0..INTERLEAVE)
-                            .map(|_| Scratch::new(ncam, self.patch(), w))
-                            .collect::<Vec<_>>()
-                    },
+                    || Scratch::new(ncam, self.patch(), w, INTERLEAVE),
                     |scratch, (out, ns)| {
                         let d: Vec<f32> = ns
                             .iter()
@@ -545,8 +814,11 @@ impl Matcher<'_> {
                 .for_each(|(row, dst)| {
                     for (x, px) in dst.chunks_exact_mut(nd).enumerate() {
                         let i = row * w + x;
-                        for (g, &n) in group.iter().enumerate() {
-                            px[n] = slices[g * plane + i];
+                        for (k, ns) in group.chunks(INTERLEAVE).enumerate() {
+                            let src = &slices[k * chunk + i * INTERLEAVE..][..INTERLEAVE];
+                            for (&n, &c) in ns.iter().zip(src) {
+                                px[n] = c;
+                            }
                         }
                     }
                 });
@@ -596,23 +868,96 @@ mod tests {
             (64, 2, 7),
             (640, 4, 18),
         ] {
-            let colsum: Vec<f32> = (0..q * w)
-                .map(|_| (rng.next_f64() * 200.0 - 100.0) as f32)
-                .collect();
-            let (mut fast, mut plain) = (vec![f32::NAN; q * w], vec![f32::NAN; q * w]);
-            row_window_sums(&colsum, &mut fast, w, r);
-            row_window_sums_reference(&colsum, &mut plain, w, r);
-            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&fast), bits(&plain), "w {w} r {r} q {q}");
-            // And they are window sums round the ring (to rounding).
-            for j in 0..q {
-                for x in 0..w {
-                    let exact: f64 = (0..2 * r + 1)
-                        .map(|k| f64::from(colsum[j * w + (x + w + k - r) % w]))
-                        .sum();
-                    assert!((f64::from(fast[j * w + x]) - exact).abs() < 1e-2);
+            for lanes in [1, INTERLEAVE] {
+                let n = q * w * lanes;
+                let colsum: Vec<f32> = (0..n)
+                    .map(|_| (rng.next_f64() * 200.0 - 100.0) as f32)
+                    .collect();
+                let (mut fast, mut plain) = (vec![f32::NAN; n], vec![f32::NAN; n]);
+                if lanes == 1 {
+                    row_window_sums::<1>(&colsum, &mut fast, w, r);
+                } else {
+                    row_window_sums::<INTERLEAVE>(&colsum, &mut fast, w, r);
+                }
+                row_window_sums_reference(&colsum, &mut plain, w, r, lanes);
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fast), bits(&plain), "w {w} r {r} q {q} lanes {lanes}");
+                #[cfg(target_arch = "x86_64")]
+                if let (4, Some(simd)) = (lanes, pulp::core_arch::x86::Sse::try_new()) {
+                    let mut sse = vec![f32::NAN; n];
+                    row_window_sums_x4(simd, &colsum, &mut sse, w, r);
+                    assert_eq!(bits(&sse), bits(&plain), "SSE: w {w} r {r} q {q}");
+                }
+                // And they are window sums round the ring (to rounding).
+                let at = |j: usize, x: usize, g: usize| (j * w + x) * lanes + g;
+                for j in 0..q {
+                    for x in 0..w {
+                        for g in 0..lanes {
+                            let exact: f64 = (0..2 * r + 1)
+                                .map(|k| f64::from(colsum[at(j, (x + w + k - r) % w, g)]))
+                                .sum();
+                            assert!((f64::from(fast[at(j, x, g)]) - exact).abs() < 1e-2);
+                        }
+                    }
                 }
             }
+        }
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn avx2_window_moments_and_pair_costs_equal_the_plain_loops_bit_for_bit() {
+        let Some(simd) = pulp::x86::V3::try_new() else {
+            eprintln!("no AVX2 here: only the plain loops run");
+            return;
+        };
+        let mut rng = SplitMix64::new(17);
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for w in [3, 8, 37, 2560] {
+            let mut random = |lo: f64, hi: f64| -> Vec<f32> {
+                (0..w)
+                    .map(|_| (lo + rng.next_f64() * (hi - lo)) as f32)
+                    .collect()
+            };
+            let inv_n = 1.0 / 81.0;
+            let sum = random(-81.0, 81.0);
+            // Some windows nearly flat (variance at or below 0 by rounding).
+            let mut sq = random(0.0, 300.0);
+            for (q, &a) in sq.iter_mut().zip(&sum).step_by(5) {
+                *q = a * a * inv_n;
+            }
+            let miss: Vec<f32> = (0..w)
+                .map(|x| if x % 7 == 3 { (x % 3 + 1) as f32 } else { 0.0 })
+                .collect();
+            let stats = WindowSums {
+                sum: &sum,
+                sq: &sq,
+                miss: &miss,
+            };
+            let (mut m_fast, mut i_fast) = (vec![f32::NAN; w], vec![f32::NAN; w]);
+            let (mut m_plain, mut i_plain) = (vec![f32::NAN; w], vec![f32::NAN; w]);
+            let done = stats.moments_v3(simd, inv_n, &mut m_fast, &mut i_fast);
+            assert_eq!(done, w / 8 * 8);
+            stats.moments(done, inv_n, &mut m_fast, &mut i_fast);
+            stats.moments(0, inv_n, &mut m_plain, &mut i_plain);
+            assert_eq!(bits(&m_fast), bits(&m_plain), "mean, width {w}");
+            assert_eq!(bits(&i_fast), bits(&i_plain), "1 / std, width {w}");
+            assert!(i_plain.contains(&0.0) || w < 4);
+            // Pairs, with correlations beyond +-1 (clamped) and missing windows.
+            let (mb, ib) = (random(-2.0, 2.0), random(0.0, 3.0));
+            let prod = random(-400.0, 400.0);
+            let pair = PairSums {
+                prod: &prod,
+                mean: [&m_plain, &mb],
+                inv_std: [&i_plain, &ib],
+            };
+            let (mut c_fast, mut n_fast) = (random(0.0, 3.0), random(0.0, 3.0));
+            let (mut c_plain, mut n_plain) = (c_fast.clone(), n_fast.clone());
+            let done = pair.add_costs_v3(simd, inv_n, &mut c_fast, &mut n_fast);
+            pair.add_costs(done, inv_n, &mut c_fast, &mut n_fast);
+            pair.add_costs(0, inv_n, &mut c_plain, &mut n_plain);
+            assert_eq!(bits(&c_fast), bits(&c_plain), "cost sums, width {w}");
+            assert_eq!(bits(&n_fast), bits(&n_plain), "pair counts, width {w}");
         }
     }
 
@@ -621,7 +966,7 @@ mod tests {
         let mut rng = SplitMix64::new(16);
         for ncam in [2, 3, 4] {
             let (patch, w) = (3, 37);
-            let mut fused = Scratch::new(ncam, patch, w);
+            let mut fused = Scratch::new(ncam, patch, w, INTERLEAVE);
             for (v, m) in fused.values.iter_mut().zip(fused.missing.iter_mut()) {
                 // Normalised samples, some of them missing (0 with a 1 flag).
                 let missing = rng.below(5) == 0;
@@ -635,7 +980,7 @@ mod tests {
             for c in fused.colsum.iter_mut() {
                 *c = (rng.next_f64() * 50.0 - 25.0) as f32;
             }
-            let mut plain = Scratch::new(ncam, patch, w);
+            let mut plain = Scratch::new(ncam, patch, w, INTERLEAVE);
             plain.values.clone_from(&fused.values);
             plain.missing.clone_from(&fused.missing);
             plain.colsum.clone_from(&fused.colsum);

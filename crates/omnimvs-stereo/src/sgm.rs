@@ -44,26 +44,115 @@ impl AggregatedVolume {
 }
 
 /// One step along a path: `cur` from `prev` (both padded with a
-/// [`SENTINEL`] at each end); returns the minimum of `cur`.
+/// [`SENTINEL`] at each end); returns the minimum of `cur`. With AVX2
+/// (checked at run time) sixteen hypotheses at a time, the same integer
+/// operations ([`step_v3`]).
 #[inline]
 fn step(cost: &[u16], prev: &[i16], prev_min: i16, p1: i16, p2: i16, cur: &mut [i16]) -> i16 {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = pulp::x86::V3::try_new() {
+        let (done, min) = step_v3(simd, cost, prev, prev_min, p1, p2, cur);
+        return min.min(step_from(done, cost, prev, prev_min, p1, p2, cur));
+    }
+    step_from(0, cost, prev, prev_min, p1, p2, cur)
+}
+
+/// [`step`] for hypotheses `start..`, plainly; returns their minimum.
+#[inline]
+fn step_from(
+    start: usize,
+    cost: &[u16],
+    prev: &[i16],
+    prev_min: i16,
+    p1: i16,
+    p2: i16,
+    cur: &mut [i16],
+) -> i16 {
     let nd = cost.len();
     let jump = prev_min + p2;
-    let (lo, mid, hi) = (&prev[..nd], &prev[1..=nd], &prev[2..nd + 2]);
-    let out = &mut cur[1..=nd];
-    for ((((o, &c), &l), &m), &h) in out.iter_mut().zip(cost).zip(lo).zip(mid).zip(hi) {
+    let (lo, mid, hi) = (
+        &prev[start..nd],
+        &prev[start + 1..=nd],
+        &prev[start + 2..nd + 2],
+    );
+    let out = &mut cur[start + 1..=nd];
+    for ((((o, &c), &l), &m), &h) in out.iter_mut().zip(&cost[start..]).zip(lo).zip(mid).zip(hi) {
         let best = m.min(l.min(h) + p1).min(jump);
         *o = c as i16 + best - prev_min;
     }
     out.iter().copied().fold(i16::MAX, i16::min)
 }
 
+/// [`step`] sixteen hypotheses at a time with AVX2 (16-bit lanes, the same
+/// operations); returns how many leading hypotheses it did and their minimum.
+#[cfg(target_arch = "x86_64")]
+fn step_v3(
+    simd: pulp::x86::V3,
+    cost: &[u16],
+    prev: &[i16],
+    prev_min: i16,
+    p1: i16,
+    p2: i16,
+    cur: &mut [i16],
+) -> (usize, i16) {
+    use pulp::{as_arrays, as_arrays_mut, bytemuck::cast};
+    simd.vectorize(
+        #[inline(always)]
+        || {
+            let nd = cost.len();
+            let (c, _) = as_arrays::<16, u16>(cost);
+            let (lo, _) = as_arrays::<16, i16>(&prev[..nd]);
+            let (mid, _) = as_arrays::<16, i16>(&prev[1..=nd]);
+            let (hi, _) = as_arrays::<16, i16>(&prev[2..nd + 2]);
+            let (out, _) = as_arrays_mut::<16, i16>(&mut cur[1..=nd]);
+            let n = c
+                .len()
+                .min(lo.len())
+                .min(mid.len())
+                .min(hi.len())
+                .min(out.len());
+            let (p1, jump) = (simd.splat_i16x16(p1), simd.splat_i16x16(prev_min + p2));
+            let prev_min = simd.splat_i16x16(prev_min);
+            let mut min = simd.splat_i16x16(i16::MAX);
+            for i in 0..n {
+                let side = simd.wrapping_add_i16x16(simd.min_i16x16(cast(lo[i]), cast(hi[i])), p1);
+                let best = simd.min_i16x16(simd.min_i16x16(cast(mid[i]), side), jump);
+                let o =
+                    simd.wrapping_sub_i16x16(simd.wrapping_add_i16x16(cast(c[i]), best), prev_min);
+                min = simd.min_i16x16(min, o);
+                out[i] = cast(o);
+            }
+            let lanes: [i16; 16] = cast(min);
+            (n * 16, lanes.into_iter().fold(i16::MAX, i16::min))
+        },
+    )
+}
+
 /// `sum += path` (16-bit; the sum of all paths fits, see
-/// [`SgmParams::max_p2`]).
+/// [`SgmParams::max_p2`]); sixteen at a time with AVX2.
 #[inline]
 fn accumulate(sum: &mut [u16], path: &[i16]) {
     let n = sum.len();
-    for (s, &l) in sum.iter_mut().zip(&path[1..=n]) {
+    let path = &path[1..=n];
+    #[cfg(target_arch = "x86_64")]
+    let done = pulp::x86::V3::try_new().map_or(0, |simd| {
+        use pulp::{as_arrays, as_arrays_mut, bytemuck::cast};
+        simd.vectorize(
+            #[inline(always)]
+            || {
+                let (s, _) = as_arrays_mut::<16, u16>(sum);
+                let (l, _) = as_arrays::<16, i16>(path);
+                let k = s.len().min(l.len());
+                for i in 0..k {
+                    s[i] = cast(simd.wrapping_add_u16x16(cast(s[i]), cast(l[i])));
+                }
+                k * 16
+            },
+        )
+    });
+    #[cfg(not(target_arch = "x86_64"))]
+    let done = 0;
+    for (s, &l) in sum[done..].iter_mut().zip(&path[done..]) {
         *s = s.wrapping_add(l as u16);
     }
 }
@@ -210,6 +299,29 @@ mod tests {
         }
     }
 
+    #[test]
+    fn a_step_and_its_sum_equal_the_plain_loops_for_any_depth_count() {
+        let mut rng = omnimvs_camera::rng::SplitMix64::new(21);
+        for nd in [2, 15, 16, 17, 64, 192, 203] {
+            let cost: Vec<u16> = (0..nd).map(|_| rng.below(2048) as u16).collect();
+            let mut prev = start_state(nd);
+            for v in &mut prev[1..=nd] {
+                *v = rng.below(3000) as i16;
+            }
+            let prev_min = prev[1..=nd].iter().copied().min().unwrap();
+            let (mut fast, mut plain) = (start_state(nd), start_state(nd));
+            let m_fast = step(&cost, &prev, prev_min, 100, 2000, &mut fast);
+            let m_plain = step_from(0, &cost, &prev, prev_min, 100, 2000, &mut plain);
+            assert_eq!((m_fast, &fast), (m_plain, &plain), "nd {nd}");
+            let mut sum: Vec<u16> = (0..nd).map(|_| rng.below(60_000) as u16).collect();
+            let mut want = sum.clone();
+            accumulate(&mut sum, &fast);
+            for (s, &l) in want.iter_mut().zip(&fast[1..=nd]) {
+                *s = s.wrapping_add(l as u16);
+            }
+            assert_eq!(sum, want, "nd {nd}");
+        }
+    }
     #[test]
     fn zero_penalties_sum_the_cost_once_per_path() {
         let c = volume(5, 7, 4, |y, x, n| {

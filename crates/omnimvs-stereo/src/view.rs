@@ -93,6 +93,98 @@ impl CameraView {
         })
     }
 
+    /// The first half of [`Self::sample`] for a run of positions: the index
+    /// of each sample's top-left texel (`-1` where the 2x2 block is not
+    /// inside the image) and its fractional offsets, from position `start`
+    /// on. Together with [`Self::sample_at`] it gives exactly what
+    /// `sample` gives.
+    pub fn taps(&self, start: usize, cols: &[f32], rows: &[f32], taps: &mut Taps) {
+        let (last_col, last_row) = ((self.width - 1) as f32, (self.height - 1) as f32);
+        let n = cols.len().min(rows.len()).min(taps.index.len());
+        for i in start..n {
+            let (col, row) = (cols[i], rows[i]);
+            // `col as usize + 1 < width` is `col < width - 1` for col >= 0.
+            if col >= 0.0 && row >= 0.0 && col < last_col && row < last_row {
+                let (x0, y0) = (col as i32, row as i32);
+                taps.index[i] = y0 * self.width as i32 + x0;
+                taps.fx[i] = col - x0 as f32;
+                taps.fy[i] = row - y0 as f32;
+            } else {
+                taps.index[i] = -1;
+            }
+        }
+    }
+
+    /// [`Self::taps`] eight positions at a time with AVX2 (the same
+    /// conversions and subtractions); returns how many leading positions it did.
+    #[cfg(target_arch = "x86_64")]
+    pub fn taps_v3(
+        &self,
+        simd: pulp::x86::V3,
+        cols: &[f32],
+        rows: &[f32],
+        taps: &mut Taps,
+    ) -> usize {
+        use pulp::{as_arrays, as_arrays_mut, bytemuck::cast};
+        let (width, last_col, last_row) = (
+            self.width as i32,
+            (self.width - 1) as f32,
+            (self.height - 1) as f32,
+        );
+        simd.vectorize(
+            #[inline(always)]
+            || {
+                let (cols, _) = as_arrays::<8, f32>(cols);
+                let (rows, _) = as_arrays::<8, f32>(rows);
+                let (index, _) = as_arrays_mut::<8, i32>(&mut taps.index);
+                let (fx, _) = as_arrays_mut::<8, f32>(&mut taps.fx);
+                let (fy, _) = as_arrays_mut::<8, f32>(&mut taps.fy);
+                let n = cols.len().min(rows.len()).min(index.len());
+                let n = n.min(fx.len()).min(fy.len());
+                let zero = simd.splat_f32x8(0.0);
+                let (last_col, last_row) = (simd.splat_f32x8(last_col), simd.splat_f32x8(last_row));
+                let width = simd.splat_i32x8(width);
+                let none = simd.splat_i32x8(-1);
+                for i in 0..n {
+                    let (col, row) = (cast(cols[i]), cast(rows[i]));
+                    let inside = simd.and_m32x8(
+                        simd.and_m32x8(simd.cmp_ge_f32x8(col, zero), simd.cmp_ge_f32x8(row, zero)),
+                        simd.and_m32x8(
+                            simd.cmp_lt_f32x8(col, last_col),
+                            simd.cmp_lt_f32x8(row, last_row),
+                        ),
+                    );
+                    let x0 = simd.convert_f32x8_to_i32x8(col);
+                    let y0 = simd.convert_f32x8_to_i32x8(row);
+                    let at = simd.wrapping_add_i32x8(simd.wrapping_mul_i32x8(y0, width), x0);
+                    index[i] = cast(simd.select_i32x8(inside, at, none));
+                    fx[i] = cast(simd.sub_f32x8(col, simd.convert_i32x8_to_f32x8(x0)));
+                    fy[i] = cast(simd.sub_f32x8(row, simd.convert_i32x8_to_f32x8(y0)));
+                }
+                n * 8
+            },
+        )
+    }
+
+    /// The second half of [`Self::sample`]: the normalised bilinear sample
+    /// of one tap (`index`, `fx`, `fy` as [`Self::taps`] wrote them), `None`
+    /// where it is outside or touches an invalid pixel.
+    #[inline]
+    pub fn sample_at(&self, index: i32, fx: f32, fy: f32) -> Option<f32> {
+        let i0 = usize::try_from(index).ok()?;
+        let [t00, t01] = *self.texels.get(i0..)?.first_chunk::<2>()?;
+        if t00 & 1 == 0 {
+            return None;
+        }
+        let [t10, t11] = *self.texels.get(i0 + self.width..)?.first_chunk::<2>()?;
+        let v = |t: u16| f32::from(t >> 1);
+        let (a, b, c, d) = (v(t00), v(t01), v(t10), v(t11));
+        let top = a + fx * (b - a);
+        let bottom = c + fx * (d - c);
+        let gray = (top + fy * (bottom - top)) * (1.0 / TEXEL_SCALE);
+        Some((gray - self.mean) * self.inv_std)
+    }
+
     /// Bilinear sample at fractional `(col, row)`, normalised; `None` when
     /// any of the four neighbours is outside the image or invalid.
     #[inline]
@@ -127,9 +219,100 @@ impl CameraView {
     }
 }
 
+/// Texel indices and fractional offsets of a run of bilinear samples
+/// ([`CameraView::taps`]).
+#[derive(Debug, Clone, Default)]
+pub struct Taps {
+    pub index: Vec<i32>,
+    pub fx: Vec<f32>,
+    pub fy: Vec<f32>,
+}
+
+impl Taps {
+    /// Room for `n` samples.
+    pub fn new(n: usize) -> Self {
+        Self {
+            index: vec![-1; n],
+            fx: vec![0.0; n],
+            fy: vec![0.0; n],
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn taps_then_sample_at_equal_sample_bit_for_bit() {
+        // A 13 x 9 image with a hole in its mask.
+        let (w, h) = (13, 9);
+        let img = GrayImage {
+            width: w,
+            height: h,
+            data: (0..w * h).map(|i| ((i * 37) % 251) as f32 + 0.3).collect(),
+        };
+        let mask = ValidityMask {
+            width: w as u32,
+            height: h as u32,
+            valid: (0..w * h).map(|i| i % 17 != 5).collect(),
+        };
+        let v = CameraView::new(&img, Some(&mask), 1).unwrap();
+        let mut rng = omnimvs_camera::rng::SplitMix64::new(3);
+        let mut cols: Vec<f32> = (0..203)
+            .map(|_| (rng.next_f64() * 15.0 - 1.0) as f32)
+            .collect();
+        let mut rows: Vec<f32> = (0..203)
+            .map(|_| (rng.next_f64() * 11.0 - 1.0) as f32)
+            .collect();
+        // Edges and oddities: the last full block, just past it, NaN, huge.
+        let odd = [
+            (11.999, 7.999),
+            (12.0, 3.0),
+            (3.0, 8.0),
+            (0.0, 0.0),
+            (-0.0, 2.5),
+            (f32::NAN, 1.0),
+            (2.0, f32::NAN),
+            (1e12, 1.0),
+            (-1.0, -1.0),
+            (f32::INFINITY, 2.0),
+        ];
+        for (k, &(c, r)) in odd.iter().enumerate() {
+            cols[k * 9] = c;
+            rows[k * 9] = r;
+        }
+        let plain: Vec<Option<u32>> = cols
+            .iter()
+            .zip(&rows)
+            .map(|(&c, &r)| v.sample(c, r).map(f32::to_bits))
+            .collect();
+        assert!(plain.iter().filter(|s| s.is_some()).count() > 50);
+        assert!(plain.iter().filter(|s| s.is_none()).count() > 20);
+        let mut taps = Taps::new(cols.len());
+        v.taps(0, &cols, &rows, &mut taps);
+        let two_step: Vec<Option<u32>> = (0..cols.len())
+            .map(|i| {
+                v.sample_at(taps.index[i], taps.fx[i], taps.fy[i])
+                    .map(f32::to_bits)
+            })
+            .collect();
+        assert_eq!(two_step, plain);
+        #[cfg(target_arch = "x86_64")]
+        if let Some(simd) = pulp::x86::V3::try_new() {
+            let mut taps = Taps::new(cols.len());
+            let done = v.taps_v3(simd, &cols, &rows, &mut taps);
+            assert_eq!(done, 200);
+            v.taps(done, &cols, &rows, &mut taps);
+            let vector: Vec<Option<u32>> = (0..cols.len())
+                .map(|i| {
+                    v.sample_at(taps.index[i], taps.fx[i], taps.fy[i])
+                        .map(f32::to_bits)
+                })
+                .collect();
+            assert_eq!(vector, plain);
+        }
+    }
 
     #[test]
     fn samples_bilinearly_normalised_and_rejects_invalid_taps() {
