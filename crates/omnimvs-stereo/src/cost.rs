@@ -92,6 +92,19 @@ pub(crate) fn finished_volume(
     (volume, CostTimings { warp, cost })
 }
 
+/// With [`SweepStep::EveryOther`]: the cost of each odd hypothesis of one pixel's `px` as the
+/// mean of its two even neighbours (rounded up), the last one a copy of the one before.
+pub(crate) fn fill_odd_hypotheses(px: &mut [u16]) {
+    let nd = px.len();
+    for n in (1..nd).step_by(2) {
+        px[n] = if n + 1 < nd {
+            ((u32::from(px[n - 1]) + u32::from(px[n + 1])).div_ceil(2)) as u16
+        } else {
+            px[n - 1]
+        };
+    }
+}
+
 /// Everything needed to match one frame.
 pub struct Matcher<'a> {
     pub grid: EquirectGrid,
@@ -826,15 +839,7 @@ impl Matcher<'_> {
         }
         if step == 2 {
             let t = Instant::now();
-            data.par_chunks_mut(nd).for_each(|px| {
-                for n in (1..nd).step_by(2) {
-                    px[n] = if n + 1 < nd {
-                        ((u32::from(px[n - 1]) + u32::from(px[n + 1])).div_ceil(2)) as u16
-                    } else {
-                        px[n - 1]
-                    };
-                }
-            });
+            data.par_chunks_mut(nd).for_each(fill_odd_hypotheses);
             transpose += t.elapsed();
         }
         // Split the wall time of the parallel part by the threads' shares.

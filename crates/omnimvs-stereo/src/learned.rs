@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use rayon::prelude::*;
 
-use crate::cost::{NO_PAIR_COST, finished_volume};
+use crate::cost::{NO_PAIR_COST, fill_odd_hypotheses, finished_volume};
 use crate::params::{COST_SCALE, SweepStep};
 use crate::{CameraView, CostTimings, CostVolume, SphereProjector, StereoError};
 
@@ -172,16 +172,7 @@ pub fn feature_cost_volume(
                 }
             }
             if step == 2 {
-                for x in 0..w {
-                    let px = &mut out[x * nd..(x + 1) * nd];
-                    for n in (1..nd).step_by(2) {
-                        px[n] = if n + 1 < nd {
-                            ((u32::from(px[n - 1]) + u32::from(px[n + 1])) / 2) as u16
-                        } else {
-                            px[n - 1]
-                        };
-                    }
-                }
+                out.chunks_exact_mut(nd).for_each(fill_odd_hypotheses);
             }
         },
     );

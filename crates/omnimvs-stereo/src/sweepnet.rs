@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
-use crate::cost::{NO_PAIR_COST, ZNCC_VARIANCE_EPS, finished_volume};
+use crate::cost::{NO_PAIR_COST, ZNCC_VARIANCE_EPS, fill_odd_hypotheses, finished_volume};
 use crate::params::{COST_SCALE, SweepStep};
 use crate::{CameraView, CostTimings, CostVolume, SphereProjector, StereoError};
 
@@ -597,15 +597,7 @@ pub fn sweep_cost_volume(
                     }
                 }
                 if step == 2 {
-                    for px in out.chunks_exact_mut(nd) {
-                        for n in (1..nd).step_by(2) {
-                            px[n] = if n + 1 < nd {
-                                ((u32::from(px[n - 1]) + u32::from(px[n + 1])).div_ceil(2)) as u16
-                            } else {
-                                px[n - 1]
-                            };
-                        }
-                    }
+                    out.chunks_exact_mut(nd).for_each(fill_odd_hypotheses);
                 }
             },
         );

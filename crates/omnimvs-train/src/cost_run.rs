@@ -159,3 +159,72 @@ pub(crate) fn append_metrics<R: Serialize>(run_dir: &Path, record: &R) -> Result
     text.push('\n');
     write_atomic(&metrics, text.as_bytes()).map_err(io_err(&metrics))
 }
+
+/// What every matching-cost run holds beside its own configuration: its folder, the network
+/// being trained (on the autodiff device), Adam's state, the step and the opened datasets.
+pub(crate) struct RunState<M> {
+    pub run_dir: PathBuf,
+    pub net: M,
+    pub optim: ModuleOptimizer,
+    pub device: burn::tensor::Device,
+    pub step: usize,
+    pub sources: Vec<Source>,
+}
+
+impl<M: Module> RunState<M> {
+    /// A new run: the datasets of `data` opened for the grid and accepted by `check` first,
+    /// then `run_dir` created with `config`, then the network built by `build` on the
+    /// autodiff device seeded with `seed`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn create<C: Serialize>(
+        run_dir: &Path,
+        config: &C,
+        data: &[PathBuf],
+        grid: (usize, usize, usize),
+        seed: u64,
+        device: &burn::tensor::Device,
+        check: impl FnOnce(&[Source]) -> Result<(), TrainError>,
+        build: impl FnOnce(&burn::tensor::Device) -> Result<M, TrainError>,
+    ) -> Result<Self, TrainError> {
+        let sources = open_sources(data, grid)?;
+        check(&sources)?;
+        create_run(run_dir, config)?;
+        let device = device.clone().autodiff();
+        device.seed(seed);
+        let net = build(&device)?;
+        Ok(Self {
+            run_dir: run_dir.to_path_buf(),
+            net,
+            optim: AdamConfig::new().init(),
+            device,
+            step: 0,
+            sources,
+        })
+    }
+
+    /// The run in `run_dir` from its last checkpoint (a network of `build`'s shape).
+    pub fn resume(
+        run_dir: &Path,
+        data: &[PathBuf],
+        grid: (usize, usize, usize),
+        device: &burn::tensor::Device,
+        build: impl FnOnce(&burn::tensor::Device) -> Result<M, TrainError>,
+    ) -> Result<Self, TrainError> {
+        let device = device.clone().autodiff();
+        let (net, optim, step) = load_checkpoint(run_dir, build(&device)?)?;
+        let sources = open_sources(data, grid)?;
+        Ok(Self {
+            run_dir: run_dir.to_path_buf(),
+            net,
+            optim,
+            device,
+            step,
+            sources,
+        })
+    }
+
+    /// Writes the checkpoint of the current step.
+    pub fn save_checkpoint(&self) -> Result<(), TrainError> {
+        save_checkpoint(&self.run_dir, &self.net, &self.optim, self.step)
+    }
+}

@@ -19,17 +19,14 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use burn::module::Module;
-use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::optim::GradientsParams;
 use burn::tensor::{Device, Tensor, TensorData, activation};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::mccnn::{self, McCnn, McCnnConfig, pool};
 use omnimvs_sweep::GrayImage;
 use serde::{Deserialize, Serialize};
 
-use crate::cost_run::{
-    Source, append_metrics, create_run, load_checkpoint, open_sources, read_run_config,
-    save_checkpoint,
-};
+use crate::cost_run::{RunState, Source, append_metrics, read_run_config};
 use crate::error::TrainError;
 use crate::rng::SplitMix64;
 
@@ -270,12 +267,7 @@ pub fn batch_loss(
 /// A matching-cost training run.
 pub struct CostTrainer {
     pub config: CostTrainConfig,
-    pub run_dir: PathBuf,
-    net: McCnn,
-    optim: ModuleOptimizer,
-    device: Device,
-    step: usize,
-    sources: Vec<Source>,
+    state: RunState<McCnn>,
 }
 
 impl CostTrainer {
@@ -294,20 +286,17 @@ impl CostTrainer {
                 message: "expected batch > 0, neg_max >= neg_min, frame_every > 0".into(),
             });
         }
-        create_run(run_dir, &config)?;
-        let device = device.clone().autodiff();
-        device.seed(config.seed);
-        let net = McCnn::new(&config.net, &device)?;
-        let sources = open_sources(&config.data, config.grid)?;
-        Ok(Self {
-            optim: AdamConfig::new().init(),
-            config,
-            run_dir: run_dir.to_path_buf(),
-            net,
+        let state = RunState::create(
+            run_dir,
+            &config,
+            &config.data,
+            config.grid,
+            config.seed,
             device,
-            step: 0,
-            sources,
-        })
+            |_| Ok(()),
+            |d| Ok(McCnn::new(&config.net, d)?),
+        )?;
+        Ok(Self { config, state })
     }
 
     /// The run in `run_dir` from its last checkpoint; `steps` raises the total.
@@ -323,28 +312,28 @@ impl CostTrainer {
         if let Some(s) = steps {
             config.steps = s;
         }
-        let device = device.clone().autodiff();
-        let (net, optim, step) = load_checkpoint(run_dir, McCnn::new(&config.net, &device)?)?;
-        let sources = open_sources(&config.data, config.grid)?;
-        Ok(Self {
-            config,
-            run_dir: run_dir.to_path_buf(),
-            net,
-            optim,
-            device,
-            step,
-            sources,
-        })
+        let state = RunState::resume(run_dir, &config.data, config.grid, device, |d| {
+            Ok(McCnn::new(&config.net, d)?)
+        })?;
+        Ok(Self { config, state })
     }
 
     /// The step the run is at.
     pub fn step(&self) -> usize {
-        self.step
+        self.state.step
+    }
+
+    /// The run's folder.
+    pub fn run_dir(&self) -> &Path {
+        &self.state.run_dir
     }
 
     fn save(&self) -> Result<(), TrainError> {
-        save_checkpoint(&self.run_dir, &self.net, &self.optim, self.step)?;
-        mccnn::save(&self.net.valid(), &self.run_dir.join("model.safetensors"))?;
+        self.state.save_checkpoint()?;
+        mccnn::save(
+            &self.state.net.valid(),
+            &self.state.run_dir.join("model.safetensors"),
+        )?;
         Ok(())
     }
 
@@ -352,11 +341,16 @@ impl CostTrainer {
     fn validation(&self) -> Result<Vec<Vec<f32>>, TrainError> {
         let mut out = Vec::new();
         let (v0, v1) = self.config.val_frames;
-        for s in 0..self.sources.len() {
+        for s in 0..self.state.sources.len() {
             for (j, f) in [v0, v1].into_iter().enumerate() {
-                let frame = load_frame(&self.sources, s, f, self.config.net.stride)?;
+                let frame = load_frame(&self.state.sources, s, f, self.config.net.stride)?;
                 let mut rng = SplitMix64::new(0x5EED ^ (s as u64 * 31 + j as u64));
-                out.push(draw_batch(&self.sources, &frame, &self.config, &mut rng));
+                out.push(draw_batch(
+                    &self.state.sources,
+                    &frame,
+                    &self.config,
+                    &mut rng,
+                ));
             }
         }
         Ok(out)
@@ -374,20 +368,25 @@ impl CostTrainer {
     ) -> Result<(), TrainError> {
         let val = self.validation()?;
         let end = stop_after.map_or(self.config.steps, |s| {
-            (self.step + s).min(self.config.steps)
+            (self.state.step + s).min(self.config.steps)
         });
         let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
         let mut frame: Option<Frame> = None;
         let t0 = Instant::now();
         let (f0, f1) = self.config.train_frames;
-        while self.step < end {
-            let step = self.step;
+        while self.state.step < end {
+            let step = self.state.step;
             if frame.is_none() || step.is_multiple_of(self.config.frame_every) {
                 let mut rng =
                     SplitMix64::for_epoch(self.config.seed, step / self.config.frame_every);
-                let s = rng.below(self.sources.len());
+                let s = rng.below(self.state.sources.len());
                 let f = f0 + rng.below((f1 - f0 + 1) as usize) as u32;
-                frame = Some(load_frame(&self.sources, s, f, self.config.net.stride)?);
+                frame = Some(load_frame(
+                    &self.state.sources,
+                    s,
+                    f,
+                    self.config.net.stride,
+                )?);
             }
             let mut rng = SplitMix64::for_epoch(self.config.seed ^ 0xA5A5, step);
             let Some(current) = frame.as_ref() else {
@@ -396,21 +395,29 @@ impl CostTrainer {
                     message: "no frame to draw from".into(),
                 });
             };
-            let patches = draw_batch(&self.sources, current, &self.config, &mut rng);
+            let patches = draw_batch(&self.state.sources, current, &self.config, &mut rng);
             if patches.is_empty() {
-                self.step += 1;
+                self.state.step += 1;
                 continue;
             }
-            let (loss, acc) = batch_loss(&self.net, patches, self.config.margin, &self.device);
+            let (loss, acc) = batch_loss(
+                &self.state.net,
+                patches,
+                self.config.margin,
+                &self.state.device,
+            );
             loss_sum += loss.clone().into_scalar::<f32>();
             acc_sum += acc;
             count += 1;
-            let grads = GradientsParams::from_grads(loss.backward(), &self.net);
-            self.net = self.optim.step(self.config.lr, self.net.clone(), grads);
-            self.step += 1;
-            if self.step.is_multiple_of(self.config.log_every) || self.step == end {
-                let inference = self.net.valid();
-                let dev = self.device.clone().without_autodiff();
+            let grads = GradientsParams::from_grads(loss.backward(), &self.state.net);
+            self.state.net = self
+                .state
+                .optim
+                .step(self.config.lr, self.state.net.clone(), grads);
+            self.state.step += 1;
+            if self.state.step.is_multiple_of(self.config.log_every) || self.state.step == end {
+                let inference = self.state.net.valid();
+                let dev = self.state.device.clone().without_autodiff();
                 let (mut vl, mut va) = (0f32, 0f32);
                 for b in &val {
                     let (l, a) = batch_loss(&inference, b.clone(), self.config.margin, &dev);
@@ -418,7 +425,7 @@ impl CostTrainer {
                     va += a;
                 }
                 let record = CostRecord {
-                    step: self.step,
+                    step: self.state.step,
                     train_loss: loss_sum / count.max(1) as f32,
                     train_acc: acc_sum / count.max(1) as f32,
                     val_loss: vl / val.len() as f32,
@@ -426,7 +433,7 @@ impl CostTrainer {
                     seconds: t0.elapsed().as_secs_f64(),
                 };
                 (loss_sum, acc_sum, count) = (0.0, 0.0, 0);
-                append_metrics(&self.run_dir, &record)?;
+                append_metrics(&self.state.run_dir, &record)?;
                 self.save()?;
                 report(&record);
             }
@@ -436,6 +443,6 @@ impl CostTrainer {
 
     /// The trained network, without autodiff.
     pub fn net(&self) -> McCnn {
-        self.net.valid()
+        self.state.net.valid()
     }
 }

@@ -26,10 +26,7 @@ use omnimvs_stereo::sweepnet::{BandScratch, FeatureLayout, band_features};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::cost_run::{
-    Source, append_metrics, create_run, load_checkpoint, open_sources, read_run_config,
-    save_checkpoint,
-};
+use crate::cost_run::{RunState, Source, append_metrics, read_run_config};
 use crate::error::TrainError;
 use crate::rng::SplitMix64;
 
@@ -276,12 +273,7 @@ pub fn batch_loss(net: &SweepNet, batch: &SweepBatch, device: &Device) -> (Tenso
 /// A SweepNet training run.
 pub struct SweepTrainer {
     pub config: SweepTrainConfig,
-    pub run_dir: PathBuf,
-    net: SweepNet,
-    optim: burn::optim::ModuleOptimizer,
-    device: Device,
-    step: usize,
-    sources: Vec<Source>,
+    state: RunState<SweepNet>,
 }
 
 impl SweepTrainer {
@@ -300,34 +292,28 @@ impl SweepTrainer {
                 message: "expected batch > 0, band_rows > 0, frame_every > 0".into(),
             });
         }
-        let sources = open_sources(&config.data, config.grid)?;
-        if let Some(s) = sources
-            .iter()
-            .find(|s| s.dataset.rig.len() != config.net.cameras)
-        {
-            return Err(TrainError::InvalidConfig {
-                field: "data",
-                message: format!(
-                    "{}: {} cameras, the network reads {}",
-                    s.dataset.root.display(),
-                    s.dataset.rig.len(),
-                    config.net.cameras
-                ),
-            });
-        }
-        create_run(run_dir, &config)?;
-        let device = device.clone().autodiff();
-        device.seed(config.seed);
-        let net = SweepNet::new(&config.net, &device)?;
-        Ok(Self {
-            optim: burn::optim::AdamConfig::new().init(),
-            config,
-            run_dir: run_dir.to_path_buf(),
-            net,
+        let cameras = config.net.cameras;
+        let state = RunState::create(
+            run_dir,
+            &config,
+            &config.data,
+            config.grid,
+            config.seed,
             device,
-            step: 0,
-            sources,
-        })
+            |sources| match sources.iter().find(|s| s.dataset.rig.len() != cameras) {
+                Some(s) => Err(TrainError::InvalidConfig {
+                    field: "data",
+                    message: format!(
+                        "{}: {} cameras, the network reads {cameras}",
+                        s.dataset.root.display(),
+                        s.dataset.rig.len(),
+                    ),
+                }),
+                None => Ok(()),
+            },
+            |d| Ok(SweepNet::new(&config.net, d)?),
+        )?;
+        Ok(Self { config, state })
     }
 
     /// The run in `run_dir` from its last checkpoint; `steps` raises the total.
@@ -343,28 +329,28 @@ impl SweepTrainer {
         if let Some(s) = steps {
             config.steps = s;
         }
-        let device = device.clone().autodiff();
-        let (net, optim, step) = load_checkpoint(run_dir, SweepNet::new(&config.net, &device)?)?;
-        let sources = open_sources(&config.data, config.grid)?;
-        Ok(Self {
-            config,
-            run_dir: run_dir.to_path_buf(),
-            net,
-            optim,
-            device,
-            step,
-            sources,
-        })
+        let state = RunState::resume(run_dir, &config.data, config.grid, device, |d| {
+            Ok(SweepNet::new(&config.net, d)?)
+        })?;
+        Ok(Self { config, state })
     }
 
     /// The step the run is at.
     pub fn step(&self) -> usize {
-        self.step
+        self.state.step
+    }
+
+    /// The run's folder.
+    pub fn run_dir(&self) -> &Path {
+        &self.state.run_dir
     }
 
     fn save(&self) -> Result<(), TrainError> {
-        save_checkpoint(&self.run_dir, &self.net, &self.optim, self.step)?;
-        sweepnet::save(&self.net.valid(), &self.run_dir.join("model.safetensors"))?;
+        self.state.save_checkpoint()?;
+        sweepnet::save(
+            &self.state.net.valid(),
+            &self.state.run_dir.join("model.safetensors"),
+        )?;
         Ok(())
     }
 
@@ -372,12 +358,12 @@ impl SweepTrainer {
     fn validation(&self) -> Result<Vec<SweepBatch>, TrainError> {
         let mut out = Vec::new();
         let (v0, v1) = self.config.val_frames;
-        for s in 0..self.sources.len() {
+        for s in 0..self.state.sources.len() {
             for (j, f) in [v0, v1].into_iter().enumerate() {
-                let frame = load_frame(&self.sources, s, f)?;
+                let frame = load_frame(&self.state.sources, s, f)?;
                 for k in 0..2u64 {
                     let mut rng = SplitMix64::new(0x5EED ^ (s as u64 * 31 + j as u64 * 7 + k));
-                    let batch = draw_batch(&self.sources, &frame, &self.config, &mut rng);
+                    let batch = draw_batch(&self.state.sources, &frame, &self.config, &mut rng);
                     if !batch.is_empty() {
                         out.push(batch);
                     }
@@ -405,20 +391,20 @@ impl SweepTrainer {
             .sum::<f32>()
             / val.len().max(1) as f32;
         let end = stop_after.map_or(self.config.steps, |s| {
-            (self.step + s).min(self.config.steps)
+            (self.state.step + s).min(self.config.steps)
         });
         let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
         let mut frame: Option<Frame> = None;
         let t0 = Instant::now();
         let (f0, f1) = self.config.train_frames;
-        while self.step < end {
-            let step = self.step;
+        while self.state.step < end {
+            let step = self.state.step;
             if frame.is_none() || step.is_multiple_of(self.config.frame_every) {
                 let mut rng =
                     SplitMix64::for_epoch(self.config.seed, step / self.config.frame_every);
-                let s = rng.below(self.sources.len());
+                let s = rng.below(self.state.sources.len());
                 let f = f0 + rng.below((f1 - f0 + 1) as usize) as u32;
-                frame = Some(load_frame(&self.sources, s, f)?);
+                frame = Some(load_frame(&self.state.sources, s, f)?);
             }
             let Some(current) = frame.as_ref() else {
                 return Err(TrainError::InvalidConfig {
@@ -427,19 +413,22 @@ impl SweepTrainer {
                 });
             };
             let mut rng = SplitMix64::for_epoch(self.config.seed ^ 0xA5A5, step);
-            let batch = draw_batch(&self.sources, current, &self.config, &mut rng);
+            let batch = draw_batch(&self.state.sources, current, &self.config, &mut rng);
             if !batch.is_empty() {
-                let (loss, acc) = batch_loss(&self.net, &batch, &self.device);
+                let (loss, acc) = batch_loss(&self.state.net, &batch, &self.state.device);
                 loss_sum += loss.clone().into_scalar::<f32>();
                 acc_sum += acc;
                 count += 1;
-                let grads = GradientsParams::from_grads(loss.backward(), &self.net);
-                self.net = self.optim.step(self.config.lr, self.net.clone(), grads);
+                let grads = GradientsParams::from_grads(loss.backward(), &self.state.net);
+                self.state.net =
+                    self.state
+                        .optim
+                        .step(self.config.lr, self.state.net.clone(), grads);
             }
-            self.step += 1;
-            if self.step.is_multiple_of(self.config.log_every) || self.step == end {
-                let inference = self.net.valid();
-                let dev = self.device.clone().without_autodiff();
+            self.state.step += 1;
+            if self.state.step.is_multiple_of(self.config.log_every) || self.state.step == end {
+                let inference = self.state.net.valid();
+                let dev = self.state.device.clone().without_autodiff();
                 let (mut vl, mut va) = (0f32, 0f32);
                 for b in &val {
                     let (l, a) = batch_loss(&inference, b, &dev);
@@ -447,7 +436,7 @@ impl SweepTrainer {
                     va += a;
                 }
                 let record = SweepRecord {
-                    step: self.step,
+                    step: self.state.step,
                     train_loss: loss_sum / count.max(1) as f32,
                     train_acc: acc_sum / count.max(1) as f32,
                     val_loss: vl / val.len().max(1) as f32,
@@ -456,7 +445,7 @@ impl SweepTrainer {
                     seconds: t0.elapsed().as_secs_f64(),
                 };
                 (loss_sum, acc_sum, count) = (0.0, 0.0, 0);
-                append_metrics(&self.run_dir, &record)?;
+                append_metrics(&self.state.run_dir, &record)?;
                 self.save()?;
                 report(&record);
             }
@@ -466,6 +455,6 @@ impl SweepTrainer {
 
     /// The trained network, without autodiff.
     pub fn net(&self) -> SweepNet {
-        self.net.valid()
+        self.state.net.valid()
     }
 }

@@ -192,7 +192,7 @@ fn train_sweepnet(args: &Args, device: &Device) -> Result<()> {
         trainer.config.batch,
         trainer.config.grid.2,
         trainer.step(),
-        trainer.run_dir.display()
+        trainer.run_dir().display()
     );
     trainer.run(args.stop_after, |r| {
         outln!(
@@ -240,7 +240,7 @@ fn train_cost(args: &Args, device: &Device) -> Result<()> {
         trainer.config.steps,
         trainer.config.batch,
         trainer.step(),
-        trainer.run_dir.display()
+        trainer.run_dir().display()
     );
     trainer.run(args.stop_after, |r| {
         outln!(
