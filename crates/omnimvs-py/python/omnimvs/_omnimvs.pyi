@@ -2,7 +2,7 @@
 
 import os
 from pathlib import Path
-from typing import Optional, Sequence, Tuple, TypedDict, Union, overload
+from typing import Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -95,7 +95,7 @@ def sgm(
     ndepth: int = 192,
     phi_deg: float = 45.0,
     *,
-    cost: str = "zncc",
+    cost: Literal["zncc", "mccnn", "sweepnet"] = "zncc",
 ) -> FloatMap: ...
 @overload
 def sgm(
@@ -107,7 +107,7 @@ def sgm(
     phi_deg: float = 45.0,
     *,
     rig: Rig,
-    cost: str = "zncc",
+    cost: Literal["zncc", "mccnn", "sweepnet"] = "zncc",
 ) -> FloatMap: ...
 @overload
 def infer(
