@@ -45,7 +45,8 @@ impl FeatureMap {
             return false;
         }
         let (x0, y0) = (x as usize, y as usize);
-        if x0 + 1 >= self.width || y0 + 1 >= self.height {
+        // `as` saturates (an infinite coordinate gives usize::MAX): no `+ 1` that could wrap.
+        if x0 >= self.width.saturating_sub(1) || y0 >= self.height.saturating_sub(1) {
             return false;
         }
         let (fx, fy) = (x - x0 as f32, y - y0 as f32);

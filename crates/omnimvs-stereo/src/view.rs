@@ -194,7 +194,8 @@ impl CameraView {
         }
         let x0 = col as usize;
         let y0 = row as usize;
-        if x0 + 1 >= self.width || y0 + 1 >= self.height {
+        // `as` saturates (an infinite coordinate gives usize::MAX): no `+ 1` that could wrap.
+        if x0 >= self.width.saturating_sub(1) || y0 >= self.height.saturating_sub(1) {
             return None;
         }
         let i = y0 * self.width + x0;
