@@ -78,10 +78,15 @@ impl SweepNetConfig {
 
     /// Multiply-accumulates per sphere point.
     pub fn macs_per_point(&self) -> usize {
+        self.widths().windows(2).map(|w| w[0] * w[1]).sum()
+    }
+
+    /// Widths of the layers from the input to the one output.
+    pub fn widths(&self) -> Vec<usize> {
         let mut widths = vec![self.inputs()];
         widths.extend(&self.hidden);
         widths.push(1);
-        widths.windows(2).map(|w| w[0] * w[1]).sum()
+        widths
     }
 
     fn validate(&self) -> Result<(), NetError> {
@@ -129,10 +134,8 @@ impl SweepNet {
     /// [`NetError::InvalidConfig`].
     pub fn new(config: &SweepNetConfig, device: &Device) -> Result<Self, NetError> {
         config.validate()?;
-        let mut widths = vec![config.inputs()];
-        widths.extend(&config.hidden);
-        widths.push(1);
-        let layers = widths
+        let layers = config
+            .widths()
             .windows(2)
             .map(|w| LinearConfig::new(w[0], w[1]).init(device))
             .collect();

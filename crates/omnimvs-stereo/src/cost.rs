@@ -92,6 +92,18 @@ pub(crate) fn finished_volume(
     (volume, CostTimings { warp, cost })
 }
 
+/// The pairs of `ncam` cameras in the order every cost averages and every learned cost's
+/// features list them: `(0, 1), (0, 2), ..., (1, 2), ...`.
+pub fn camera_pairs(ncam: usize) -> Vec<(usize, usize)> {
+    let mut pairs = Vec::new();
+    for a in 0..ncam {
+        for b in a + 1..ncam {
+            pairs.push((a, b));
+        }
+    }
+    pairs
+}
+
 /// With [`SweepStep::EveryOther`]: the cost of each odd hypothesis of one pixel's `px` as the
 /// mean of its two even neighbours (rounded up), the last one a copy of the one before.
 pub(crate) fn fill_odd_hypotheses(px: &mut [u16]) {
@@ -155,12 +167,7 @@ struct Scratch {
 impl Scratch {
     fn new(ncam: usize, patch: usize, cols: usize, lanes: usize) -> Self {
         let width = cols * lanes;
-        let mut pairs = Vec::new();
-        for a in 0..ncam {
-            for b in a + 1..ncam {
-                pairs.push((a, b));
-            }
-        }
+        let pairs = camera_pairs(ncam);
         // Quantities per column: per camera sum, sum of squares, missing
         // count; per pair the sum of products.
         let q = 3 * ncam + pairs.len();
@@ -789,10 +796,7 @@ impl Matcher<'_> {
             )));
         }
         let nd = hyps.count;
-        let step = match sweep {
-            SweepStep::All => 1,
-            SweepStep::EveryOther => 2,
-        };
+        let step = sweep.stride();
         let computed: Vec<usize> = (0..nd).step_by(step).collect();
         let plane = w * h;
         let mut data = vec![0u16; plane * nd];

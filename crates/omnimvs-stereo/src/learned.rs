@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use rayon::prelude::*;
 
-use crate::cost::{NO_PAIR_COST, fill_odd_hypotheses, finished_volume};
+use crate::cost::{NO_PAIR_COST, camera_pairs, fill_odd_hypotheses, finished_volume};
 use crate::params::{COST_SCALE, SweepStep};
 use crate::{CameraView, CostTimings, CostVolume, SphereProjector, StereoError};
 
@@ -113,16 +113,8 @@ pub fn feature_cost_volume(
         ));
     }
     let (w, h, nd) = (grid.width, grid.height, hyps.count);
-    let step = match sweep {
-        SweepStep::All => 1,
-        SweepStep::EveryOther => 2,
-    };
-    let mut pairs = Vec::new();
-    for a in 0..ncam {
-        for b in a + 1..ncam {
-            pairs.push((a, b));
-        }
-    }
+    let step = sweep.stride();
+    let pairs = camera_pairs(ncam);
     let inv_depths: Vec<f32> = (0..nd).map(|n| hyps.inv_depth(n as f64) as f32).collect();
     let start = Instant::now();
     let mut data = vec![0u16; w * h * nd];

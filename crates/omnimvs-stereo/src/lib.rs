@@ -39,7 +39,7 @@ pub mod sweepnet;
 mod view;
 mod wta;
 
-pub use cost::{CostTimings, CostVolume, Matcher, NO_PAIR_COST, ZNCC_VARIANCE_EPS};
+pub use cost::{CostTimings, CostVolume, Matcher, NO_PAIR_COST, ZNCC_VARIANCE_EPS, camera_pairs};
 pub use error::StereoError;
 pub use estimator::SgmEstimator;
 pub use learned::{FeatureExtractor, FeatureMap, feature_cost_volume};

@@ -49,6 +49,16 @@ pub enum SweepStep {
     EveryOther,
 }
 
+impl SweepStep {
+    /// Hypotheses between two that get a matching cost: 1 or 2.
+    pub fn stride(self) -> usize {
+        match self {
+            Self::All => 1,
+            Self::EveryOther => 2,
+        }
+    }
+}
+
 /// Parameters of the ZNCC + SGM method.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SgmParams {

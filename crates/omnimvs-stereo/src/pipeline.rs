@@ -183,7 +183,7 @@ impl SphericalStereo {
             .collect()
     }
 
-    /// The ZNCC cost volume of one frame and the warp / cost times.
+    /// The cost volume of one frame (ZNCC or the learned cost) and the warp / cost times.
     ///
     /// # Errors
     /// As [`Self::compute`].
@@ -195,59 +195,50 @@ impl SphericalStereo {
         let t0 = Instant::now();
         let views = self.views(images, masks)?;
         let prepare = t0.elapsed();
-        if let Some(LearnedCost::Sweep(head)) = &self.learned {
-            let (volume, t) = sweep_cost_volume(
-                &self.grid,
-                &self.projectors,
-                &views,
-                head.as_ref(),
-                &self.hypotheses,
-                self.params.sweep,
-            )?;
-            return Ok((
-                volume,
-                StageTimings {
-                    prepare_s: prepare.as_secs_f64(),
-                    cost_s: t.cost.as_secs_f64(),
-                    ..StageTimings::default()
-                },
-            ));
-        }
-        if let Some(LearnedCost::Features(extractor)) = &self.learned {
-            let t1 = Instant::now();
-            let maps = extractor.features(images)?;
-            let network = t1.elapsed();
-            let (volume, t) = feature_cost_volume(
-                &self.grid,
-                &self.projectors,
-                &views,
-                &maps,
-                &self.hypotheses,
-                self.params.sweep,
-            )?;
-            return Ok((
-                volume,
-                StageTimings {
-                    prepare_s: prepare.as_secs_f64(),
-                    warp_s: network.as_secs_f64(),
-                    cost_s: t.cost.as_secs_f64(),
-                    ..StageTimings::default()
-                },
-            ));
-        }
-        let matcher = Matcher {
-            grid: self.grid,
-            projectors: &self.projectors,
-            views: &views,
-            radius: self.params.patch / 2,
+        // `warp`: the sampling of the images, or with a feature network the network itself.
+        let (volume, warp, cost) = match &self.learned {
+            Some(LearnedCost::Sweep(head)) => {
+                let (volume, t) = sweep_cost_volume(
+                    &self.grid,
+                    &self.projectors,
+                    &views,
+                    head.as_ref(),
+                    &self.hypotheses,
+                    self.params.sweep,
+                )?;
+                (volume, t.warp, t.cost)
+            }
+            Some(LearnedCost::Features(extractor)) => {
+                let t1 = Instant::now();
+                let maps = extractor.features(images)?;
+                let network = t1.elapsed();
+                let (volume, t) = feature_cost_volume(
+                    &self.grid,
+                    &self.projectors,
+                    &views,
+                    &maps,
+                    &self.hypotheses,
+                    self.params.sweep,
+                )?;
+                (volume, network, t.cost)
+            }
+            None => {
+                let matcher = Matcher {
+                    grid: self.grid,
+                    projectors: &self.projectors,
+                    views: &views,
+                    radius: self.params.patch / 2,
+                };
+                let (volume, t) = matcher.cost_volume(&self.hypotheses, self.params.sweep)?;
+                (volume, t.warp, t.cost)
+            }
         };
-        let (volume, t) = matcher.cost_volume(&self.hypotheses, self.params.sweep)?;
         Ok((
             volume,
             StageTimings {
                 prepare_s: prepare.as_secs_f64(),
-                warp_s: t.warp.as_secs_f64(),
-                cost_s: t.cost.as_secs_f64(),
+                warp_s: warp.as_secs_f64(),
+                cost_s: cost.as_secs_f64(),
                 ..StageTimings::default()
             },
         ))

@@ -6,10 +6,11 @@
 //! images into a cost map per sphere. Ours, sized for a CPU, splits that network in two:
 //!
 //! * a fixed first stage ([`band_features`]) computed with running sums on the warped images
-//!   of each sphere: for every camera its `patch x patch` window's texture
-//!   (`ln(variance + eps) / 4`) and whether the window is complete, for every camera pair the
-//!   ZNCC of their windows and whether both are complete (`2 P + 2 C` numbers for `C` cameras
-//!   and `P` pairs: 20 for four cameras);
+//!   of each sphere ([`FeatureLayout`]): for each window size of a [`FeatureSpec`], every
+//!   camera pair's ZNCC and whether both windows are complete, every camera's texture
+//!   (`ln(variance + eps) / 4`) and whether its window is complete; then every pair's
+//!   difference of normalised centre samples and, optionally, the best ZNCC of the shifted
+//!   windows (58 numbers for four cameras, three window sizes and the shifted windows);
 //! * a learned head ([`SweepCostHead`], in practice the [`Mlp`] that `omnimvs-net` trains)
 //!   that turns those numbers into the cost in `[0, 1]`. It can learn what an average of pair
 //!   costs cannot: to distrust a pair where one camera is occluded or a window is flat, to
@@ -24,23 +25,15 @@ use std::time::{Duration, Instant};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
-use crate::cost::{NO_PAIR_COST, ZNCC_VARIANCE_EPS, fill_odd_hypotheses, finished_volume};
+use crate::cost::{
+    NO_PAIR_COST, ZNCC_VARIANCE_EPS, camera_pairs, fill_odd_hypotheses, finished_volume,
+};
 use crate::params::{COST_SCALE, SweepStep};
 use crate::{CameraView, CostTimings, CostVolume, SphereProjector, StereoError};
 
-/// Output rows computed together (the warped band holds `BAND + patch - 1` rows).
+/// Output rows computed together (the warped band holds `BAND` rows and the reach of the
+/// widest window, [`FeatureSpec`]'s `reach`, above and below).
 const BAND: usize = 16;
-
-/// The camera pairs in feature order: `(0, 1), (0, 2), ..., (1, 2), ...`.
-pub fn camera_pairs(ncam: usize) -> Vec<(usize, usize)> {
-    let mut pairs = Vec::new();
-    for a in 0..ncam {
-        for b in a + 1..ncam {
-            pairs.push((a, b));
-        }
-    }
-    pairs
-}
 
 /// Layout of one feature vector for `ncam` cameras and `scales` window sizes: per window
 /// size `[zncc of each pair, pair complete (0/1), texture of each camera, camera complete
@@ -119,6 +112,24 @@ impl FeatureLayout {
     pub fn dim(&self) -> usize {
         let shifted = if self.shifted { 2 * self.pairs() } else { 0 };
         self.scales * self.block() + self.pairs() + shifted
+    }
+
+    /// The plain ZNCC cost of one feature vector: `(1 - zncc) / 2` of the first window size
+    /// averaged over the complete pairs, [`NO_PAIR_COST`] without any (what the ZNCC cost
+    /// volume holds, up to the order of its sums).
+    pub fn zncc_cost(&self, features: &[f32]) -> f32 {
+        let (mut sum, mut count) = (0f32, 0f32);
+        for p in 0..self.pairs() {
+            if features[self.pair_complete(0, p)] > 0.5 {
+                sum += 0.5 * (1.0 - features[self.zncc(0, p)]);
+                count += 1.0;
+            }
+        }
+        if count > 0.0 {
+            sum / count
+        } else {
+            NO_PAIR_COST
+        }
     }
 }
 
@@ -559,10 +570,7 @@ pub fn sweep_cost_volume(
         )));
     }
     let (w, h, nd) = (grid.width, grid.height, hyps.count);
-    let step = match sweep {
-        SweepStep::All => 1,
-        SweepStep::EveryOther => 2,
-    };
+    let step = sweep.stride();
     let inv_depths: Vec<f32> = (0..nd).map(|n| hyps.inv_depth(n as f64) as f32).collect();
     let start = Instant::now();
     let mut data = vec![0u16; w * h * nd];

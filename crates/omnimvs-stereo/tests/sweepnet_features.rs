@@ -30,14 +30,7 @@ impl SweepCostHead for ZnccMean {
     fn costs(&self, features: &[f32], out: &mut [f32]) {
         let l = self.0;
         for (f, o) in features.chunks_exact(l.dim()).zip(out) {
-            let (mut sum, mut count) = (0f32, 0f32);
-            for p in 0..l.pairs() {
-                if f[l.pair_complete(0, p)] > 0.5 {
-                    sum += 0.5 * (1.0 - f[l.zncc(0, p)]);
-                    count += 1.0;
-                }
-            }
-            *o = if count > 0.0 { sum / count } else { 0.5 };
+            *o = l.zncc_cost(f);
         }
     }
 }
