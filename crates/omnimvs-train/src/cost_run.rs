@@ -5,8 +5,9 @@
 use std::path::{Path, PathBuf};
 
 use burn::module::Module;
-use burn::optim::{AdamConfig, ModuleOptimizer};
+use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::store::{BurnpackStore, ModuleSnapshot};
+use burn::tensor::Tensor;
 use omnimvs_camera::ValidityMask;
 use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::Dataset;
@@ -16,6 +17,7 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use crate::error::TrainError;
+use crate::rng::SplitMix64;
 
 /// A dataset opened for sampling: its masks, the sweep of the ground truth and the fast
 /// projectors of that sweep's grid.
@@ -226,5 +228,27 @@ impl<M: Module> RunState<M> {
     /// Writes the checkpoint of the current step.
     pub fn save_checkpoint(&self) -> Result<(), TrainError> {
         save_checkpoint(&self.run_dir, &self.net, &self.optim, self.step)
+    }
+
+    /// The dataset and frame that the steps from `step` on draw from: a new one every
+    /// `frame_every` steps, among the frames `train_frames` of every dataset, chosen by
+    /// `seed` and `step / frame_every` (so that a resumed run chooses as the first did).
+    pub fn frame_for_step(
+        &self,
+        seed: u64,
+        step: usize,
+        frame_every: usize,
+        (f0, f1): (u32, u32),
+    ) -> (usize, u32) {
+        let mut rng = SplitMix64::for_epoch(seed, step / frame_every);
+        let source = rng.below(self.sources.len());
+        let frame = f0 + rng.below((f1 - f0 + 1) as usize) as u32;
+        (source, frame)
+    }
+
+    /// One Adam step of the network on `loss` (a scalar of the autodiff device).
+    pub fn descend(&mut self, loss: Tensor<1>, lr: f64) {
+        let grads = GradientsParams::from_grads(loss.backward(), &self.net);
+        self.net = self.optim.step(lr, self.net.clone(), grads);
     }
 }

@@ -19,7 +19,6 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use burn::module::Module;
-use burn::optim::GradientsParams;
 use burn::tensor::{Device, Tensor, TensorData, activation};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::mccnn::{self, McCnn, McCnnConfig, pool};
@@ -373,14 +372,15 @@ impl CostTrainer {
         let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
         let mut frame: Option<Frame> = None;
         let t0 = Instant::now();
-        let (f0, f1) = self.config.train_frames;
         while self.state.step < end {
             let step = self.state.step;
             if frame.is_none() || step.is_multiple_of(self.config.frame_every) {
-                let mut rng =
-                    SplitMix64::for_epoch(self.config.seed, step / self.config.frame_every);
-                let s = rng.below(self.state.sources.len());
-                let f = f0 + rng.below((f1 - f0 + 1) as usize) as u32;
+                let (s, f) = self.state.frame_for_step(
+                    self.config.seed,
+                    step,
+                    self.config.frame_every,
+                    self.config.train_frames,
+                );
                 frame = Some(load_frame(
                     &self.state.sources,
                     s,
@@ -409,11 +409,7 @@ impl CostTrainer {
             loss_sum += loss.clone().into_scalar::<f32>();
             acc_sum += acc;
             count += 1;
-            let grads = GradientsParams::from_grads(loss.backward(), &self.state.net);
-            self.state.net = self
-                .state
-                .optim
-                .step(self.config.lr, self.state.net.clone(), grads);
+            self.state.descend(loss, self.config.lr);
             self.state.step += 1;
             if self.state.step.is_multiple_of(self.config.log_every) || self.state.step == end {
                 let inference = self.state.net.valid();

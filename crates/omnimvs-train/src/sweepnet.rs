@@ -17,7 +17,6 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use burn::module::Module;
-use burn::optim::GradientsParams;
 use burn::tensor::{Device, Tensor, TensorData, activation};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::sweepnet::{self, SweepNet, SweepNetConfig};
@@ -230,16 +229,7 @@ pub fn zncc_costs(batch: &SweepBatch, layout: FeatureLayout) -> Vec<f32> {
     batch
         .features
         .chunks_exact(batch.dim)
-        .map(|f| {
-            let (mut sum, mut count) = (0f32, 0f32);
-            for p in 0..layout.pairs() {
-                if f[layout.pair_complete(0, p)] > 0.5 {
-                    sum += 0.5 * (1.0 - f[layout.zncc(0, p)]);
-                    count += 1.0;
-                }
-            }
-            if count > 0.0 { sum / count } else { 0.5 }
-        })
+        .map(|f| layout.zncc_cost(f))
         .collect()
 }
 
@@ -396,14 +386,15 @@ impl SweepTrainer {
         let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
         let mut frame: Option<Frame> = None;
         let t0 = Instant::now();
-        let (f0, f1) = self.config.train_frames;
         while self.state.step < end {
             let step = self.state.step;
             if frame.is_none() || step.is_multiple_of(self.config.frame_every) {
-                let mut rng =
-                    SplitMix64::for_epoch(self.config.seed, step / self.config.frame_every);
-                let s = rng.below(self.state.sources.len());
-                let f = f0 + rng.below((f1 - f0 + 1) as usize) as u32;
+                let (s, f) = self.state.frame_for_step(
+                    self.config.seed,
+                    step,
+                    self.config.frame_every,
+                    self.config.train_frames,
+                );
                 frame = Some(load_frame(&self.state.sources, s, f)?);
             }
             let Some(current) = frame.as_ref() else {
@@ -419,11 +410,7 @@ impl SweepTrainer {
                 loss_sum += loss.clone().into_scalar::<f32>();
                 acc_sum += acc;
                 count += 1;
-                let grads = GradientsParams::from_grads(loss.backward(), &self.state.net);
-                self.state.net =
-                    self.state
-                        .optim
-                        .step(self.config.lr, self.state.net.clone(), grads);
+                self.state.descend(loss, self.config.lr);
             }
             self.state.step += 1;
             if self.state.step.is_multiple_of(self.config.log_every) || self.state.step == end {
