@@ -32,6 +32,12 @@ pub enum StereoError {
     },
     #[error("ndepth {found}: expected an even number of at least 2 inverse-depth hypotheses")]
     NDepth { found: usize },
+    #[error("SGM parameter {name} = {value}: expected {expected}")]
+    Parameter {
+        name: &'static str,
+        value: String,
+        expected: &'static str,
+    },
     #[error("SGM penalties P1 = {p1}, P2 = {p2}: {reason}")]
     Penalties { p1: f32, p2: f32, reason: String },
     #[error("camera {camera}: {reason}")]

@@ -105,8 +105,9 @@ impl SgmParams {
     ///
     /// # Errors
     /// [`StereoError::Penalties`] for non-finite or negative values, `P2 < P1`
-    /// or `P2` too large for 16-bit aggregation; [`StereoError::Volume`] for
-    /// an even or zero patch size.
+    /// or `P2` too large for 16-bit aggregation; [`StereoError::Parameter`] for
+    /// an even or zero patch size, an even median filter size or a minimum confidence
+    /// outside `[0, 1]`.
     pub fn validate(&self) -> Result<(), StereoError> {
         let bad = |reason: String| StereoError::Penalties {
             p1: self.p1,
@@ -128,22 +129,25 @@ impl SgmParams {
             )));
         }
         if !(self.min_confidence.is_finite() && (0.0..=1.0).contains(&self.min_confidence)) {
-            return Err(StereoError::Volume(format!(
-                "minimum confidence {}: expected a value in [0, 1]",
-                self.min_confidence
-            )));
+            return Err(StereoError::Parameter {
+                name: "min_confidence",
+                value: self.min_confidence.to_string(),
+                expected: "a value in [0, 1]",
+            });
         }
         if self.median > 1 && self.median.is_multiple_of(2) {
-            return Err(StereoError::Volume(format!(
-                "median filter size {}: expected an odd number of pixels (or 0: none)",
-                self.median
-            )));
+            return Err(StereoError::Parameter {
+                name: "median",
+                value: self.median.to_string(),
+                expected: "an odd number of pixels (or 0: none)",
+            });
         }
         if self.patch == 0 || self.patch.is_multiple_of(2) {
-            return Err(StereoError::Volume(format!(
-                "patch size {}: expected an odd number of pixels (9 in the paper)",
-                self.patch
-            )));
+            return Err(StereoError::Parameter {
+                name: "patch",
+                value: self.patch.to_string(),
+                expected: "an odd number of pixels (9 in the paper)",
+            });
         }
         Ok(())
     }
@@ -181,5 +185,17 @@ mod tests {
             ..SgmParams::default()
         };
         assert!(even.validate().is_err());
+        for (median, min_confidence, ok) in [(4, 0.0, false), (5, 1.5, false), (0, 0.05, true)] {
+            let p = SgmParams {
+                median,
+                min_confidence,
+                ..SgmParams::default()
+            };
+            assert_eq!(
+                p.validate().is_ok(),
+                ok,
+                "median {median}, {min_confidence}"
+            );
+        }
     }
 }

@@ -3,9 +3,10 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use omnimvs_data::output::ConfidenceRun;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, StageTimes};
+use omnimvs_net::NetError;
 use omnimvs_net::learned_sgm::{MatchingCost, sgm_estimator};
 use omnimvs_stereo::{Directions, SgmEstimator, SgmParams, SweepStep};
 use omnimvs_sweep::GrayImage;
@@ -119,8 +120,11 @@ pub fn estimator(
         Cost::Mccnn => MatchingCost::McCnn,
         Cost::Sweepnet => MatchingCost::SweepNet,
     };
-    sgm_estimator(&ds.rig, ds.masks()?, spec, cost, weights, params)
-        .with_context(|| format!("--cost-weights {weights}"))
+    // Errors of the method's own parameters say which; the others come from the weights.
+    sgm_estimator(&ds.rig, ds.masks()?, spec, cost, weights, params).map_err(|e| match e {
+        NetError::Stereo(_) => anyhow::Error::new(e),
+        e => anyhow::Error::new(e).context(format!("--cost-weights {weights}")),
+    })
 }
 
 /// The line that presents the method's settings.
