@@ -3,7 +3,10 @@
 
 use std::path::{Path, PathBuf};
 
+use std::sync::mpsc;
+
 use anyhow::{Result, bail};
+use omnimvs_data::gt::EvalTruth;
 use omnimvs_data::output::ConfidenceRun;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, StageTimes};
 use omnimvs_net::NetError;
@@ -158,15 +161,36 @@ pub fn frame(
     frame: u32,
     images: &[GrayImage],
 ) -> Result<DepthEstimate> {
+    let truth = frame_truth(ds, stereo, frame);
+    let (est, timings) = estimate(stereo, images)?;
+    record(run, frame, &est, timings, truth.as_ref())?;
+    Ok(est)
+}
+
+/// The frame's ground truth on the method's grid; `None` (said on stderr) when it has none
+/// or it cannot be read.
+fn frame_truth(ds: &Dataset, stereo: &SgmEstimator, frame: u32) -> Option<EvalTruth> {
+    ds.eval_truth(frame, stereo.spec()).unwrap_or_else(|e| {
+        eprintln!("frame {frame}: no metrics: {e}");
+        None
+    })
+}
+
+/// The estimate of one frame and the time of each stage.
+fn estimate(stereo: &SgmEstimator, images: &[GrayImage]) -> Result<(DepthEstimate, StageTimes)> {
     let mut timings = StageTimes::default();
     let est = stereo.estimate_observed(images, &mut timings)?;
-    let truth = match ds.eval_truth(frame, stereo.spec()) {
-        Ok(truth) => truth,
-        Err(e) => {
-            eprintln!("frame {frame}: no metrics: {e}");
-            None
-        }
-    };
+    Ok((est, timings))
+}
+
+/// Writes one frame's files into `run` and prints the line that reports it.
+fn record(
+    run: &mut ConfidenceRun,
+    frame: u32,
+    est: &DepthEstimate,
+    timings: StageTimes,
+    truth: Option<&EvalTruth>,
+) -> Result<()> {
     let t = |name| timings.get(name);
     let line = format!(
         "frame {frame:5}: warp {:.2} s, cost {:.2} s, aggregation {:.2} s, wta {:.2} s, total {:.2} s",
@@ -176,7 +200,7 @@ pub fn frame(
         t("wta"),
         t("total"),
     );
-    let record = run.add(frame, &est, timings, truth.as_ref())?;
+    let record = run.add(frame, est, timings, truth)?;
     let metrics = record.protocol_metrics().map_or(String::new(), |m| {
         let (r, s) = (m.reference, m.with_sky);
         format!(
@@ -185,7 +209,7 @@ pub fn frame(
         )
     });
     outln!("{line}{metrics}");
-    Ok(est)
+    Ok(())
 }
 
 /// Writes the run's reports and prints its table, when frames had ground truth.
@@ -212,11 +236,66 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let spec = args.sweep.spec(&ds)?;
     let stereo = estimator(&ds, spec, args.cost, &args.cost_weights, |d| args.params(d))?;
-    let mut run = ConfidenceRun::new(&args.out, spec)?;
+    let run = ConfidenceRun::new(&args.out, spec)?;
     outln!("{}", header(&ds, &stereo));
-    for &f in &frames {
-        let images = ds.read_frame(f)?;
-        frame(&ds, &stereo, &mut run, f, &images)?;
-    }
+    let run = pipelined(&ds, &stereo, run, &frames)?;
     finish(&ds, &stereo, run, &args.out)
+}
+
+/// The frames one after the other, with their files read one frame ahead and written one
+/// frame behind on threads of their own: decoding the images and ground truth and encoding
+/// the outputs (one core each) overlap the method's parallel work instead of leaving a core
+/// idle. The same files and lines as [`frame`] frame by frame, in order; the first error
+/// stops the run.
+///
+/// # Errors
+/// As [`frame`].
+fn pipelined(
+    ds: &Dataset,
+    stereo: &SgmEstimator,
+    mut run: ConfidenceRun,
+    frames: &[u32],
+) -> Result<ConfidenceRun> {
+    type Read = (u32, Result<Vec<GrayImage>>, Option<EvalTruth>);
+    type Done = (u32, DepthEstimate, StageTimes, Option<EvalTruth>);
+    std::thread::scope(|scope| {
+        let (read_tx, read_rx) = mpsc::sync_channel::<Read>(1);
+        let (done_tx, done_rx) = mpsc::sync_channel::<Done>(1);
+        scope.spawn(move || {
+            for &f in frames {
+                let images = ds.read_frame(f).map_err(anyhow::Error::from);
+                let failed = images.is_err();
+                let truth = if failed {
+                    None
+                } else {
+                    frame_truth(ds, stereo, f)
+                };
+                // A closed channel: the run stopped at an error.
+                if read_tx.send((f, images, truth)).is_err() || failed {
+                    break;
+                }
+            }
+        });
+        let writer = scope.spawn(move || -> Result<ConfidenceRun> {
+            for (f, est, timings, truth) in done_rx {
+                record(&mut run, f, &est, timings, truth.as_ref())?;
+            }
+            Ok(run)
+        });
+        let computed = (|| -> Result<()> {
+            for (f, images, truth) in read_rx {
+                let (est, timings) = estimate(stereo, &images?)?;
+                if done_tx.send((f, est, timings, truth)).is_err() {
+                    break; // the writer stopped at an error, which it returns
+                }
+            }
+            Ok(())
+        })();
+        drop(done_tx);
+        let written = writer
+            .join()
+            .map_err(|_| anyhow::anyhow!("the thread writing the outputs panicked"))?;
+        computed?;
+        written
+    })
 }
