@@ -20,7 +20,7 @@ use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
 use crate::params::{COST_SCALE, SweepStep};
-use crate::{CameraView, SphereProjector, StereoError, Taps};
+use crate::{CameraView, SphereProjector, StereoError, Taps, TexelPairs};
 
 /// Cost where fewer than two cameras see the whole window.
 pub const NO_PAIR_COST: f32 = 0.5;
@@ -162,6 +162,12 @@ struct Scratch {
     table_pos: Vec<f32>,
     /// `[col]`: their texels and offsets in the camera's image.
     taps: Taps,
+    /// `[col]`: the texels of those taps.
+    texels: TexelPairs,
+    /// `[col]`: the samples of one sphere and whether each is missing, before they go into
+    /// their lane of `values` and `missing`.
+    run_values: Vec<f32>,
+    run_missing: Vec<f32>,
 }
 
 impl Scratch {
@@ -189,6 +195,9 @@ impl Scratch {
             pos_row: vec![0.0; cols],
             table_pos: vec![0.0; cols],
             taps: Taps::new(cols),
+            texels: TexelPairs::new(cols),
+            run_values: vec![0.0; cols],
+            run_missing: vec![0.0; cols],
         }
     }
 
@@ -632,23 +641,30 @@ impl Matcher<'_> {
                     &mut s.table_pos,
                 );
                 #[cfg(target_arch = "x86_64")]
-                let done = pulp::x86::V3::try_new().map_or(0, |simd| {
+                let v3 = pulp::x86::V3::try_new();
+                #[cfg(target_arch = "x86_64")]
+                let done = v3.map_or(0, |simd| {
                     view.taps_v3(simd, &s.pos_col, &s.pos_row, &mut s.taps)
                 });
                 #[cfg(not(target_arch = "x86_64"))]
                 let done = 0;
                 view.taps(done, &s.pos_col, &s.pos_row, &mut s.taps);
+                view.gather(&s.taps.index, &mut s.texels);
                 let r = s.row_slice(cam, slot);
+                let (run_v, run_m) = (&mut s.run_values, &mut s.run_missing);
+                #[cfg(target_arch = "x86_64")]
+                let done = v3.map_or(0, |simd| {
+                    view.blend_v3(simd, &s.taps, &s.texels, run_v, run_m)
+                });
+                #[cfg(not(target_arch = "x86_64"))]
+                let done = 0;
+                view.blend(done, &s.taps, &s.texels, run_v, run_m);
                 let (vals, miss) = (&mut s.values[r.clone()], &mut s.missing[r]);
-                let texels = vals
+                let lanes_out = vals
                     .chunks_exact_mut(lanes)
                     .zip(miss.chunks_exact_mut(lanes));
-                let taps = s.taps.index.iter().zip(&s.taps.fx).zip(&s.taps.fy);
-                for ((v, m), ((&i, &fx), &fy)) in texels.zip(taps) {
-                    (v[g], m[g]) = match view.sample_at(i, fx, fy) {
-                        Some(v) => (v, 0.0),
-                        None => (0.0, 1.0),
-                    };
+                for ((v, m), (&rv, &rm)) in lanes_out.zip(run_v.iter().zip(run_m.iter())) {
+                    (v[g], m[g]) = (rv, rm);
                 }
             }
         }

@@ -220,6 +220,128 @@ impl CameraView {
     }
 }
 
+impl CameraView {
+    /// The texels that [`Self::sample_at`] reads for the taps `index` (the scalar loads of
+    /// a run of samples; the arithmetic is then [`Self::blend`]'s, eight at a time).
+    pub fn gather(&self, index: &[i32], pairs: &mut TexelPairs) {
+        let (t, w) = (&self.texels, self.width);
+        let out = pairs.top.iter_mut().zip(pairs.bottom.iter_mut());
+        for (&i, (top, bottom)) in index.iter().zip(out) {
+            (*top, *bottom) = usize::try_from(i)
+                .ok()
+                .and_then(|i0| {
+                    let [t00, t01] = *t.get(i0..)?.first_chunk::<2>()?;
+                    let [t10, t11] = *t.get(i0 + w..)?.first_chunk::<2>()?;
+                    Some((
+                        u32::from(t00) | (u32::from(t01) << 16),
+                        u32::from(t10) | (u32::from(t11) << 16),
+                    ))
+                })
+                .unwrap_or((0, 0));
+        }
+    }
+
+    /// [`Self::sample_at`] from the texels [`Self::gather`] read, for taps `start..`: the
+    /// normalised value (0 where there is none) and 1 where there is none (0 otherwise).
+    /// Bit for bit what `sample_at` gives.
+    pub fn blend(
+        &self,
+        start: usize,
+        taps: &Taps,
+        pairs: &TexelPairs,
+        values: &mut [f32],
+        missing: &mut [f32],
+    ) {
+        let n = values.len().min(missing.len()).min(pairs.top.len());
+        for i in start..n {
+            let (top, bottom) = (pairs.top[i], pairs.bottom[i]);
+            if top & 1 == 0 {
+                (values[i], missing[i]) = (0.0, 1.0);
+                continue;
+            }
+            let (a, b) = ((top & 0xffff) >> 1, top >> 17);
+            let (c, d) = ((bottom & 0xffff) >> 1, bottom >> 17);
+            let (a, b, c, d) = (a as f32, b as f32, c as f32, d as f32);
+            let (fx, fy) = (taps.fx[i], taps.fy[i]);
+            let upper = a + fx * (b - a);
+            let lower = c + fx * (d - c);
+            let gray = (upper + fy * (lower - upper)) * (1.0 / TEXEL_SCALE);
+            (values[i], missing[i]) = ((gray - self.mean) * self.inv_std, 0.0);
+        }
+    }
+
+    /// [`Self::blend`] eight taps at a time with AVX2 (the same operations in the same
+    /// order, no fused multiply-add); returns how many leading taps it did.
+    #[cfg(target_arch = "x86_64")]
+    pub fn blend_v3(
+        &self,
+        simd: pulp::x86::V3,
+        taps: &Taps,
+        pairs: &TexelPairs,
+        values: &mut [f32],
+        missing: &mut [f32],
+    ) -> usize {
+        use pulp::{as_arrays, as_arrays_mut, bytemuck::cast};
+        let (mean, inv_std) = (self.mean, self.inv_std);
+        simd.vectorize(
+            #[inline(always)]
+            || {
+                let (top, _) = as_arrays::<8, u32>(&pairs.top);
+                let (bottom, _) = as_arrays::<8, u32>(&pairs.bottom);
+                let (fx, _) = as_arrays::<8, f32>(&taps.fx);
+                let (fy, _) = as_arrays::<8, f32>(&taps.fy);
+                let (values, _) = as_arrays_mut::<8, f32>(values);
+                let (missing, _) = as_arrays_mut::<8, f32>(missing);
+                let n = top.len().min(bottom.len()).min(fx.len()).min(fy.len());
+                let n = n.min(values.len()).min(missing.len());
+                let (zero, one) = (simd.splat_f32x8(0.0), simd.splat_f32x8(1.0));
+                let scale = simd.splat_f32x8(1.0 / TEXEL_SCALE);
+                let (mean, inv_std) = (simd.splat_f32x8(mean), simd.splat_f32x8(inv_std));
+                let high_bit = simd.splat_u32x8(1 << 31);
+                let float = |v: pulp::u32x8| simd.convert_i32x8_to_f32x8(cast(v));
+                for i in 0..n {
+                    let (t, u): (pulp::u32x8, pulp::u32x8) = (cast(top[i]), cast(bottom[i]));
+                    let valid = simd.cmp_ge_u32x8(simd.shl_const_u32x8::<31>(t), high_bit);
+                    let a = float(simd.shr_const_u32x8::<17>(simd.shl_const_u32x8::<16>(t)));
+                    let b = float(simd.shr_const_u32x8::<17>(t));
+                    let c = float(simd.shr_const_u32x8::<17>(simd.shl_const_u32x8::<16>(u)));
+                    let d = float(simd.shr_const_u32x8::<17>(u));
+                    let (x, y) = (cast(fx[i]), cast(fy[i]));
+                    let upper = simd.add_f32x8(a, simd.mul_f32x8(x, simd.sub_f32x8(b, a)));
+                    let lower = simd.add_f32x8(c, simd.mul_f32x8(x, simd.sub_f32x8(d, c)));
+                    let gray = simd.mul_f32x8(
+                        simd.add_f32x8(upper, simd.mul_f32x8(y, simd.sub_f32x8(lower, upper))),
+                        scale,
+                    );
+                    let v = simd.mul_f32x8(simd.sub_f32x8(gray, mean), inv_std);
+                    values[i] = cast(simd.select_f32x8(valid, v, zero));
+                    missing[i] = cast(simd.select_f32x8(valid, zero, one));
+                }
+                n * 8
+            },
+        )
+    }
+}
+
+/// The texels of a run of taps ([`CameraView::gather`]), two per `u32`: `top[i]` holds the
+/// top-left texel in its low half and its right neighbour in the high half, `bottom[i]` the
+/// two below; both 0 (validity bit clear) where the tap is outside the image.
+#[derive(Debug, Clone, Default)]
+pub struct TexelPairs {
+    pub top: Vec<u32>,
+    pub bottom: Vec<u32>,
+}
+
+impl TexelPairs {
+    /// Room for `n` samples.
+    pub fn new(n: usize) -> Self {
+        Self {
+            top: vec![0; n],
+            bottom: vec![0; n],
+        }
+    }
+}
+
 /// Texel indices and fractional offsets of a run of bilinear samples
 /// ([`CameraView::taps`]).
 #[derive(Debug, Clone, Default)]
@@ -312,6 +434,28 @@ mod tests {
                 })
                 .collect();
             assert_eq!(vector, plain);
+        }
+        // Gathered texels blended, plainly and eight at a time: the same bits again.
+        let as_pair = |s: Option<u32>| s.map_or((0, 1f32.to_bits()), |b| (b, 0));
+        let expected: Vec<(u32, u32)> = plain.iter().map(|&s| as_pair(s)).collect();
+        let mut pairs = TexelPairs::new(cols.len());
+        v.gather(&taps.index, &mut pairs);
+        let blended = |done: usize, values: &mut Vec<f32>, missing: &mut Vec<f32>| {
+            v.blend(done, &taps, &pairs, values, missing);
+            values
+                .iter()
+                .zip(missing.iter())
+                .map(|(a, b)| (a.to_bits(), b.to_bits()))
+                .collect::<Vec<_>>()
+        };
+        let (mut values, mut missing) = (vec![7.0; cols.len()], vec![7.0; cols.len()]);
+        assert_eq!(blended(0, &mut values, &mut missing), expected);
+        #[cfg(target_arch = "x86_64")]
+        if let Some(simd) = pulp::x86::V3::try_new() {
+            let (mut values, mut missing) = (vec![7.0; cols.len()], vec![7.0; cols.len()]);
+            let done = v.blend_v3(simd, &taps, &pairs, &mut values, &mut missing);
+            assert_eq!(done, 200);
+            assert_eq!(blended(done, &mut values, &mut missing), expected);
         }
     }
 
