@@ -40,6 +40,10 @@ pub struct SweepNetConfig {
     pub p1: f32,
     /// SGM `P2` for this cost.
     pub p2: f32,
+    /// Share of the plain 9x9 ZNCC cost in the cost SGM gets, `(1 - w) * learned + w * zncc`
+    /// (`omnimvs_stereo::SweepCostHead::zncc_weight`; 0, the default: the learned cost alone).
+    #[serde(default)]
+    pub zncc_weight: f32,
 }
 
 impl Default for SweepNetConfig {
@@ -53,6 +57,7 @@ impl Default for SweepNetConfig {
             temperature: 10.0,
             p1: omnimvs_stereo::DEFAULT_P1,
             p2: omnimvs_stereo::DEFAULT_P2,
+            zncc_weight: 0.0,
         }
     }
 }
@@ -105,6 +110,9 @@ impl SweepNetConfig {
                 "radii",
                 "expected at least one window half side, each >= 1",
             ));
+        }
+        if !(0.0..=1.0).contains(&self.zncc_weight) {
+            return Err(bad("zncc_weight", "expected a share in [0, 1]"));
         }
         if self.hidden.contains(&0) {
             return Err(bad("hidden", "expected layers of at least one unit"));
@@ -193,10 +201,12 @@ impl SweepNet {
                 bias,
             });
         }
-        Mlp::new(Self::NAME, self.config.spec(), layers).map_err(|e| NetError::InvalidConfig {
-            field: "layers",
-            message: e.to_string(),
-        })
+        Mlp::new(Self::NAME, self.config.spec(), layers)
+            .and_then(|m| m.with_zncc_weight(self.config.zncc_weight))
+            .map_err(|e| NetError::InvalidConfig {
+                field: "layers",
+                message: e.to_string(),
+            })
     }
 
     /// The network as the learned cost of `omnimvs_stereo`'s SGM.

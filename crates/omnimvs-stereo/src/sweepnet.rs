@@ -146,6 +146,12 @@ pub trait SweepCostHead: Debug + Send + Sync {
 
     /// The costs of `out.len()` feature vectors laid end to end in `features`.
     fn costs(&self, features: &[f32], out: &mut [f32]);
+
+    /// The share of the plain 9x9 ZNCC cost ([`FeatureLayout::zncc_cost`]) in the cost that
+    /// SGM gets, `(1 - w) * learned + w * zncc`, in `[0, 1]` (0: the learned cost alone).
+    fn zncc_weight(&self) -> f32 {
+        0.0
+    }
 }
 
 /// One fully connected layer, `weight[o * inputs + i]`.
@@ -168,6 +174,8 @@ pub struct Mlp {
     layers: Vec<Dense>,
     /// Each layer's weights as `[input][output]`.
     transposed: Vec<Vec<f32>>,
+    /// [`SweepCostHead::zncc_weight`].
+    zncc_weight: f32,
 }
 
 impl Mlp {
@@ -224,7 +232,25 @@ impl Mlp {
             spec,
             layers,
             transposed,
+            zncc_weight: 0.0,
         })
+    }
+
+    /// The same head with `weight` of the plain ZNCC cost mixed into its cost
+    /// ([`SweepCostHead::zncc_weight`]).
+    ///
+    /// # Errors
+    /// [`StereoError::Parameter`] for a weight outside `[0, 1]`.
+    pub fn with_zncc_weight(mut self, weight: f32) -> Result<Self, StereoError> {
+        if !(0.0..=1.0).contains(&weight) {
+            return Err(StereoError::Parameter {
+                name: "zncc_weight",
+                value: weight.to_string(),
+                expected: "a share in [0, 1]",
+            });
+        }
+        self.zncc_weight = weight;
+        Ok(self)
     }
 }
 
@@ -239,6 +265,10 @@ impl SweepCostHead for Mlp {
 
     fn features(&self) -> &FeatureSpec {
         &self.spec
+    }
+
+    fn zncc_weight(&self) -> f32 {
+        self.zncc_weight
     }
 
     fn costs(&self, features: &[f32], out: &mut [f32]) {
@@ -571,6 +601,7 @@ pub fn sweep_cost_volume(
     }
     let (w, h, nd) = (grid.width, grid.height, hyps.count);
     let step = sweep.stride();
+    let zncc_weight = head.zncc_weight();
     let inv_depths: Vec<f32> = (0..nd).map(|n| hyps.inv_depth(n as f64) as f32).collect();
     let start = Instant::now();
     let mut data = vec![0u16; w * h * nd];
@@ -597,7 +628,12 @@ pub fn sweep_cost_volume(
                     head.costs(feats, costs);
                     for (i, (f, &c)) in feats.chunks_exact(dim).zip(costs.iter()).enumerate() {
                         let cost = if any_pair(f, layout) {
-                            c.clamp(0.0, 1.0)
+                            let learned = c.clamp(0.0, 1.0);
+                            if zncc_weight > 0.0 {
+                                (1.0 - zncc_weight) * learned + zncc_weight * layout.zncc_cost(f)
+                            } else {
+                                learned
+                            }
                         } else {
                             NO_PAIR_COST
                         };

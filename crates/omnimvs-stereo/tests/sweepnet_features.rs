@@ -113,3 +113,54 @@ fn a_learned_head_names_the_method_and_every_other_sphere_fills_the_odd_ones() {
     let err = bad.cost_volume(&frame.images, None).unwrap_err();
     assert!(err.to_string().contains("26"), "{err}");
 }
+
+#[test]
+fn the_zncc_weight_mixes_the_plain_zncc_cost_into_the_learned_one() {
+    let rig = published_rig(0.25);
+    let grid = EquirectGrid::new(24, 96, 45.0).unwrap();
+    let hyps = InvDepthHypotheses::new(8, 1.0).unwrap();
+    let frame = Rendered::new(&room(&rig, 13), &rig);
+    let stereo = SphericalStereo::new(&rig, grid, hyps, SgmParams::default()).unwrap();
+    let (zncc, _) = stereo.cost_volume(&frame.images, None).unwrap();
+    let spec = FeatureSpec {
+        radii: vec![4],
+        shifted: false,
+    };
+    // All weights zero: the head answers sigmoid(0) = 0.5 everywhere.
+    let flat = Mlp::new(
+        "flat",
+        spec,
+        vec![omnimvs_stereo::sweepnet::Dense {
+            inputs: 26,
+            outputs: 1,
+            weight: vec![0.0; 26],
+            bias: vec![0.0],
+        }],
+    )
+    .unwrap();
+    assert!(flat.clone().with_zncc_weight(1.5).is_err());
+    assert!(flat.clone().with_zncc_weight(-0.1).is_err());
+    let volume = |weight: f32| {
+        let head = flat.clone().with_zncc_weight(weight).unwrap();
+        let learned = stereo
+            .clone()
+            .with_learned_cost(Some(LearnedCost::Sweep(Arc::new(head))));
+        learned.cost_volume(&frame.images, None).unwrap().0
+    };
+    let (alone, zncc_only, half) = (volume(0.0), volume(1.0), volume(0.5));
+    let worst = |expected: &dyn Fn(usize) -> f32, got: &[u16]| {
+        got.iter()
+            .enumerate()
+            .map(|(i, &c)| (expected(i) - f32::from(c)).abs())
+            .fold(0f32, f32::max)
+    };
+    // Where no pair sees the point every volume holds the no-pair cost, 0.5 as well.
+    assert!(alone.data.iter().all(|&c| c == 256));
+    assert!(worst(&|i| f32::from(zncc.data[i]), &zncc_only.data) <= 3.0);
+    let mixed = |i: usize| 0.5 * 256.0 + 0.5 * f32::from(zncc.data[i]);
+    assert!(worst(&mixed, &half.data) <= 3.0);
+    assert!(
+        zncc.data.iter().any(|&c| c < 200),
+        "the scene must match somewhere"
+    );
+}
