@@ -34,6 +34,9 @@ pub const ZNCC_VARIANCE_EPS: f32 = 1e-3;
 /// `[row][col][n]` volume (bounds the scratch memory).
 const SPHERE_GROUP: usize = 32;
 
+/// Runs `start..end` of columns of one grid row.
+type Runs = Vec<(usize, usize)>;
+
 /// Spheres one thread computes side by side (see [`Matcher::sphere_group`]).
 const INTERLEAVE: usize = 4;
 
@@ -626,45 +629,49 @@ impl Matcher<'_> {
 
     /// Samples grid row `row` of every camera on the spheres `inv_depths`
     /// (one per lane of `s`; lanes beyond them are left as they are) into
-    /// the ring slot of that row.
-    fn warp_rows(&self, s: &mut Scratch, row: usize, inv_depths: &[f32]) {
+    /// the ring slot of that row. `visible[cam][row]` are the runs of columns where the
+    /// camera can see some sphere of the sweep ([`SphereProjector::visible_runs`]); the
+    /// others are missing in every lane, as sampling would find them.
+    fn warp_rows(&self, s: &mut Scratch, row: usize, inv_depths: &[f32], visible: &[Vec<Runs>]) {
         let w = self.grid.width;
         let lanes = s.lanes;
         let slot = row % s.slots;
+        #[cfg(target_arch = "x86_64")]
+        let v3 = pulp::x86::V3::try_new();
         for (cam, view) in self.views.iter().enumerate() {
-            for (g, &d) in inv_depths.iter().enumerate().take(lanes) {
-                self.projectors[cam].project_run(
-                    row * w,
-                    d,
-                    &mut s.pos_col,
-                    &mut s.pos_row,
-                    &mut s.table_pos,
-                );
-                #[cfg(target_arch = "x86_64")]
-                let v3 = pulp::x86::V3::try_new();
-                #[cfg(target_arch = "x86_64")]
-                let done = v3.map_or(0, |simd| {
-                    view.taps_v3(simd, &s.pos_col, &s.pos_row, &mut s.taps)
-                });
-                #[cfg(not(target_arch = "x86_64"))]
-                let done = 0;
-                view.taps(done, &s.pos_col, &s.pos_row, &mut s.taps);
-                view.gather(&s.taps.index, &mut s.texels);
-                let r = s.row_slice(cam, slot);
-                let (run_v, run_m) = (&mut s.run_values, &mut s.run_missing);
-                #[cfg(target_arch = "x86_64")]
-                let done = v3.map_or(0, |simd| {
-                    view.blend_v3(simd, &s.taps, &s.texels, run_v, run_m)
-                });
-                #[cfg(not(target_arch = "x86_64"))]
-                let done = 0;
-                view.blend(done, &s.taps, &s.texels, run_v, run_m);
-                let (vals, miss) = (&mut s.values[r.clone()], &mut s.missing[r]);
-                let lanes_out = vals
-                    .chunks_exact_mut(lanes)
-                    .zip(miss.chunks_exact_mut(lanes));
-                for ((v, m), (&rv, &rm)) in lanes_out.zip(run_v.iter().zip(run_m.iter())) {
-                    (v[g], m[g]) = (rv, rm);
+            let runs = &visible[cam][row];
+            let r = s.row_slice(cam, slot);
+            if runs.iter().map(|&(a, b)| b - a).sum::<usize>() < w {
+                s.values[r.clone()].fill(0.0);
+                s.missing[r.clone()].fill(1.0);
+            }
+            for &(a, b) in runs {
+                let n = b - a;
+                for (g, &d) in inv_depths.iter().enumerate().take(lanes) {
+                    let (cols, rows) = (&mut s.pos_col[..n], &mut s.pos_row[..n]);
+                    self.projectors[cam].project_run(row * w + a, d, cols, rows, &mut s.table_pos);
+                    #[cfg(target_arch = "x86_64")]
+                    let done = v3.map_or(0, |simd| view.taps_v3(simd, cols, rows, &mut s.taps));
+                    #[cfg(not(target_arch = "x86_64"))]
+                    let done = 0;
+                    view.taps(done, cols, rows, &mut s.taps);
+                    view.gather(&s.taps.index[..n], &mut s.texels);
+                    let (run_v, run_m) = (&mut s.run_values[..n], &mut s.run_missing[..n]);
+                    #[cfg(target_arch = "x86_64")]
+                    let done = v3.map_or(0, |simd| {
+                        view.blend_v3(simd, &s.taps, &s.texels, run_v, run_m)
+                    });
+                    #[cfg(not(target_arch = "x86_64"))]
+                    let done = 0;
+                    view.blend(done, &s.taps, &s.texels, run_v, run_m);
+                    let span = r.start + a * lanes..r.start + b * lanes;
+                    let (vals, miss) = (&mut s.values[span.clone()], &mut s.missing[span]);
+                    let lanes_out = vals
+                        .chunks_exact_mut(lanes)
+                        .zip(miss.chunks_exact_mut(lanes));
+                    for ((v, m), (&rv, &rm)) in lanes_out.zip(run_v.iter().zip(run_m.iter())) {
+                        (v[g], m[g]) = (rv, rm);
+                    }
                 }
             }
         }
@@ -752,6 +759,7 @@ impl Matcher<'_> {
         s: &mut Scratch,
         inv_depths: &[f32],
         out: &mut [u16],
+        visible: &[Vec<Runs>],
     ) -> (Duration, Duration) {
         let (h, r) = (self.grid.height, self.radius);
         let spheres = inv_depths.len().min(s.lanes);
@@ -765,7 +773,7 @@ impl Matcher<'_> {
         }
         for row in 0..r.min(h) {
             let t0 = Instant::now();
-            self.warp_rows(s, row, &inv_depths[..spheres]);
+            self.warp_rows(s, row, &inv_depths[..spheres], visible);
             let t1 = Instant::now();
             s.accumulate(row % s.slots, 1.0);
             warp += t1 - t0;
@@ -777,7 +785,7 @@ impl Matcher<'_> {
             let t0 = Instant::now();
             let add = row + r;
             if add < h {
-                self.warp_rows(s, add, &inv_depths[..spheres]);
+                self.warp_rows(s, add, &inv_depths[..spheres], visible);
             }
             let t1 = Instant::now();
             let leave = (row > r).then(|| (row - r - 1) % s.slots);
@@ -816,6 +824,20 @@ impl Matcher<'_> {
         let computed: Vec<usize> = (0..nd).step_by(step).collect();
         let plane = w * h;
         let mut data = vec![0u16; plane * nd];
+        // Per camera and grid row, the columns where some sphere can be seen.
+        let near_far: Vec<f32> = [0, nd - 1]
+            .iter()
+            .map(|&n| hyps.inv_depth(n as f64) as f32)
+            .collect();
+        let visible: Vec<Vec<Runs>> = self
+            .projectors
+            .iter()
+            .map(|p| {
+                (0..h)
+                    .map(|row| p.visible_runs(row, w, near_far[0], near_far[1]))
+                    .collect()
+            })
+            .collect();
         let warp_ns = AtomicU64::new(0);
         let cost_ns = AtomicU64::new(0);
         let start = Instant::now();
@@ -835,7 +857,7 @@ impl Matcher<'_> {
                             .iter()
                             .map(|&n| hyps.inv_depth(n as f64) as f32)
                             .collect();
-                        let (tw, tc) = self.sphere_group(scratch, &d, out);
+                        let (tw, tc) = self.sphere_group(scratch, &d, out, &visible);
                         warp_ns.fetch_add(tw.as_nanos() as u64, Ordering::Relaxed);
                         cost_ns.fetch_add(tc.as_nanos() as u64, Ordering::Relaxed);
                     },

@@ -16,6 +16,11 @@ pub fn median_filter(map: &IndexMap, size: usize) -> Vec<f32> {
     let (w, h) = (map.width, map.height);
     let r = size / 2;
     let src = &map.index;
+    // The window's columns round the ring, per output column (no division per pixel).
+    let k = 2 * r + 1;
+    let cols: Vec<usize> = (0..w)
+        .flat_map(|x| (0..k).map(move |dx| (x + w * (r / w + 1) + dx - r) % w))
+        .collect();
     let mut out = vec![0f32; w * h];
     out.par_chunks_mut(w).enumerate().for_each_init(
         || Vec::with_capacity(size * size),
@@ -24,8 +29,8 @@ pub fn median_filter(map: &IndexMap, size: usize) -> Vec<f32> {
             for (x, o) in dst.iter_mut().enumerate() {
                 window.clear();
                 for y in r0..r1 {
-                    for dx in 0..2 * r + 1 {
-                        let v = src[y * w + (x + w + dx - r) % w];
+                    for &c in &cols[x * k..(x + 1) * k] {
+                        let v = src[y * w + c];
                         if v.is_finite() {
                             window.push(v);
                         }

@@ -317,6 +317,56 @@ impl SphereProjector {
         }
     }
 
+    /// The runs `start..end` of columns of grid row `row` (`width` columns) where some sphere
+    /// of inverse depth in `[near, far]` (1/m) can be inside the field of view; the other
+    /// columns see none of them, and [`Self::project`] gives `None` there for every such
+    /// sphere. Every column when the field of view is 180 degrees or less.
+    ///
+    /// Why two spheres decide: the point of pixel `i` on the sphere of inverse depth `d` is
+    /// proportional to `R r + d t`, a segment as `d` runs over `[near, far]`; beyond 180
+    /// degrees the directions the camera cannot see form a convex cone, which holds the
+    /// whole segment if it holds both ends. A margin of 1e-3 in `tan(alpha / 2)` keeps
+    /// rounding on the side of looking.
+    pub fn visible_runs(
+        &self,
+        row: usize,
+        width: usize,
+        near: f32,
+        far: f32,
+    ) -> Vec<(usize, usize)> {
+        if self.s_max <= 1.0 {
+            return vec![(0, width)];
+        }
+        let limit = self.s_max * (1.0 + 1e-3);
+        // NaN (0 / 0) and points straight behind (s huge) count as outside.
+        let inside = |i: usize, d: f32| {
+            let x = self.rays[0][i] + d * self.t[0];
+            let y = self.rays[1][i] + d * self.t[1];
+            let z = self.rays[2][i] + d * self.t[2];
+            let n2 = x * x + y * y;
+            let s = n2.sqrt() / ((n2 + z * z).sqrt() + z);
+            s <= limit
+        };
+        let mut runs = Vec::new();
+        let mut open: Option<usize> = None;
+        for col in 0..width {
+            let i = row * width + col;
+            let seen = inside(i, near) || inside(i, far);
+            match (seen, open) {
+                (true, None) => open = Some(col),
+                (false, Some(start)) => {
+                    runs.push((start, col));
+                    open = None;
+                }
+                _ => {}
+            }
+        }
+        if let Some(start) = open {
+            runs.push((start, width));
+        }
+        runs
+    }
+
     /// Number of grid pixels.
     pub fn len(&self) -> usize {
         self.rays[0].len()
@@ -332,6 +382,41 @@ impl SphereProjector {
 mod tests {
     use super::*;
     use omnimvs_sweep::{InvDepthHypotheses, LookupTable, SphereSet};
+
+    #[test]
+    fn columns_outside_the_visible_runs_see_no_sphere() {
+        let rig = omnimvs_synth::rig::preset_rig().unwrap().rig;
+        let grid = EquirectGrid::new(40, 160, 45.0).unwrap();
+        let hyps = InvDepthHypotheses::new(64, 0.55).unwrap();
+        let (near, far) = (hyps.inv_depth(0.0) as f32, hyps.inv_depth(63.0) as f32);
+        let (mut culled, mut seen_near_edge) = (0, 0);
+        for (cam, camera) in rig.cameras.iter().enumerate() {
+            let p = SphereProjector::new(camera, cam + 1, &grid).unwrap();
+            for row in 0..grid.height {
+                let runs = p.visible_runs(row, grid.width, near, far);
+                assert!(runs.windows(2).all(|r| r[0].1 < r[1].0), "{runs:?}");
+                for col in 0..grid.width {
+                    let i = row * grid.width + col;
+                    let listed = runs.iter().any(|&(a, b)| (a..b).contains(&col));
+                    let any =
+                        (0..64).any(|n| p.project(i, hyps.inv_depth(n as f64) as f32).is_some());
+                    if !listed {
+                        assert!(!any, "cam {cam} row {row} col {col}: a sphere is seen");
+                        culled += 1;
+                    } else if !any {
+                        seen_near_edge += 1; // listed by the margin or between spheres
+                    }
+                }
+            }
+        }
+        // A 220-degree camera misses about a third of the panorama.
+        let all = 4 * grid.len();
+        assert!(culled > all / 4 && culled < all / 2, "{culled} of {all}");
+        assert!(
+            seen_near_edge < all / 50,
+            "{seen_near_edge} listed but unseen"
+        );
+    }
 
     #[test]
     fn matches_the_lookup_table() {

@@ -21,18 +21,12 @@ pub struct IndexMap {
 /// Index and confidence of one pixel.
 fn pixel(costs: &[u16]) -> (f32, f32) {
     let nd = costs.len();
-    let mut best = 0usize;
-    for (n, &c) in costs.iter().enumerate() {
-        if c < costs[best] {
-            best = n;
-        }
-    }
-    let mut second = u16::MAX;
-    for (n, &c) in costs.iter().enumerate() {
-        if n + 1 < best || n > best + 1 {
-            second = second.min(c);
-        }
-    }
+    // The first smallest cost, then the smallest more than one hypothesis away: minima over
+    // contiguous runs, which vectorise.
+    let lowest = |run: &[u16]| run.iter().copied().min().unwrap_or(u16::MAX);
+    let min = lowest(costs);
+    let best = costs.iter().position(|&c| c == min).unwrap_or(0);
+    let second = lowest(&costs[..best.saturating_sub(1)]).min(lowest(&costs[(best + 2).min(nd)..]));
     let mut index = best as f32;
     if best > 0 && best + 1 < nd {
         let (c0, c1, c2) = (
@@ -91,5 +85,40 @@ mod tests {
         assert_eq!(pixel(&[1, 5, 9, 9]).0, 0.0);
         // Two equal distant minima: confidence 0.
         assert_eq!(pixel(&[3, 9, 9, 9, 3]).1, 0.0);
+    }
+
+    #[test]
+    fn best_and_second_are_the_plain_definitions() {
+        // The first strict minimum, and the smallest cost more than one hypothesis from it.
+        let plain = |costs: &[u16]| {
+            let mut best = 0;
+            for (n, &c) in costs.iter().enumerate() {
+                if c < costs[best] {
+                    best = n;
+                }
+            }
+            let second = (0..costs.len())
+                .filter(|&n| n + 1 < best || n > best + 1)
+                .map(|n| costs[n])
+                .min()
+                .unwrap_or(u16::MAX);
+            (best, second)
+        };
+        let mut rng = omnimvs_camera::rng::SplitMix64::new(5);
+        for len in [2, 3, 4, 17, 192] {
+            for _ in 0..200 {
+                // Few distinct values, so that ties and neighbours are common.
+                let costs: Vec<u16> = (0..len).map(|_| (rng.next_f64() * 6.0) as u16).collect();
+                let (best, second) = plain(&costs);
+                let (index, confidence) = pixel(&costs);
+                assert!((index - best as f32).abs() <= 0.5, "{costs:?}: {index}");
+                let expected = if second == u16::MAX || second == 0 {
+                    0.0
+                } else {
+                    1.0 - f32::from(costs[best]) / f32::from(second)
+                };
+                assert_eq!(confidence, expected, "{costs:?}");
+            }
+        }
     }
 }
