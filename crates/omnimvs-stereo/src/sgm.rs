@@ -157,6 +157,18 @@ fn accumulate(sum: &mut [u16], path: &[i16]) {
     }
 }
 
+/// Runs `f` with AVX2 enabled where the CPU has it (checked at run time), so that the
+/// [`step`]s and [`accumulate`]s of a whole row inline into its loops instead of being called
+/// one pixel at a time.
+#[inline(always)]
+fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = pulp::x86::V3::try_new() {
+        return simd.vectorize(f);
+    }
+    f()
+}
+
 /// A path state for one pixel: zeros inside, sentinels at the ends (the
 /// state "before" the first pixel of a path, so that `L = C` there).
 fn start_state(nd: usize) -> Vec<i16> {
@@ -168,6 +180,15 @@ fn start_state(nd: usize) -> Vec<i16> {
 
 /// Both horizontal paths of one row, twice round the ring.
 fn horizontal_row(cost: &[u16], sum: &mut [u16], nd: usize, p1: i16, p2: i16) {
+    with_avx2(
+        #[inline(always)]
+        || horizontal_row_plain(cost, sum, nd, p1, p2),
+    );
+}
+
+/// [`horizontal_row`]'s loops.
+#[inline(always)]
+fn horizontal_row_plain(cost: &[u16], sum: &mut [u16], nd: usize, p1: i16, p2: i16) {
     let w = cost.len() / nd;
     for forward in [true, false] {
         let mut prev = start_state(nd);
@@ -209,27 +230,32 @@ fn vertical_pass(cost: &CostVolume, sum: &mut [u16], dxs: &[isize], down: bool, 
             .zip(sum_row.par_chunks_mut(CHUNK * nd))
             .enumerate()
             .for_each(|(chunk, ((cur, cur_min), sum))| {
-                let x0 = chunk * CHUNK;
-                for (j, s) in sum.chunks_exact_mut(nd).enumerate() {
-                    let x = x0 + j;
-                    let c = &cost_row[x * nd..(x + 1) * nd];
-                    for (dir, &dx) in dxs.iter().enumerate() {
-                        // The previous pixel on the path is (y - dy, x - dx).
-                        let xs = (x as isize - dx).rem_euclid(w as isize) as usize;
-                        let src = (xs * ndir + dir) * nd2;
-                        let dst = (j * ndir + dir) * nd2;
-                        let m = step(
-                            c,
-                            &prev_ref[src..src + nd2],
-                            prev_min_ref[xs * ndir + dir],
-                            p1,
-                            p2,
-                            &mut cur[dst..dst + nd2],
-                        );
-                        cur_min[j * ndir + dir] = m;
-                        accumulate(s, &cur[dst..dst + nd2]);
-                    }
-                }
+                with_avx2(
+                    #[inline(always)]
+                    || {
+                        let x0 = chunk * CHUNK;
+                        for (j, s) in sum.chunks_exact_mut(nd).enumerate() {
+                            let x = x0 + j;
+                            let c = &cost_row[x * nd..(x + 1) * nd];
+                            for (dir, &dx) in dxs.iter().enumerate() {
+                                // The previous pixel on the path is (y - dy, x - dx).
+                                let xs = (x as isize - dx).rem_euclid(w as isize) as usize;
+                                let src = (xs * ndir + dir) * nd2;
+                                let dst = (j * ndir + dir) * nd2;
+                                let m = step(
+                                    c,
+                                    &prev_ref[src..src + nd2],
+                                    prev_min_ref[xs * ndir + dir],
+                                    p1,
+                                    p2,
+                                    &mut cur[dst..dst + nd2],
+                                );
+                                cur_min[j * ndir + dir] = m;
+                                accumulate(s, &cur[dst..dst + nd2]);
+                            }
+                        }
+                    },
+                );
             });
         std::mem::swap(&mut prev, &mut cur);
         std::mem::swap(&mut prev_min, &mut cur_min);
