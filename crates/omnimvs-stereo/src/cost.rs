@@ -808,6 +808,20 @@ impl Matcher<'_> {
         hyps: &InvDepthHypotheses,
         sweep: SweepStep,
     ) -> Result<(CostVolume, CostTimings), StereoError> {
+        self.cost_volume_in(hyps, sweep, Vec::new())
+    }
+
+    /// [`Self::cost_volume`] in `buffer` (any content; its memory is reused, which spares a
+    /// frame the page faults of a fresh volume).
+    ///
+    /// # Errors
+    /// As [`Self::cost_volume`].
+    pub fn cost_volume_in(
+        &self,
+        hyps: &InvDepthHypotheses,
+        sweep: SweepStep,
+        buffer: Vec<u16>,
+    ) -> Result<(CostVolume, CostTimings), StereoError> {
         let (w, h) = (self.grid.width, self.grid.height);
         let ncam = self.views.len();
         if ncam < 2 || self.projectors.len() != ncam {
@@ -823,7 +837,9 @@ impl Matcher<'_> {
         let step = sweep.stride();
         let computed: Vec<usize> = (0..nd).step_by(step).collect();
         let plane = w * h;
-        let mut data = vec![0u16; plane * nd];
+        let mut data = buffer;
+        data.clear();
+        data.resize(plane * nd, 0);
         // Per camera and grid row, the columns where some sphere can be seen.
         let near_far: Vec<f32> = [0, nd - 1]
             .iter()

@@ -1,7 +1,7 @@
 //! The whole method for one rig and output grid: normalise the images,
 //! match (warp + ZNCC), aggregate (SGM), pick (WTA + parabola).
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
 use omnimvs_camera::{Rig, ValidityMask};
@@ -12,7 +12,7 @@ use crate::learned::{FeatureExtractor, feature_cost_volume};
 use crate::sweepnet::{SweepCostHead, sweep_cost_volume};
 use crate::{
     AggregatedVolume, CameraView, CostVolume, IndexMap, Matcher, SgmParams, SphereProjector,
-    StereoError, aggregate, winner_take_all,
+    StereoError, aggregate_in, winner_take_all,
 };
 
 /// Wall-clock time of each stage of one frame.
@@ -55,6 +55,37 @@ pub struct SphericalStereo {
     projectors: Vec<SphereProjector>,
     /// The learned matching cost; ZNCC when absent.
     learned: Option<LearnedCost>,
+    /// Volume buffers kept from one frame to the next.
+    buffers: Recycled,
+}
+
+/// Buffers of 16-bit volumes kept from one frame to the next: a fresh volume (39 MB at
+/// 160x640x192) costs every frame its page faults and, when freed, its unmapping, several
+/// times the cost of clearing a kept one. Clones of a [`SphericalStereo`] share them.
+#[derive(Debug, Clone, Default)]
+struct Recycled(Arc<Mutex<Vec<Vec<u16>>>>);
+
+impl Recycled {
+    /// Buffers kept at most: the cost volume and the aggregated one.
+    const KEPT: usize = 2;
+
+    fn lock(&self) -> MutexGuard<'_, Vec<Vec<u16>>> {
+        // A panic elsewhere cannot leave a list of buffers half changed.
+        self.0.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// A kept buffer (any content), or an empty one.
+    fn take(&self) -> Vec<u16> {
+        self.lock().pop().unwrap_or_default()
+    }
+
+    /// Keeps `buffer` for a later frame.
+    fn give(&self, buffer: Vec<u16>) {
+        let mut kept = self.lock();
+        if kept.len() < Self::KEPT {
+            kept.push(buffer);
+        }
+    }
 }
 
 /// A learned matching cost in place of ZNCC.
@@ -120,6 +151,7 @@ impl SphericalStereo {
                 .collect(),
             projectors,
             learned: None,
+            buffers: Recycled::default(),
         })
     }
 
@@ -229,7 +261,11 @@ impl SphericalStereo {
                     views: &views,
                     radius: self.params.patch / 2,
                 };
-                let (volume, t) = matcher.cost_volume(&self.hypotheses, self.params.sweep)?;
+                let (volume, t) = matcher.cost_volume_in(
+                    &self.hypotheses,
+                    self.params.sweep,
+                    self.buffers.take(),
+                )?;
                 (volume, t.warp, t.cost)
             }
         };
@@ -259,7 +295,7 @@ impl SphericalStereo {
                 cost.height, cost.width, cost.ndepth, g.height, g.width
             )));
         }
-        aggregate(cost, &self.params)
+        aggregate_in(cost, &self.params, self.buffers.take())
     }
 
     /// Inverse depth, index and confidence of one frame.
@@ -280,10 +316,10 @@ impl SphericalStereo {
         let start = Instant::now();
         let (cost, mut timings) = self.cost_volume(images, masks)?;
         let (agg, aggregation) = self.aggregate(&cost)?;
-        drop(cost);
+        self.buffers.give(cost.data);
         let t = Instant::now();
         let mut index = winner_take_all(&agg);
-        drop(agg);
+        self.buffers.give(agg.data);
         if self.params.min_confidence > 0.0 {
             crate::filter::invalidate_below(&mut index, self.params.min_confidence);
         }

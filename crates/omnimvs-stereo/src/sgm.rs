@@ -272,6 +272,19 @@ pub fn aggregate(
     cost: &CostVolume,
     params: &SgmParams,
 ) -> Result<(AggregatedVolume, Duration), StereoError> {
+    aggregate_in(cost, params, Vec::new())
+}
+
+/// [`aggregate`] in `buffer` (any content; its memory is reused, which spares a frame the
+/// page faults of a fresh volume).
+///
+/// # Errors
+/// As [`aggregate`].
+pub fn aggregate_in(
+    cost: &CostVolume,
+    params: &SgmParams,
+    buffer: Vec<u16>,
+) -> Result<(AggregatedVolume, Duration), StereoError> {
     params.validate()?;
     let (w, h, nd) = (cost.width, cost.height, cost.ndepth);
     if nd < 2 || w == 0 || h == 0 || cost.data.len() != w * h * nd {
@@ -282,7 +295,9 @@ pub fn aggregate(
     }
     let start = Instant::now();
     let (p1, p2) = (params.p1_units(), params.p2_units());
-    let mut sum = vec![0u16; w * h * nd];
+    let mut sum = buffer;
+    sum.clear();
+    sum.resize(w * h * nd, 0);
     sum.par_chunks_mut(w * nd)
         .zip(cost.data.par_chunks(w * nd))
         .for_each(|(s, c)| horizontal_row(c, s, nd, p1, p2));
