@@ -5,7 +5,7 @@
 //! `RAYON_NUM_THREADS=2 cargo bench -p omnimvs-stereo --bench bench_sgm`
 //!
 //! One benchmark per stage: `warp` (projecting every grid pixel of every
-//! sphere into every camera and sampling it, the way the matcher does),
+//! sphere into every camera that can see it and sampling it, with the matcher's kernels),
 //! `warp_and_cost` (the matcher: warp, window sums, ZNCC and the volume in
 //! one pass; the cost stage is its time minus `warp`'s), `aggregation_8_paths`
 //! and `wta`, then the whole method. The stage split of one frame is printed
@@ -18,7 +18,8 @@ mod scenes;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 use omnimvs_stereo::{
-    CameraView, SgmParams, SphereProjector, SphericalStereo, SweepStep, winner_take_all,
+    CameraView, Matcher, SgmParams, SphereProjector, SphericalStereo, SweepStep, Taps, TexelPairs,
+    aggregate_in, winner_take_all,
 };
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
@@ -72,7 +73,22 @@ fn bench(c: &mut Criterion) {
         .map(|(i, img)| CameraView::new(img, None, i + 1).unwrap())
         .collect();
     // Four consecutive spheres per task, interleaved row by row and camera
-    // by camera, as the matcher does (it keeps the images in cache).
+    // by camera, as the matcher does (it keeps the images in cache), with its
+    // kernels: only the columns a camera can see, positions, taps, texels, blend.
+    let (near, far) = (
+        hyps.inv_depth(0.0) as f32,
+        hyps.inv_depth((hyps.count - 1) as f64) as f32,
+    );
+    let visible: Vec<Vec<Vec<(usize, usize)>>> = projectors
+        .iter()
+        .map(|p| {
+            (0..grid.height)
+                .map(|row| p.visible_runs(row, grid.width, near, far))
+                .collect()
+        })
+        .collect();
+    #[cfg(target_arch = "x86_64")]
+    let v3 = pulp::x86::V3::try_new();
     g.bench_function("warp", |b| {
         b.iter(|| {
             let spheres: Vec<usize> = (0..hyps.count).collect();
@@ -86,13 +102,29 @@ fn bench(c: &mut Criterion) {
                     let w = grid.width;
                     let (mut cols, mut rows, mut tmp) =
                         (vec![0f32; w], vec![0f32; w], vec![0f32; w]);
+                    let mut taps = Taps::new(w);
+                    let mut texels = TexelPairs::new(w);
+                    let (mut values, mut missing) = (vec![0f32; w], vec![0f32; w]);
                     let mut acc = 0f32;
                     for row in 0..grid.height {
-                        for (p, v) in projectors.iter().zip(&views) {
-                            for &dn in &d {
-                                p.project_run(row * w, dn, &mut cols, &mut rows, &mut tmp);
-                                for (&c, &r) in cols.iter().zip(&rows) {
-                                    acc += v.sample(c, r).unwrap_or(0.0);
+                        for ((p, v), runs) in projectors.iter().zip(&views).zip(&visible) {
+                            for &(a, e) in &runs[row] {
+                                let n = e - a;
+                                for &dn in &d {
+                                    let (c, r) = (&mut cols[..n], &mut rows[..n]);
+                                    p.project_run(row * w + a, dn, c, r, &mut tmp);
+                                    #[cfg(target_arch = "x86_64")]
+                                    let done = v3.map_or(0, |s| v.taps_v3(s, c, r, &mut taps));
+                                    #[cfg(not(target_arch = "x86_64"))]
+                                    let done = 0;
+                                    v.taps(done, c, r, &mut taps);
+                                    v.gather(&taps.index[..n], &mut texels);
+                                    let (vals, miss) = (&mut values[..n], &mut missing[..n]);
+                                    #[cfg(target_arch = "x86_64")]
+                                    let done =
+                                        v3.map_or(0, |s| v.blend_v3(s, &taps, &texels, vals, miss));
+                                    v.blend(done, &taps, &texels, vals, miss);
+                                    acc += values[..n].iter().sum::<f32>();
                                 }
                             }
                         }
@@ -102,12 +134,31 @@ fn bench(c: &mut Criterion) {
                 .sum::<f32>()
         })
     });
+    // The matcher and SGM in buffers kept from one iteration to the next, as
+    // `SphericalStereo` keeps them from frame to frame.
+    let matcher = Matcher {
+        grid,
+        projectors: &projectors,
+        views: &views,
+        radius: 4,
+    };
+    let mut buffer = Vec::new();
     g.bench_function("warp_and_cost", |b| {
-        b.iter(|| stereo.cost_volume(&images, None).unwrap())
+        b.iter(|| {
+            let (v, _) = matcher
+                .cost_volume_in(&hyps, SweepStep::All, std::mem::take(&mut buffer))
+                .unwrap();
+            buffer = v.data;
+        })
     });
     let (cost, _) = stereo.cost_volume(&images, None).unwrap();
+    let mut buffer = Vec::new();
     g.bench_function("aggregation_8_paths", |b| {
-        b.iter(|| stereo.aggregate(&cost).unwrap())
+        b.iter(|| {
+            let (agg, _) =
+                aggregate_in(&cost, &SgmParams::default(), std::mem::take(&mut buffer)).unwrap();
+            buffer = agg.data;
+        })
     });
     let (agg, _) = stereo.aggregate(&cost).unwrap();
     g.bench_function("wta", |b| b.iter(|| winner_take_all(&agg)));
