@@ -9,7 +9,7 @@ use omnimvs_data::Dataset;
 use omnimvs_data::gt::read_inv_depth;
 use omnimvs_data::metrics::eval_metrics;
 use omnimvs_sweep::EquirectGrid;
-use support::{constant_guess_mae, png_size, read_json, run_ok, synth_dataset};
+use support::{constant_guess_mae, omnimvs, png_size, read_json, run_ok, synth_dataset, text};
 
 #[test]
 fn sgm_writes_every_output_and_finds_the_depth() {
@@ -102,4 +102,47 @@ fn sgm_writes_every_output_and_finds_the_depth() {
     }
     let mean = report["mean_metrics"]["mae"].as_f64().unwrap();
     assert!((mean - (maes[0] + maes[1]) / 2.0).abs() < 1e-9);
+}
+
+#[test]
+fn a_missing_frame_stops_the_run_after_the_frames_before_it() {
+    // Frames are read ahead and written behind on threads of their own: the frames before
+    // the missing one are still written in full, the run fails naming the file, and no
+    // report claims the whole range.
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let data = synth_dataset(dir.path(), "things", "1..2", "192x200", 12);
+    let out = dir.path().join("sgm");
+    let o = omnimvs(
+        &[
+            "sgm",
+            data.to_str().unwrap(),
+            "--frames",
+            "1..4",
+            "--size",
+            "40x160",
+            "--ndepth",
+            "16",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    let (stdout, stderr) = (text(&o.stdout), text(&o.stderr));
+    assert_eq!(o.status.code(), Some(1), "{stdout}\n{stderr}");
+    assert!(
+        stderr.contains("frame 3") && stderr.contains("00003"),
+        "{stderr}"
+    );
+    for frame in 1..=2 {
+        assert!(stdout.contains(&format!("frame {frame:5}:")), "{stdout}");
+        for suffix in [".tiff", "_index.tiff", "_invdepth.png", "_confidence.tiff"] {
+            assert!(
+                out.join(format!("{frame:05}{suffix}")).is_file(),
+                "{frame} {suffix}"
+            );
+        }
+    }
+    assert!(!out.join("00003.tiff").exists());
+    assert!(!out.join("sgm.json").exists());
 }
