@@ -18,7 +18,7 @@ mod scenes;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 use omnimvs_stereo::{
-    CameraView, Matcher, SgmParams, SphereProjector, SphericalStereo, SweepStep, Taps, TexelPairs,
+    CameraView, Matcher, RunSampler, SgmParams, SphereProjector, SphericalStereo, SweepStep,
     aggregate_in, winner_take_all,
 };
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
@@ -87,8 +87,6 @@ fn bench(c: &mut Criterion) {
                 .collect()
         })
         .collect();
-    #[cfg(target_arch = "x86_64")]
-    let v3 = pulp::x86::V3::try_new();
     g.bench_function("warp", |b| {
         b.iter(|| {
             let spheres: Vec<usize> = (0..hyps.count).collect();
@@ -100,31 +98,14 @@ fn bench(c: &mut Criterion) {
                         .map(|&n| hyps.inv_depth(n as f64) as f32)
                         .collect();
                     let w = grid.width;
-                    let (mut cols, mut rows, mut tmp) =
-                        (vec![0f32; w], vec![0f32; w], vec![0f32; w]);
-                    let mut taps = Taps::new(w);
-                    let mut texels = TexelPairs::new(w);
-                    let (mut values, mut missing) = (vec![0f32; w], vec![0f32; w]);
+                    let mut sampler = RunSampler::new(w);
                     let mut acc = 0f32;
                     for row in 0..grid.height {
                         for ((p, v), runs) in projectors.iter().zip(&views).zip(&visible) {
                             for &(a, e) in &runs[row] {
-                                let n = e - a;
                                 for &dn in &d {
-                                    let (c, r) = (&mut cols[..n], &mut rows[..n]);
-                                    p.project_run(row * w + a, dn, c, r, &mut tmp);
-                                    #[cfg(target_arch = "x86_64")]
-                                    let done = v3.map_or(0, |s| v.taps_v3(s, c, r, &mut taps));
-                                    #[cfg(not(target_arch = "x86_64"))]
-                                    let done = 0;
-                                    v.taps(done, c, r, &mut taps);
-                                    v.gather(&taps.index[..n], &mut texels);
-                                    let (vals, miss) = (&mut values[..n], &mut missing[..n]);
-                                    #[cfg(target_arch = "x86_64")]
-                                    let done =
-                                        v3.map_or(0, |s| v.blend_v3(s, &taps, &texels, vals, miss));
-                                    v.blend(done, &taps, &texels, vals, miss);
-                                    acc += values[..n].iter().sum::<f32>();
+                                    let (values, _) = sampler.sample(p, v, row * w + a, e - a, dn);
+                                    acc += values.iter().sum::<f32>();
                                 }
                             }
                         }

@@ -20,7 +20,7 @@ use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
 use crate::params::{COST_SCALE, SweepStep};
-use crate::{CameraView, SphereProjector, StereoError, Taps, TexelPairs};
+use crate::{CameraView, RunSampler, SphereProjector, StereoError};
 
 /// Cost where fewer than two cameras see the whole window.
 pub const NO_PAIR_COST: f32 = 0.5;
@@ -159,18 +159,8 @@ struct Scratch {
     /// `[col]`: sum of pair costs and number of pairs.
     cost_sum: Vec<f32>,
     pair_count: Vec<f32>,
-    /// `[col]`: fisheye positions of the row being warped (one sphere).
-    pos_col: Vec<f32>,
-    pos_row: Vec<f32>,
-    table_pos: Vec<f32>,
-    /// `[col]`: their texels and offsets in the camera's image.
-    taps: Taps,
-    /// `[col]`: the texels of those taps.
-    texels: TexelPairs,
-    /// `[col]`: the samples of one sphere and whether each is missing, before they go into
-    /// their lane of `values` and `missing`.
-    run_values: Vec<f32>,
-    run_missing: Vec<f32>,
+    /// Sampling one camera's row on one sphere.
+    sampler: RunSampler,
 }
 
 impl Scratch {
@@ -194,13 +184,7 @@ impl Scratch {
             inv_std: vec![0.0; ncam * width],
             cost_sum: vec![0.0; width],
             pair_count: vec![0.0; width],
-            pos_col: vec![0.0; cols],
-            pos_row: vec![0.0; cols],
-            table_pos: vec![0.0; cols],
-            taps: Taps::new(cols),
-            texels: TexelPairs::new(cols),
-            run_values: vec![0.0; cols],
-            run_missing: vec![0.0; cols],
+            sampler: RunSampler::new(cols),
         }
     }
 
@@ -636,8 +620,6 @@ impl Matcher<'_> {
         let w = self.grid.width;
         let lanes = s.lanes;
         let slot = row % s.slots;
-        #[cfg(target_arch = "x86_64")]
-        let v3 = pulp::x86::V3::try_new();
         for (cam, view) in self.views.iter().enumerate() {
             let runs = &visible[cam][row];
             let r = s.row_slice(cam, slot);
@@ -648,22 +630,9 @@ impl Matcher<'_> {
             for &(a, b) in runs {
                 let n = b - a;
                 for (g, &d) in inv_depths.iter().enumerate().take(lanes) {
-                    let (cols, rows) = (&mut s.pos_col[..n], &mut s.pos_row[..n]);
-                    self.projectors[cam].project_run(row * w + a, d, cols, rows, &mut s.table_pos);
-                    #[cfg(target_arch = "x86_64")]
-                    let done = v3.map_or(0, |simd| view.taps_v3(simd, cols, rows, &mut s.taps));
-                    #[cfg(not(target_arch = "x86_64"))]
-                    let done = 0;
-                    view.taps(done, cols, rows, &mut s.taps);
-                    view.gather(&s.taps.index[..n], &mut s.texels);
-                    let (run_v, run_m) = (&mut s.run_values[..n], &mut s.run_missing[..n]);
-                    #[cfg(target_arch = "x86_64")]
-                    let done = v3.map_or(0, |simd| {
-                        view.blend_v3(simd, &s.taps, &s.texels, run_v, run_m)
-                    });
-                    #[cfg(not(target_arch = "x86_64"))]
-                    let done = 0;
-                    view.blend(done, &s.taps, &s.texels, run_v, run_m);
+                    let (run_v, run_m) =
+                        s.sampler
+                            .sample(&self.projectors[cam], view, row * w + a, n, d);
                     let span = r.start + a * lanes..r.start + b * lanes;
                     let (vals, miss) = (&mut s.values[span.clone()], &mut s.missing[span]);
                     let lanes_out = vals
@@ -841,16 +810,16 @@ impl Matcher<'_> {
         data.clear();
         data.resize(plane * nd, 0);
         // Per camera and grid row, the columns where some sphere can be seen.
-        let near_far: Vec<f32> = [0, nd - 1]
-            .iter()
-            .map(|&n| hyps.inv_depth(n as f64) as f32)
-            .collect();
+        let (near, far) = (
+            hyps.inv_depth(0.0) as f32,
+            hyps.inv_depth((nd - 1) as f64) as f32,
+        );
         let visible: Vec<Vec<Runs>> = self
             .projectors
             .iter()
             .map(|p| {
                 (0..h)
-                    .map(|row| p.visible_runs(row, w, near_far[0], near_far[1]))
+                    .map(|row| p.visible_runs(row, w, near, far))
                     .collect()
             })
             .collect();

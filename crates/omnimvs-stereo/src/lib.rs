@@ -50,5 +50,5 @@ pub use pipeline::{LearnedCost, SphericalStereo, StageTimings, StereoResult};
 pub use projector::SphereProjector;
 pub use sgm::{AggregatedVolume, aggregate, aggregate_in};
 pub use sweepnet::{Mlp, SweepCostHead};
-pub use view::{CameraView, Taps, TexelPairs};
+pub use view::{CameraView, RunSampler, Taps, TexelPairs};
 pub use wta::{IndexMap, winner_take_all};

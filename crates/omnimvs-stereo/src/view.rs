@@ -4,7 +4,7 @@
 use omnimvs_camera::ValidityMask;
 use omnimvs_sweep::GrayImage;
 
-use crate::StereoError;
+use crate::{SphereProjector, StereoError};
 
 /// Fixed-point steps per gray level in a texel.
 const TEXEL_SCALE: f32 = 128.0;
@@ -320,6 +320,68 @@ impl CameraView {
                 n * 8
             },
         )
+    }
+}
+
+/// The scratch of sampling one camera along a run of grid pixels on one sphere, and the
+/// one place that chains the sampling kernels the way the matcher uses them: positions
+/// ([`SphereProjector::project_run`]), taps, texels, blend (AVX2 where the CPU has it).
+#[derive(Debug, Clone, Default)]
+pub struct RunSampler {
+    cols: Vec<f32>,
+    rows: Vec<f32>,
+    table_pos: Vec<f32>,
+    taps: Taps,
+    texels: TexelPairs,
+    values: Vec<f32>,
+    missing: Vec<f32>,
+}
+
+impl RunSampler {
+    /// Room for runs of up to `n` grid pixels.
+    pub fn new(n: usize) -> Self {
+        Self {
+            cols: vec![0.0; n],
+            rows: vec![0.0; n],
+            table_pos: vec![0.0; n],
+            taps: Taps::new(n),
+            texels: TexelPairs::new(n),
+            values: vec![0.0; n],
+            missing: vec![0.0; n],
+        }
+    }
+
+    /// `view` sampled where grid pixels `start..start + n` (row-major) meet the sphere of
+    /// inverse depth `inv_depth` (1/m) through `projector`: per pixel the normalised value
+    /// (0 where there is none) and 1 where it is missing (0 otherwise), as
+    /// [`CameraView::sample`] would give them. `n` at most the room of [`Self::new`].
+    pub fn sample(
+        &mut self,
+        projector: &SphereProjector,
+        view: &CameraView,
+        start: usize,
+        n: usize,
+        inv_depth: f32,
+    ) -> (&[f32], &[f32]) {
+        let (cols, rows) = (&mut self.cols[..n], &mut self.rows[..n]);
+        projector.project_run(start, inv_depth, cols, rows, &mut self.table_pos);
+        #[cfg(target_arch = "x86_64")]
+        let v3 = pulp::x86::V3::try_new();
+        #[cfg(target_arch = "x86_64")]
+        let done = v3.map_or(0, |simd| view.taps_v3(simd, cols, rows, &mut self.taps));
+        #[cfg(not(target_arch = "x86_64"))]
+        let done = 0;
+        view.taps(done, cols, rows, &mut self.taps);
+        view.gather(&self.taps.index[..n], &mut self.texels);
+        let (values, missing) = (&mut self.values[..n], &mut self.missing[..n]);
+        #[cfg(target_arch = "x86_64")]
+        let done = v3.map_or(0, |simd| {
+            view.blend_v3(simd, &self.taps, &self.texels, values, missing)
+        });
+        #[cfg(not(target_arch = "x86_64"))]
+        let done = 0;
+        view.blend(done, &self.taps, &self.texels, values, missing);
+        (values, missing)
     }
 }
 
