@@ -26,7 +26,9 @@ mod args;
 mod bench;
 mod cmd;
 mod dataset;
+mod malloc;
 mod out;
+mod pipeline;
 mod weights;
 
 /// 360-degree depth maps from a rig of ultra-wide (220-degree) fisheye cameras,
@@ -81,6 +83,7 @@ fn ignores_pose_unit(command: &Command) -> Option<&'static str> {
 }
 
 fn main() -> ExitCode {
+    malloc::keep_freed_memory();
     let cli = Cli::parse();
     if let Some(unit) = cli.pose_unit
         && let Some(name) = ignores_pose_unit(&cli.command)

@@ -25,7 +25,7 @@ pub enum NetEstimator {
 }
 
 impl NetEstimator {
-    /// Prepares `net` for `dataset` on `device`: batch norms folded, the paper's network's
+    /// Prepares `net` for `dataset` on `device`: batch norms folded (both families), the paper's network's
     /// lookup table from `cache` (its status is returned) with the sweep on the device when
     /// `sweep_on_device` (GPU backends).
     ///
@@ -48,7 +48,11 @@ impl NetEstimator {
                 (Self::OmniMvs(Box::new(inference)), Some(status))
             }
             AnyNet::Cascade(net) => (
-                Self::Cascade(Box::new(CascadeInference::new(*net, dataset, device)?)),
+                Self::Cascade(Box::new(CascadeInference::new(
+                    (*net).fold_batch_norm(),
+                    dataset,
+                    device,
+                )?)),
                 None,
             ),
         })

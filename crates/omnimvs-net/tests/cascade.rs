@@ -1,5 +1,5 @@
 //! The cascade network: per-pixel sampling equals the lookup table on the spheres they share,
-//! every stage has the expected shape, a window of longitudes answers as the whole panorama,
+//! every stage has the expected shape, folding the batch norms keeps its answers, a window of longitudes answers as the whole panorama,
 //! and its weight files round-trip (training it: `omnimvs-train`'s `tests/cascade.rs`). Uses the published rig of `sunny_single` from
 //! `../shared/data/omnimvs-samples`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -45,7 +45,7 @@ fn per_pixel_positions_equal_the_lookup_table_on_its_spheres() {
     let (rig, hyps) = sunny_rig();
     let grid = EquirectGrid::new(16, 64, 45.0).unwrap();
     let table = LookupTable::build(&rig, &grid, &hyps, SphereSet::EveryOther).unwrap();
-    let sampler = PixelSampler::new(&rig, &grid, &hyps);
+    let sampler = PixelSampler::new(&rig, &grid, &hyps).unwrap();
     let spheres: Vec<f64> = table.sphere_indices.iter().map(|&n| n as f64).collect();
     let grids = sampler.sphere_grids(&spheres).unwrap();
     let mut compared = 0;
@@ -109,6 +109,77 @@ fn stages_have_the_expected_shapes_and_stay_in_range() {
         .collect();
     assert!(net.forward(&two, &geometry).is_err());
     assert!(net.forward(&learner_images[..3], &geometry).is_err());
+}
+
+/// Gives a batch norm inference statistics and an affine part away from the identity, from
+/// `seed` (channel `c` of seed `s`: mean, variance, scale and shift all differ).
+fn perturb(bn: &mut burn::nn::BatchNorm, seed: usize) {
+    use burn::module::{Param, RunningState};
+    use burn::tensor::{Tensor, TensorData};
+    let device = bn.gamma.val().device();
+    let n = bn.gamma.val().dims()[0];
+    let values = |f: &dyn Fn(f32) -> f32| {
+        let v: Vec<f32> = (0..n).map(|c| f((c + 3 * seed) as f32)).collect();
+        Tensor::<1>::from_data(TensorData::new(v, [n]), &device)
+    };
+    bn.gamma = Param::from_tensor(values(&|x| 0.6 + 0.4 * (0.7 * x).sin().abs()));
+    bn.beta = Param::from_tensor(values(&|x| 0.2 * (1.3 * x).cos()));
+    bn.running_mean = RunningState::new(values(&|x| 0.3 * (0.9 * x).sin()));
+    bn.running_var = RunningState::new(values(&|x| 0.5 + (0.4 * x).cos().abs()));
+}
+
+#[test]
+fn folding_the_batch_norms_keeps_every_stage_answer() {
+    let (rig, hyps) = sunny_rig();
+    let config = micro_config();
+    let device = Device::flex();
+    let mut net = CascadeNet::new(&config, &device).unwrap();
+    let mut seed = 0;
+    let mut next = || {
+        seed += 1;
+        seed
+    };
+    let f = &mut net.features;
+    for block in [&mut f.conv0, &mut f.conv2, &mut f.down4, &mut f.down8]
+        .into_iter()
+        .chain(f.res4.iter_mut())
+        .chain(f.res8.iter_mut())
+        .chain(f.ctx8.iter_mut())
+    {
+        perturb(block.bn.as_mut().unwrap(), next());
+    }
+    let c = &mut net.coarse;
+    for block in
+        c.c0.iter_mut()
+            .chain(c.c1.iter_mut())
+            .chain(c.c2.iter_mut())
+    {
+        perturb(block.bn.as_mut().unwrap(), next());
+    }
+    perturb(&mut c.up1.bn, next());
+    perturb(&mut c.up0.bn, next());
+    for block in net.mid.convs.iter_mut().chain(net.fine.convs.iter_mut()) {
+        perturb(block.bn.as_mut().unwrap(), next());
+    }
+    let geometry = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
+    let images = micro_tensors(&config, &device);
+    let plain = net.forward(&images, &geometry).unwrap();
+    let folded_net = net.clone().fold_batch_norm();
+    assert!(folded_net.features.conv0.bn.is_none() && folded_net.fine.convs[0].bn.is_none());
+    let folded = folded_net.forward(&images, &geometry).unwrap();
+    for (a, b) in plain.stages.iter().zip(&folded.stages) {
+        let a = read_values(a.prob.clone(), "plain").unwrap();
+        let b = read_values(b.prob.clone(), "folded").unwrap();
+        let max = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0f32, f32::max);
+        assert!(max < 1e-4, "probabilities differ by {max}");
+        // The perturbation reaches the answer: the distributions are not uniform.
+        let spread = a.iter().fold(0f32, |m, &x| m.max(x)) - a.iter().fold(1f32, |m, &x| m.min(x));
+        assert!(spread > 1e-3, "flat distributions");
+    }
 }
 
 #[test]

@@ -29,7 +29,9 @@ pub use cache::{CacheStatus, LutCache};
 pub use error::SweepError;
 pub use grid::EquirectGrid;
 pub use hypotheses::InvDepthHypotheses;
-pub use lut::{INVALID_PIXEL, LookupTable, SphereSet, hwd_file_name, normalized_position};
+pub use lut::{
+    INVALID_PIXEL, LookupTable, SphereSet, hwd_file_name, normalized_pixel, normalized_position,
+};
 pub use panorama::{InvDepthSource, Panorama, compose_panorama, warp_camera_to_panorama};
 pub use resample::resample_map;
 pub use spec::SweepSpec;

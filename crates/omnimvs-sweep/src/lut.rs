@@ -72,10 +72,14 @@ fn normalise(px: f64, size: u32) -> f32 {
 /// `p_cam` matters. The network's per-pixel sampler uses it too, so that its
 /// positions equal the table's on the spheres they share.
 pub fn normalized_position(camera: &Camera, size: (u32, u32), p_cam: &Vector3<f64>) -> [f32; 2] {
-    let (mut col, mut row) = match camera.model.project(p_cam) {
-        Some(px) => (px.col, px.row),
-        None => (-1.0, -1.0),
-    };
+    normalized_pixel(camera.model.project(p_cam).map(|px| (px.col, px.row)), size)
+}
+
+/// The table entry of a fisheye pixel `(col, row)` of an image of `size = (width, height)`,
+/// or of no pixel (`None`: no projection): the normalisation and the invalid marker of
+/// [`normalized_position`], for projections computed elsewhere.
+pub fn normalized_pixel(pixel: Option<(f64, f64)>, size: (u32, u32)) -> [f32; 2] {
+    let (mut col, mut row) = pixel.unwrap_or((-1.0, -1.0));
     if col < 0.0 {
         col = INVALID_PIXEL;
     }

@@ -239,17 +239,26 @@ pub fn run(args: &Args) -> Result<()> {
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    for &f in &frames {
-        let images = ds.read_frame(f).with_context(|| format!("frame {f}"))?;
-        let est = inference
-            .estimate(&images)
-            .with_context(|| format!("frame {f}"))?;
-        match frame(&ds, &inference, &mut run, f, &images, &est)? {
-            Some(m) => bar.set_message(format!("frame {f}: MAE {:.3}", m.reference.mae)),
-            None => bar.set_message(format!("frame {f}: {:.2} s", est.seconds)),
-        }
-        bar.inc(1);
-    }
+    // Frames read one ahead and written one behind on threads of their own (see
+    // `crate::pipeline`): decoding and encoding overlap the network's work.
+    crate::pipeline::run_frames(
+        &frames,
+        |f| ds.read_frame(f).with_context(|| format!("frame {f}")),
+        |f, images| {
+            let est = inference
+                .estimate(&images)
+                .with_context(|| format!("frame {f}"))?;
+            Ok((images, est))
+        },
+        |f, (images, est)| {
+            match frame(&ds, &inference, &mut run, f, &images, &est)? {
+                Some(m) => bar.set_message(format!("frame {f}: MAE {:.3}", m.reference.mae)),
+                None => bar.set_message(format!("frame {f}: {:.2} s", est.seconds)),
+            }
+            bar.inc(1);
+            Ok(())
+        },
+    )?;
     bar.finish();
     finish(&inference, run)?;
     outln!("wrote {} frames to {}", frames.len(), args.out.display());

@@ -3,8 +3,6 @@
 
 use std::path::{Path, PathBuf};
 
-use std::sync::mpsc;
-
 use anyhow::{Result, bail};
 use omnimvs_data::gt::EvalTruth;
 use omnimvs_data::output::ConfidenceRun;
@@ -242,11 +240,8 @@ pub fn run(args: &Args) -> Result<()> {
     finish(&ds, &stereo, run, &args.out)
 }
 
-/// The frames one after the other, with their files read one frame ahead and written one
-/// frame behind on threads of their own: decoding the images and ground truth and encoding
-/// the outputs (one core each) overlap the method's parallel work instead of leaving a core
-/// idle. The same files and lines as [`frame`] frame by frame, in order; the first error
-/// stops the run.
+/// The frames one after the other through [`crate::pipeline::run_frames`]: the same files
+/// and lines as [`frame`] frame by frame, in order.
 ///
 /// # Errors
 /// As [`frame`].
@@ -256,46 +251,14 @@ fn pipelined(
     mut run: ConfidenceRun,
     frames: &[u32],
 ) -> Result<ConfidenceRun> {
-    type Read = (u32, Result<Vec<GrayImage>>, Option<EvalTruth>);
-    type Done = (u32, DepthEstimate, StageTimes, Option<EvalTruth>);
-    std::thread::scope(|scope| {
-        let (read_tx, read_rx) = mpsc::sync_channel::<Read>(1);
-        let (done_tx, done_rx) = mpsc::sync_channel::<Done>(1);
-        scope.spawn(move || {
-            for &f in frames {
-                let images = ds.read_frame(f).map_err(anyhow::Error::from);
-                let failed = images.is_err();
-                let truth = if failed {
-                    None
-                } else {
-                    frame_truth(ds, stereo, f)
-                };
-                // A closed channel: the run stopped at an error.
-                if read_tx.send((f, images, truth)).is_err() || failed {
-                    break;
-                }
-            }
-        });
-        let writer = scope.spawn(move || -> Result<ConfidenceRun> {
-            for (f, est, timings, truth) in done_rx {
-                record(&mut run, f, &est, timings, truth.as_ref())?;
-            }
-            Ok(run)
-        });
-        let computed = (|| -> Result<()> {
-            for (f, images, truth) in read_rx {
-                let (est, timings) = estimate(stereo, &images?)?;
-                if done_tx.send((f, est, timings, truth)).is_err() {
-                    break; // the writer stopped at an error, which it returns
-                }
-            }
-            Ok(())
-        })();
-        drop(done_tx);
-        let written = writer
-            .join()
-            .map_err(|_| anyhow::anyhow!("the thread writing the outputs panicked"))?;
-        computed?;
-        written
-    })
+    crate::pipeline::run_frames(
+        frames,
+        |f| {
+            let images = ds.read_frame(f)?;
+            Ok((images, frame_truth(ds, stereo, f)))
+        },
+        |_, (images, truth)| Ok((estimate(stereo, &images)?, truth)),
+        |f, ((est, timings), truth)| record(&mut run, f, &est, timings, truth.as_ref()),
+    )?;
+    Ok(run)
 }

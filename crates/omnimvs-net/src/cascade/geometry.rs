@@ -150,7 +150,8 @@ impl CascadeGeometry {
             .cascade_sizes()
             .map(|[h, w]| EquirectGrid::new(h, w, config.phi_deg));
         let [g0, g1, g2] = grids;
-        let samplers = [g0?, g1?, g2?].map(|g| PixelSampler::new(rig, &g, hypotheses));
+        let [s0, s1, s2] = [g0?, g1?, g2?].map(|g| PixelSampler::new(rig, &g, hypotheses));
+        let samplers = [s0?, s1?, s2?];
         let spheres = coarse_indices(config.cascade.coarse_spheres, config.num_invdepth);
         let coarse_grids = samplers[0].sphere_grids(&spheres)?;
         let plane = samplers[0].grid().len();

@@ -13,7 +13,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use super::geometry::StageTaps;
 use crate::config::{Family, NetConfig};
 use crate::error::NetError;
-use crate::model::blocks::ConvBn2d;
+use crate::model::blocks::{ConvBn2d, fold_into};
 use crate::model::softargmin::entropy;
 
 /// Gray input images: one channel.
@@ -87,6 +87,25 @@ impl CascadeFeatures {
         x
     }
 
+    /// Folds the inference-mode batch norms into the convolutions.
+    #[must_use]
+    pub fn fold_batch_norm(self) -> Self {
+        let fold =
+            |blocks: Vec<ConvBn2d>| blocks.into_iter().map(ConvBn2d::fold_batch_norm).collect();
+        Self {
+            conv0: self.conv0.fold_batch_norm(),
+            conv2: self.conv2.fold_batch_norm(),
+            out2: self.out2.fold_batch_norm(),
+            down4: self.down4.fold_batch_norm(),
+            res4: fold(self.res4),
+            out4: self.out4.fold_batch_norm(),
+            down8: self.down8.fold_batch_norm(),
+            res8: fold(self.res8),
+            ctx8: fold(self.ctx8),
+            out8: self.out8.fold_batch_norm(),
+        }
+    }
+
     /// `[B, 1, H_I, W_I]` -> features at strides 2, 4 and 8.
     pub fn forward(&self, image: Tensor<4>) -> [Tensor<4>; 3] {
         let x = self.conv0.forward(image, None); // [B, c2, H_I/2, W_I/2]
@@ -149,6 +168,18 @@ impl PanoConv2d {
             bn: None,
             relu: false,
         }
+    }
+
+    /// Folds an inference-mode batch norm into the convolution.
+    #[must_use]
+    pub fn fold_batch_norm(mut self) -> Self {
+        fold_into(
+            &mut self.conv.weight,
+            &mut self.conv.bias,
+            self.bn.take(),
+            0,
+        );
+        self
     }
 
     /// `[B, C_in, H, W] -> [B, C_out, H', W']`.
@@ -217,6 +248,13 @@ pub struct CoarseRegularizer {
     pub out: PanoConv2d,
 }
 
+fn fold_pano(blocks: Vec<PanoConv2d>) -> Vec<PanoConv2d> {
+    blocks
+        .into_iter()
+        .map(PanoConv2d::fold_batch_norm)
+        .collect()
+}
+
 fn run(blocks: &[PanoConv2d], x: Tensor<4>) -> Tensor<4> {
     blocks.iter().fold(x, |x, b| b.forward(x))
 }
@@ -231,6 +269,20 @@ impl CoarseRegularizer {
             up1: Up2d::new([c, b], device),
             up0: Up2d::new([b, a], device),
             out: PanoConv2d::new([a, spheres], 1, false, device),
+        }
+    }
+
+    /// Folds the batch norms of its convolutions (those of the transposed convolutions stay:
+    /// they run at the two coarsest levels).
+    #[must_use]
+    pub fn fold_batch_norm(self) -> Self {
+        Self {
+            c0: fold_pano(self.c0),
+            c1: fold_pano(self.c1),
+            c2: fold_pano(self.c2),
+            up1: self.up1,
+            up0: self.up0,
+            out: self.out.fold_batch_norm(),
         }
     }
 
@@ -268,6 +320,16 @@ impl StageRegularizer {
             ],
             out: PanoConv2d::new([ch, k], 1, false, device),
             gate: gate.then(|| PanoConv2d::constant([ch, 1], GATE_START_LOGIT, device)),
+        }
+    }
+
+    /// Folds the batch norms into the convolutions.
+    #[must_use]
+    pub fn fold_batch_norm(self) -> Self {
+        Self {
+            convs: fold_pano(self.convs),
+            out: self.out.fold_batch_norm(),
+            gate: self.gate.map(PanoConv2d::fold_batch_norm),
         }
     }
 
@@ -360,6 +422,19 @@ impl CascadeNet {
             ),
             config: config.clone(),
         })
+    }
+
+    /// The network for inference with its batch norms folded into the convolutions before
+    /// them (the same answers, fewer passes over the feature maps); not for training.
+    #[must_use]
+    pub fn fold_batch_norm(self) -> Self {
+        Self {
+            features: self.features.fold_batch_norm(),
+            coarse: self.coarse.fold_batch_norm(),
+            mid: self.mid.fold_batch_norm(),
+            fine: self.fine.fold_batch_norm(),
+            config: self.config,
+        }
     }
 
     /// Group-wise correlation of one stage: every camera's features `[1, C, rows, cols]`

@@ -37,7 +37,7 @@ fn batch_norm_affine(bn: &BatchNorm) -> (Tensor<1>, Tensor<1>) {
 
 /// Folds an inference-mode batch norm, when there is one, into a convolution's weight (output
 /// channels along `out_dim`) and bias: `w' = w * scale`, `b' = b * scale + shift`.
-fn fold_into<const D: usize>(
+pub(crate) fn fold_into<const D: usize>(
     weight: &mut Param<Tensor<D>>,
     bias: &mut Option<Param<Tensor<1>>>,
     bn: Option<BatchNorm>,
