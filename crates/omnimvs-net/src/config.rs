@@ -77,6 +77,17 @@ pub struct CascadeParams {
     /// its hidden features (starting near 1, where the stage behaves as without it).
     #[serde(default)]
     pub stage_gates: bool,
+    /// Training only: weight of a cross-entropy between the coarse stage's distribution over
+    /// its spheres and a Laplacian around the exact ground-truth index (scale half the sphere
+    /// spacing), beside the L1 of its mean. The L1 is content with any spread whose mean is
+    /// right; this asks for one peak at the truth (AcfNet's unimodal supervision). `0` (the
+    /// first cascades, and left out of the file): no such term.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub coarse_distribution_weight: f64,
+}
+
+fn is_zero(value: &f64) -> bool {
+    *value == 0.0
 }
 
 impl Default for CascadeParams {
@@ -92,6 +103,7 @@ impl Default for CascadeParams {
             loss_weights: [0.5, 1.0, 2.0],
             context_pairs: 0,
             stage_gates: false,
+            coarse_distribution_weight: 0.0,
         }
     }
 }
@@ -327,6 +339,13 @@ impl NetConfig {
             return Err(invalid(
                 "cascade",
                 "channels must be positive and every stage needs at least 2 hypotheses".into(),
+            ));
+        }
+        let w = p.coarse_distribution_weight;
+        if !(w.is_finite() && w >= 0.0) {
+            return Err(invalid(
+                "cascade.coarse_distribution_weight",
+                format!("expected a finite weight >= 0, got {w}"),
             ));
         }
         if p.stage_intervals.iter().any(|&d| d.is_nan() || d <= 0.0) {

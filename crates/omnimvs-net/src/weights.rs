@@ -218,7 +218,8 @@ pub fn load_cascade(path: &Path, device: &Device) -> Result<CascadeNet, NetError
 
 /// Loads cascade weights into a network of `config`, which may have grown from the
 /// weights' own configuration (the file's JSON): more context pairs at stride 8
-/// (`context_pairs`) or gated refinement stages (`stage_gates`), everything else equal. The
+/// (`context_pairs`) or gated refinement stages (`stage_gates`), other loss weights (training
+/// only), everything else equal. The
 /// new modules keep their starting values, which leave the network's answer as it was (or
 /// nearly: the gates start at 0.98), so training goes on from the loaded network.
 ///
@@ -235,6 +236,9 @@ pub fn load_cascade_grown(
         return load_cascade(path, device);
     }
     let mut shrunk = config.clone();
+    // What only training reads may differ: the loss weights.
+    shrunk.cascade.loss_weights = saved.cascade.loss_weights;
+    shrunk.cascade.coarse_distribution_weight = saved.cascade.coarse_distribution_weight;
     shrunk.cascade.context_pairs = saved.cascade.context_pairs;
     shrunk.cascade.stage_gates = saved.cascade.stage_gates;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
@@ -243,7 +247,8 @@ pub fn load_cascade_grown(
         return Err(weights_error(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
-             (only `context_pairs` may grow and `stage_gates` switch on)",
+             (only `context_pairs` may grow, `stage_gates` switch on and the loss weights \
+             differ)",
         ));
     }
     let old_ctx = 2 * saved.cascade.context_pairs;

@@ -6,13 +6,14 @@
 use std::path::Path;
 
 use burn::module::Module;
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_data::gt::GroundTruth;
 
 use crate::error::TrainError;
 use crate::learner::{masked_l1, target_data_with};
 use crate::sample::{Sample, SampleSource};
 use omnimvs_net::cascade::geometry::crop_columns;
+use omnimvs_net::cascade::sampler::coarse_indices;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet};
 use omnimvs_net::config::NetConfig;
 use omnimvs_net::model::{OmniMvsNet, SweepTaps};
@@ -195,7 +196,18 @@ impl Trainable for CascadeNet {
         };
         let targets = [&sample.stage_gt[0], &mid, &fine];
         let weights = self.config.cascade.loss_weights;
-        let mut total: Option<Tensor<1>> = None;
+        let distribution_weight = self.config.cascade.coarse_distribution_weight;
+        let mut total: Option<Tensor<1>> = (distribution_weight > 0.0).then(|| {
+            let spheres =
+                coarse_indices(self.config.cascade.coarse_spheres, self.config.num_invdepth);
+            distribution_ce(
+                out.stages[0].prob.clone(),
+                &sample.stage_gt[0],
+                &spheres,
+                &device,
+            )
+            .mul_scalar(distribution_weight)
+        });
         for ((stage, gt), w) in out.stages.into_iter().zip(targets).zip(weights) {
             let loss = index_l1(stage.index, gt, false, &device).mul_scalar(w);
             total = Some(match total {
@@ -219,6 +231,53 @@ impl Trainable for CascadeNet {
     fn save_weights(&self, path: &Path) -> Result<(), TrainError> {
         Ok(weights::save_module(self, &self.config, path)?)
     }
+}
+
+/// Laplacian target distributions over `spheres` (fractional indices, `N` units, evenly
+/// spaced) around each pixel's exact ground-truth index, scale half the spacing:
+/// `[1, K, H, W]` data (zero at invalid pixels) and the valid mask `[1, 1, H, W]`.
+pub fn distribution_target(gt: &GroundTruth, spheres: &[f64]) -> (TensorData, TensorData) {
+    let (k, plane) = (spheres.len(), gt.width * gt.height);
+    let spacing = match spheres {
+        [first, .., last] => (last - first) / (k - 1) as f64,
+        _ => 1.0,
+    };
+    let scale = (spacing / 2.0).max(f64::EPSILON);
+    let mut target = vec![0f32; k * plane];
+    let mut weights = vec![0f64; k];
+    for (i, (&n, &valid)) in gt.index.iter().zip(&gt.valid).enumerate() {
+        if !valid {
+            continue;
+        }
+        for (w, &c) in weights.iter_mut().zip(spheres) {
+            *w = (-(c - f64::from(n)).abs() / scale).exp();
+        }
+        let sum: f64 = weights.iter().sum();
+        for (j, w) in weights.iter().enumerate() {
+            target[j * plane + i] = (w / sum) as f32;
+        }
+    }
+    let mask = gt.valid.iter().map(|&v| f32::from(u8::from(v))).collect();
+    (
+        TensorData::new(target, [1, k, gt.height, gt.width]),
+        TensorData::new(mask, [1, 1, gt.height, gt.width]),
+    )
+}
+
+/// Mean cross-entropy, over the valid pixels of `gt`, between [`distribution_target`] and a
+/// stage's distribution `prob` `[1, K, H, W]` over `spheres`.
+pub fn distribution_ce(
+    prob: Tensor<4>,
+    gt: &GroundTruth,
+    spheres: &[f64],
+    device: &Device,
+) -> Tensor<1> {
+    let (target, mask) = distribution_target(gt, spheres);
+    let target = Tensor::<4>::from_data(target, device);
+    let mask = Tensor::<4>::from_data(mask, device);
+    let count = mask.clone().sum().clamp_min(1.0); // [1]
+    let ce = (target * prob.clamp_min(1e-6).log()).sum_dim(1).neg(); // [1, 1, H, W]
+    (ce * mask).sum() / count
 }
 
 /// The columns `cols` of a ground truth.
@@ -264,4 +323,77 @@ fn index_l1(index: Tensor<3>, gt: &GroundTruth, round: bool, device: &Device) ->
         Tensor::from_data(target, device),
         Tensor::from_data(mask, device),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    /// Two valid pixels (indices 12.0 and 30.5) and an invalid one, on 5 spheres 0, 10.. 40.
+    fn three_pixels() -> (GroundTruth, Vec<f64>) {
+        let gt = GroundTruth {
+            width: 3,
+            height: 1,
+            index: vec![12.0, 30.5, 7.0],
+            valid: vec![true, true, false],
+        };
+        (gt, vec![0.0, 10.0, 20.0, 30.0, 40.0])
+    }
+
+    #[test]
+    fn distribution_targets_peak_at_the_truth_and_sum_to_one() {
+        let (gt, spheres) = three_pixels();
+        let (target, mask) = distribution_target(&gt, &spheres);
+        let t = target.try_to_vec::<f32>().unwrap();
+        let at = |k: usize, i: usize| t[k * 3 + i];
+        for i in 0..2 {
+            let sum: f32 = (0..5).map(|k| at(k, i)).sum();
+            assert!((sum - 1.0).abs() < 1e-5, "pixel {i} sums to {sum}");
+        }
+        // Pixel 0 (12.0) peaks at sphere 10, then 20; pixel 1 (30.5) at 30, then 40.
+        assert!(at(1, 0) > at(2, 0) && at(2, 0) > at(0, 0) && at(0, 0) > at(4, 0));
+        assert!(at(3, 1) > at(4, 1) && at(4, 1) > at(2, 1));
+        // Laplacian of scale 5 (half the spacing): neighbours 2 and 8 units away.
+        let ratio = at(1, 0) / at(2, 0);
+        assert!((ratio - (6.0f32 / 5.0).exp()).abs() < 1e-3, "ratio {ratio}");
+        assert!((0..5).all(|k| at(k, 2) == 0.0));
+        assert_eq!(mask.try_to_vec::<f32>().unwrap(), vec![1.0, 1.0, 0.0]);
+    }
+
+    #[test]
+    fn the_cross_entropy_prefers_a_peak_at_the_truth() {
+        let (gt, spheres) = three_pixels();
+        let device = Device::flex();
+        let prob = |per_pixel: [[f32; 5]; 3]| {
+            // [1, K, 1, 3] from per-pixel distributions.
+            let data: Vec<f32> = (0..5)
+                .flat_map(|k| per_pixel.iter().map(move |p| p[k]))
+                .collect();
+            Tensor::<4>::from_data(TensorData::new(data, [1, 5, 1, 3]), &device)
+        };
+        let ce = |p| {
+            distribution_ce(prob(p), &gt, &spheres, &device)
+                .into_data()
+                .try_to_vec::<f32>()
+                .unwrap()[0]
+        };
+        let flat = [0.2; 5];
+        let right = [
+            [0.05, 0.8, 0.1, 0.03, 0.02],
+            [0.02, 0.03, 0.1, 0.75, 0.1],
+            flat,
+        ];
+        let wrong = [
+            [0.02, 0.03, 0.1, 0.05, 0.8],
+            [0.8, 0.1, 0.05, 0.03, 0.02],
+            flat,
+        ];
+        let (r, f, w) = (ce(right), ce([flat; 3]), ce(wrong));
+        assert!(r < f && f < w, "right {r}, flat {f}, wrong {w}");
+        // The invalid pixel does not count: changing it changes nothing.
+        let mut other = right;
+        other[2] = [0.96, 0.01, 0.01, 0.01, 0.01];
+        assert!((ce(other) - r).abs() < 1e-6);
+    }
 }

@@ -113,6 +113,12 @@ pub struct Args {
     /// (`stage_gates`; off in the first cascades). Taken with --init like --context-pairs.
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub stage_gates: Option<Switch>,
+    /// Cascade: weight of a cross-entropy between the coarse stage's distribution over its
+    /// spheres and a Laplacian around the ground truth, beside the stages' L1
+    /// (`coarse_distribution_weight`; 0 in the first cascades): it asks the coarse stage for
+    /// one peak at the truth, not just a right mean.
+    #[arg(long, conflicts_with = "resume")]
+    pub coarse_distribution: Option<f64>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
@@ -340,9 +346,18 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 bail!("--out RUN_DIR is required for a new run");
             };
             let mut net = args.preset.config();
-            if args.context_pairs.is_some() || args.stage_gates.is_some() {
+            if args.context_pairs.is_some()
+                || args.stage_gates.is_some()
+                || args.coarse_distribution.is_some()
+            {
                 if net.family != Family::Cascade {
-                    bail!("--context-pairs and --stage-gates are options of --preset cascade");
+                    bail!(
+                        "--context-pairs, --stage-gates and --coarse-distribution are options \
+                         of --preset cascade"
+                    );
+                }
+                if let Some(weight) = args.coarse_distribution {
+                    net.cascade.coarse_distribution_weight = weight;
                 }
                 if let Some(pairs) = args.context_pairs {
                     net.cascade.context_pairs = pairs;
