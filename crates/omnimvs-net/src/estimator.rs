@@ -25,9 +25,10 @@ pub enum NetEstimator {
 }
 
 impl NetEstimator {
-    /// Prepares `net` for `dataset` on `device`: batch norms folded (both families), the paper's network's
-    /// lookup table from `cache` (its status is returned) with the sweep on the device when
-    /// `sweep_on_device` (GPU backends).
+    /// Prepares `net` for `dataset` on `device`: batch norms folded (both families), the
+    /// paper's network's lookup table from `cache` (its status is returned), and its sweep or
+    /// the cascade's correlation on the device when `sweep_on_device` (GPU backends), on the
+    /// host otherwise.
     ///
     /// # Errors
     /// [`NetError`] when the rig does not fit the network or a table cannot be built.
@@ -52,6 +53,7 @@ impl NetEstimator {
                     (*net).fold_batch_norm(),
                     dataset,
                     device,
+                    !sweep_on_device,
                 )?)),
                 None,
             ),

@@ -1,5 +1,5 @@
 //! The cascade network: per-pixel sampling equals the lookup table on the spheres they share,
-//! every stage has the expected shape, folding the batch norms keeps its answers, a window of longitudes answers as the whole panorama,
+//! every stage has the expected shape, folding the batch norms keeps its answers, the host correlation equals the tensor one, a window of longitudes answers as the whole panorama,
 //! and its weight files round-trip (training it: `omnimvs-train`'s `tests/cascade.rs`). Uses the published rig of `sunny_single` from
 //! `../shared/data/omnimvs-samples`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -180,6 +180,59 @@ fn folding_the_batch_norms_keeps_every_stage_answer() {
         let spread = a.iter().fold(0f32, |m, &x| m.max(x)) - a.iter().fold(1f32, |m, &x| m.min(x));
         assert!(spread > 1e-3, "flat distributions");
     }
+}
+
+#[test]
+fn the_host_correlation_answers_as_the_tensor_one() {
+    let (rig, hyps) = sunny_rig();
+    let config = micro_config();
+    let device = Device::flex();
+    let net = CascadeNet::new(&config, &device).unwrap();
+    let images = micro_tensors(&config, &device);
+    let tensors = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
+    let host = CascadeGeometry::for_inference(&rig, &config, &hyps, &device, true).unwrap();
+    assert!(host.coarse.host.is_some() && host.coarse.cameras.is_empty());
+    let a = net.forward(&images, &tensors).unwrap();
+    let b = net.forward(&images, &host).unwrap();
+    for (stage, (x, y)) in a.stages.iter().zip(&b.stages).enumerate() {
+        let x = read_values(x.prob.clone(), "tensor").unwrap();
+        let y = read_values(y.prob.clone(), "host").unwrap();
+        let max = x
+            .iter()
+            .zip(&y)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0f32, f32::max);
+        assert!(max < 1e-5, "stage {stage}: probabilities differ by {max}");
+    }
+    // The volumes themselves, on the coarse stage's taps.
+    let features: Vec<_> = images
+        .iter()
+        .map(|i| net.features.forward(i.clone())[2].clone())
+        .collect();
+    let groups = config.cascade.groups[2];
+    let x = read_values(
+        CascadeNet::correlation(&features, &tensors.coarse, groups).unwrap(),
+        "tensor",
+    )
+    .unwrap();
+    let y = read_values(
+        CascadeNet::correlation(&features, &host.coarse, groups).unwrap(),
+        "host",
+    )
+    .unwrap();
+    assert_eq!(x.len(), y.len());
+    let scale = x.iter().fold(0f32, |m, v| m.max(v.abs()));
+    let max = x
+        .iter()
+        .zip(&y)
+        .map(|(p, q)| (p - q).abs())
+        .fold(0f32, f32::max);
+    assert!(
+        scale > 1e-3 && max <= 1e-5 * scale,
+        "volumes differ by {max} (scale {scale})"
+    );
+    // A wrong number of feature maps is refused.
+    assert!(CascadeNet::correlation(&features[..3], &host.coarse, groups).is_err());
 }
 
 #[test]

@@ -32,7 +32,7 @@ fn main() {
 
     let net = CascadeNet::new(&config, &device).unwrap();
     let start = Instant::now();
-    let inference = CascadeInference::new(net, &ds, device.clone()).unwrap();
+    let inference = CascadeInference::new(net, &ds, device.clone(), true).unwrap();
     println!("geometry: {:.3} s", start.elapsed().as_secs_f64());
     for _ in 0..2 {
         let mut t = omnimvs_data::StageTimes::default();

@@ -187,6 +187,8 @@ pub struct CascadeBenchReport {
     pub config: NetConfig,
     /// Number of parameters of the network.
     pub params: usize,
+    /// Whether batch norms were folded into the convolutions (as `infer` runs it).
+    pub folded_batch_norm: bool,
     /// Timings of every measured run (warm-up runs excluded).
     pub runs: Vec<CascadeRow>,
     /// Peak resident memory of the process after the runs, bytes (Linux only).
@@ -207,7 +209,8 @@ impl CascadeBenchReport {
 }
 
 /// Times the cascade's forward pass per stage on random images for `rig` (random weights,
-/// inference mode, `warmup` unmeasured runs first).
+/// inference mode, batch norms folded when `fold_batch_norm` as `infer` runs it, `warmup`
+/// unmeasured runs first).
 ///
 /// # Errors
 /// For a configuration that is not a cascade or a rig that does not fit it.
@@ -217,9 +220,17 @@ pub fn bench_cascade_forward(
     min_depth_m: f64,
     warmup: usize,
     repeats: usize,
+    fold_batch_norm: bool,
     device: &Device,
 ) -> Result<CascadeBenchReport> {
     let net = CascadeNet::new(config, device)?.valid();
+    // The network's own parameters, batch norms included (folding merges them).
+    let params = net.num_params();
+    let net = if fold_batch_norm {
+        net.fold_batch_norm()
+    } else {
+        net
+    };
     let hypotheses = InvDepthHypotheses::new(config.num_invdepth, min_depth_m)?;
     let geometry = CascadeGeometry::new(rig, config, &hypotheses, device)?;
     let images = random_images(config, device);
@@ -232,7 +243,8 @@ pub fn bench_cascade_forward(
     }
     Ok(CascadeBenchReport {
         config: config.clone(),
-        params: net.num_params(),
+        params,
+        folded_batch_norm: fold_batch_norm,
         runs,
         peak_rss_bytes: peak_rss_bytes(),
     })

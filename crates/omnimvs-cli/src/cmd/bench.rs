@@ -168,10 +168,19 @@ fn bench_cascade(
         rig.min_depth_m,
         args.warmup,
         args.repeats,
+        !args.no_fold,
         device,
     )
     .context("forward benchmark")?;
-    outln!("{} parameters", forward.params);
+    outln!(
+        "{} parameters, batch norms {}",
+        forward.params,
+        if forward.folded_batch_norm {
+            "folded"
+        } else {
+            "as separate layers"
+        }
+    );
     print_stage_table(
         &[
             ("features", 9),

@@ -15,7 +15,7 @@ use super::sampler::{PixelSampler, coarse_indices, hypotheses_around};
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;
-use crate::taps::{SweepGrid, grid_taps};
+use crate::taps::{SweepGrid, Taps, grid_taps};
 
 /// One stage's sampling positions on the device: every camera's taps, the hypotheses, and
 /// how many cameras (and camera pairs) see each sample.
@@ -32,11 +32,26 @@ pub struct StageTaps {
     /// The previous stage's estimate on this stage's grid `[1, H, W]` (`N` units), around
     /// which a refinement stage's hypotheses lie; `None` for the coarse stage.
     pub center: Option<Tensor<3>>,
+    /// The taps on the host, for the inference-only correlation kernel
+    /// ([`super::host::correlation`]); `cameras` is then empty. `None`: the device taps.
+    pub host: Option<HostTaps>,
+}
+
+/// A stage's taps on the host: what the host correlation kernel reads (no gradient).
+#[derive(Clone, Debug)]
+pub struct HostTaps {
+    /// Taps of every camera into its feature map, flat over `[K, H, W]`.
+    pub cameras: Vec<Vec<Taps>>,
+    /// Number of camera pairs that see each sample, flat over `[K, H, W]`.
+    pub pair_count: Vec<f32>,
+    /// Share of the cameras that see each sample, flat over `[K, H, W]`.
+    pub visibility: Vec<f32>,
 }
 
 impl StageTaps {
     /// Taps of `grids` (one per camera, `K` "spheres" each) into feature maps of
-    /// `feature_size`, with the hypotheses `index` (`[K, H * W]`).
+    /// `feature_size`, with the hypotheses `index` (`[K, H * W]`); on the host when `host`
+    /// (inference on a CPU backend, see [`HostTaps`]), else on `device`.
     ///
     /// # Errors
     /// [`NetError::Shape`] when there is no camera or the grids disagree in size.
@@ -44,6 +59,7 @@ impl StageTaps {
         grids: &[SweepGrid],
         index: Vec<f32>,
         feature_size: [usize; 2],
+        host: bool,
         device: &Device,
     ) -> Result<Self, NetError> {
         let Some(first) = grids.first() else {
@@ -64,18 +80,21 @@ impl StageTaps {
         }
         let mut count = vec![0f32; samples];
         let mut count_sq = vec![0f32; samples];
-        let cameras = grids
-            .iter()
-            .map(|grid| {
-                let taps = grid_taps(grid, feature_size[0], feature_size[1]);
-                for ((c, c2), t) in count.iter_mut().zip(&mut count_sq).zip(&taps) {
-                    let seen: f32 = t.weight.iter().sum();
-                    *c += seen;
-                    *c2 += seen * seen;
-                }
-                SweepTaps::from_taps(&taps, grid, feature_size, device)
-            })
-            .collect();
+        let mut cameras = Vec::new();
+        let mut host_cameras = Vec::new();
+        for grid in grids {
+            let taps = grid_taps(grid, feature_size[0], feature_size[1]);
+            for ((c, c2), t) in count.iter_mut().zip(&mut count_sq).zip(&taps) {
+                let seen: f32 = t.weight.iter().sum();
+                *c += seen;
+                *c2 += seen * seen;
+            }
+            if host {
+                host_cameras.push(taps);
+            } else {
+                cameras.push(SweepTaps::from_taps(&taps, grid, feature_size, device));
+            }
+        }
         let pairs: Vec<f32> = count
             .iter()
             .zip(&count_sq)
@@ -83,15 +102,29 @@ impl StageTaps {
             .collect();
         let share = 1.0 / grids.len() as f32;
         let visibility: Vec<f32> = count.iter().map(|c| c * share).collect();
-        let volume =
-            |data: Vec<f32>| Tensor::<5>::from_data(TensorData::new(data, [1, 1, k, h, w]), device);
+        let volume = |data: &[f32]| {
+            Tensor::<5>::from_data(TensorData::new(data.to_vec(), [1, 1, k, h, w]), device)
+        };
         Ok(Self {
             cameras,
             hypotheses: hypothesis_tensor(index, k, h, w, device),
-            visibility: volume(visibility),
-            pair_count: volume(pairs),
+            visibility: volume(&visibility),
+            pair_count: volume(&pairs),
             center: None,
+            host: host.then_some(HostTaps {
+                cameras: host_cameras,
+                pair_count: pairs,
+                visibility,
+            }),
         })
+    }
+
+    /// Number of cameras the taps sample.
+    pub fn num_cameras(&self) -> usize {
+        match &self.host {
+            Some(host) => host.cameras.len(),
+            None => self.cameras.len(),
+        }
     }
 
     /// Number of hypotheses `K`.
@@ -124,6 +157,9 @@ pub struct CascadeGeometry {
     pub config: NetConfig,
     /// Device of the taps.
     pub device: Device,
+    /// Whether the stages correlate on the host (inference on a CPU backend, no gradient:
+    /// [`CascadeGeometry::for_inference`]) or through device tensors (training, GPUs).
+    pub host_correlation: bool,
 }
 
 impl CascadeGeometry {
@@ -137,6 +173,33 @@ impl CascadeGeometry {
         config: &NetConfig,
         hypotheses: &InvDepthHypotheses,
         device: &Device,
+    ) -> Result<Self, NetError> {
+        Self::with_correlation(rig, config, hypotheses, device, false)
+    }
+
+    /// [`CascadeGeometry::new`] for inference: with `host_correlation`, every stage's
+    /// correlation runs in one host kernel over the taps ([`super::host::correlation`]: the
+    /// same values, no gradient, a fraction of the memory traffic of the tensor ops) instead
+    /// of device tensors. For CPU backends; training needs the device path.
+    ///
+    /// # Errors
+    /// As [`CascadeGeometry::new`].
+    pub fn for_inference(
+        rig: &Rig,
+        config: &NetConfig,
+        hypotheses: &InvDepthHypotheses,
+        device: &Device,
+        host_correlation: bool,
+    ) -> Result<Self, NetError> {
+        Self::with_correlation(rig, config, hypotheses, device, host_correlation)
+    }
+
+    fn with_correlation(
+        rig: &Rig,
+        config: &NetConfig,
+        hypotheses: &InvDepthHypotheses,
+        device: &Device,
+        host_correlation: bool,
     ) -> Result<Self, NetError> {
         config.validate()?;
         if rig.len() != config.num_cameras {
@@ -160,13 +223,20 @@ impl CascadeGeometry {
             .flat_map(|&n| std::iter::repeat_n(n as f32, plane))
             .collect();
         let feature_sizes = config.cascade_feature_sizes();
-        let coarse = StageTaps::new(&coarse_grids, index, feature_sizes[2], device)?;
+        let coarse = StageTaps::new(
+            &coarse_grids,
+            index,
+            feature_sizes[2],
+            host_correlation,
+            device,
+        )?;
         Ok(Self {
             coarse,
             samplers,
             hypotheses: *hypotheses,
             config: config.clone(),
             device: device.clone(),
+            host_correlation,
         })
     }
 
@@ -207,7 +277,13 @@ impl CascadeGeometry {
         let grids = sampler.grids_window(&index, k, cols.clone())?;
         // Stage 1 reads the stride-4 features, stage 2 the stride-2 ones.
         let feature_size = self.config.cascade_feature_sizes()[2 - stage];
-        let mut taps = StageTaps::new(&grids, index, feature_size, &self.device)?;
+        let mut taps = StageTaps::new(
+            &grids,
+            index,
+            feature_size,
+            self.host_correlation,
+            &self.device,
+        )?;
         let [h, w] = [sampler.grid().height, cols.len()];
         taps.center = Some(Tensor::<3>::from_data(
             TensorData::new(center, [1, h, w]),

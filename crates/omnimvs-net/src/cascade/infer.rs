@@ -25,13 +25,25 @@ impl CascadeInference {
     /// The method's name in estimates.
     pub const NAME: &'static str = "cascade";
 
-    /// Prepares `net` for `dataset`'s rig on `device`.
+    /// Prepares `net` for `dataset`'s rig on `device`; the stages correlate on the host when
+    /// `host_correlation` (CPU backends, see [`CascadeGeometry::for_inference`]).
     ///
     /// # Errors
     /// [`NetError`] when the rig does not fit the network or the masks cannot be read.
-    pub fn new(net: CascadeNet, dataset: &Dataset, device: Device) -> Result<Self, NetError> {
+    pub fn new(
+        net: CascadeNet,
+        dataset: &Dataset,
+        device: Device,
+        host_correlation: bool,
+    ) -> Result<Self, NetError> {
         let spec = sweep_spec(&net.config, dataset)?;
-        let geometry = CascadeGeometry::new(&dataset.rig, &net.config, &spec.hypotheses, &device)?;
+        let geometry = CascadeGeometry::for_inference(
+            &dataset.rig,
+            &net.config,
+            &spec.hypotheses,
+            &device,
+            host_correlation,
+        )?;
         Ok(Self {
             net,
             geometry,

@@ -3,7 +3,7 @@
 //! GwcNet's group-wise correlation:
 //!
 //! 1. a feature pyramid of every fisheye image at strides 2, 4 and 8;
-//! 2. a coarse cost volume at a quarter of the output (`40 x 160`) over 48 spheres through
+//! 2. a coarse cost volume at a quarter of the output (`40 x 160`) over 32 spheres through
 //!    the whole inverse-depth range, built by group-wise correlation across the cameras that
 //!    see each sample (not concatenation: the volume stays small and the camera order does
 //!    not matter), regularised by a two-level 2D encoder-decoder whose input channels are
@@ -19,15 +19,19 @@
 //! - [`sampler`]: per-pixel projection into every camera, hypothesis placement, resampling
 //!   between grids.
 //! - [`geometry`]: a stage's taps on the device, a rig's geometry, the forward pass.
+//! - [`host`]: the correlation of a stage on the host, for inference on a CPU.
 //! - [`model`]: the burn modules.
 //! - [`infer`]: the network on a dataset's frames.
 
 pub mod geometry;
+pub mod host;
 pub mod infer;
 pub mod model;
 pub mod sampler;
 
-pub use geometry::{CascadeGeometry, CascadeOutput, CascadeTimings, ColumnWindow, StageTaps};
+pub use geometry::{
+    CascadeGeometry, CascadeOutput, CascadeTimings, ColumnWindow, HostTaps, StageTaps,
+};
 pub use infer::CascadeInference;
 pub use model::{CascadeNet, StageOutput};
 pub use sampler::PixelSampler;

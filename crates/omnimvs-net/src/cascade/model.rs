@@ -459,6 +459,13 @@ impl CascadeNet {
             expected,
             actual,
         };
+        if let Some(host) = &taps.host {
+            let Some(device) = features.first().map(Tensor::device) else {
+                return Err(shape_error(vec![host.cameras.len()], vec![0]));
+            };
+            let dims = [taps.num_hypotheses(), taps.height(), taps.width()];
+            return super::host::correlation(features, host, dims, groups, &device);
+        }
         if features.is_empty() || features.len() != taps.cameras.len() {
             return Err(shape_error(vec![taps.cameras.len()], vec![features.len()]));
         }

@@ -1,0 +1,151 @@
+//! A stage's group-wise correlation on the host, for inference on a CPU.
+//!
+//! The tensor version ([`super::CascadeNet::correlation`]) gathers every camera's features at
+//! every tap as a whole tensor, weights it, sums, squares: a dozen passes over `[samples,
+//! channels]` tensors allocated afresh, memory-bound on a CPU (the full-resolution stage has
+//! 512 k samples of 4 cameras). Here each sample is finished in one visit: its four taps of
+//! every camera are read from channels-last copies of the feature maps and reduced in
+//! registers to the sums, the camera-pair products and the group means. Same formulas in the
+//! same order (the tests compare the two), no gradient: training uses the tensor version.
+
+use burn::tensor::{Device, Tensor, TensorData};
+use rayon::prelude::*;
+
+use super::geometry::HostTaps;
+use super::model::read_values;
+use crate::error::NetError;
+
+/// Most feature channels the kernel takes (its per-sample sums live on the stack).
+pub const MAX_CHANNELS: usize = 64;
+
+/// Group-wise correlation of one stage from every camera's features `[1, C, rows, cols]` and
+/// the stage's host taps over `dims = [K, H, W]`: `[1, groups + 1, K, H, W]`, the mean
+/// product over the camera pairs that see a sample by groups of channels, then the share of
+/// cameras that see it (as [`super::CascadeNet::correlation`]).
+///
+/// # Errors
+/// [`NetError::Shape`] when the features and the taps disagree in cameras, sizes or channels,
+/// or `groups` does not divide the channels.
+pub fn correlation(
+    features: &[Tensor<4>],
+    taps: &HostTaps,
+    dims: [usize; 3],
+    groups: usize,
+    device: &Device,
+) -> Result<Tensor<5>, NetError> {
+    let [k, h, w] = dims;
+    let samples = k * h * w;
+    let shape_error = |what: &str, expected: Vec<usize>, actual: Vec<usize>| NetError::Shape {
+        what: format!("{what} (host correlation of a cascade stage)"),
+        expected,
+        actual,
+    };
+    if features.is_empty() || features.len() != taps.cameras.len() {
+        return Err(shape_error(
+            "feature maps",
+            vec![taps.cameras.len()],
+            vec![features.len()],
+        ));
+    }
+    if taps.pair_count.len() != samples
+        || taps.visibility.len() != samples
+        || taps.cameras.iter().any(|t| t.len() != samples)
+    {
+        return Err(shape_error(
+            "taps",
+            vec![samples],
+            taps.cameras.iter().map(Vec::len).collect(),
+        ));
+    }
+    let mut tables = Vec::with_capacity(features.len());
+    let mut channels = 0;
+    for feature in features {
+        let [b, c, rows, cols] = feature.dims();
+        if b != 1 || c == 0 || c > MAX_CHANNELS || (channels != 0 && c != channels) {
+            return Err(shape_error(
+                "feature maps",
+                vec![1, channels.max(1), rows, cols],
+                vec![b, c, rows, cols],
+            ));
+        }
+        channels = c;
+        tables.push(channels_last(&read_values(feature.clone(), "features")?, c));
+    }
+    if groups == 0 || channels % groups != 0 {
+        return Err(shape_error("groups", vec![channels], vec![groups]));
+    }
+    let sizes: Vec<usize> = tables.iter().map(|t| t.len() / channels).collect();
+    let bad_tap = taps.cameras.iter().zip(&sizes).any(|(cam, &pixels)| {
+        cam.iter()
+            .any(|t| t.index.iter().any(|&i| i as usize >= pixels))
+    });
+    if bad_tap {
+        return Err(shape_error("taps inside the feature maps", sizes, vec![]));
+    }
+
+    let per_group = channels / groups;
+    // [S, G]: one sample per chunk, in parallel.
+    let mut grouped = vec![0f32; samples * groups];
+    grouped
+        .par_chunks_mut(groups)
+        .enumerate()
+        .for_each(|(s, out)| {
+            let mut sum = [0f32; MAX_CHANNELS];
+            let mut sum_sq = [0f32; MAX_CHANNELS];
+            let mut first = true;
+            for (table, cam) in tables.iter().zip(&taps.cameras) {
+                let tap = &cam[s];
+                let mut warped = [0f32; MAX_CHANNELS];
+                for (j, (&index, &weight)) in tap.index.iter().zip(&tap.weight).enumerate() {
+                    let row = &table[index as usize * channels..][..channels];
+                    for (v, &f) in warped[..channels].iter_mut().zip(row) {
+                        // The tensor version: the first tap's product, then each next added.
+                        *v = if j == 0 { f * weight } else { *v + f * weight };
+                    }
+                }
+                for ((a, q), &v) in sum.iter_mut().zip(&mut sum_sq).zip(&warped[..channels]) {
+                    if first {
+                        (*a, *q) = (v, v * v);
+                    } else {
+                        *a += v;
+                        *q += v * v;
+                    }
+                }
+                first = false;
+            }
+            let pairs = taps.pair_count[s].max(1e-3);
+            for (g, o) in out.iter_mut().enumerate() {
+                let range = g * per_group..(g + 1) * per_group;
+                let total: f32 = sum[range.clone()]
+                    .iter()
+                    .zip(&sum_sq[range])
+                    .map(|(a, q)| (a * a - q) / 2.0)
+                    .sum();
+                *o = total / per_group as f32 / pairs;
+            }
+        });
+    // [G + 1, S]: the groups, then the visibility.
+    let mut volume = vec![0f32; (groups + 1) * samples];
+    for (g, plane) in volume.chunks_exact_mut(samples).take(groups).enumerate() {
+        for (v, row) in plane.iter_mut().zip(grouped.chunks_exact(groups)) {
+            *v = row[g];
+        }
+    }
+    volume[groups * samples..].copy_from_slice(&taps.visibility);
+    Ok(Tensor::from_data(
+        TensorData::new(volume, [1, groups + 1, k, h, w]),
+        device,
+    ))
+}
+
+/// `[C, P]` (channels first) to `[P, C]`.
+fn channels_last(data: &[f32], channels: usize) -> Vec<f32> {
+    let pixels = data.len() / channels;
+    let mut out = vec![0f32; data.len()];
+    for (c, plane) in data.chunks_exact(pixels).enumerate() {
+        for (p, &v) in plane.iter().enumerate() {
+            out[p * channels + c] = v;
+        }
+    }
+    out
+}
