@@ -190,7 +190,7 @@ fn the_host_correlation_answers_as_the_tensor_one() {
     let net = CascadeNet::new(&config, &device).unwrap();
     let images = micro_tensors(&config, &device);
     let tensors = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
-    let host = CascadeGeometry::for_inference(&rig, &config, &hyps, &device, true).unwrap();
+    let host = CascadeGeometry::with_host_correlation(&rig, &config, &hyps, &device, true).unwrap();
     assert!(host.coarse.host.is_some() && host.coarse.cameras.is_empty());
     let a = net.forward(&images, &tensors).unwrap();
     let b = net.forward(&images, &host).unwrap();

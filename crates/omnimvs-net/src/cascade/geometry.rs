@@ -158,7 +158,7 @@ pub struct CascadeGeometry {
     /// Device of the taps.
     pub device: Device,
     /// Whether the stages correlate on the host (inference on a CPU backend, no gradient:
-    /// [`CascadeGeometry::for_inference`]) or through device tensors (training, GPUs).
+    /// [`CascadeGeometry::with_host_correlation`]) or through device tensors (training, GPUs).
     pub host_correlation: bool,
 }
 
@@ -174,27 +174,17 @@ impl CascadeGeometry {
         hypotheses: &InvDepthHypotheses,
         device: &Device,
     ) -> Result<Self, NetError> {
-        Self::with_correlation(rig, config, hypotheses, device, false)
+        Self::with_host_correlation(rig, config, hypotheses, device, false)
     }
 
-    /// [`CascadeGeometry::new`] for inference: with `host_correlation`, every stage's
-    /// correlation runs in one host kernel over the taps ([`super::host::correlation`]: the
-    /// same values, no gradient, a fraction of the memory traffic of the tensor ops) instead
-    /// of device tensors. For CPU backends; training needs the device path.
+    /// [`CascadeGeometry::new`], with every stage's correlation in one host kernel over the
+    /// taps when `host_correlation` ([`super::host::correlation`]: the same values, no
+    /// gradient, a fraction of the memory traffic of the tensor ops). For inference on CPU
+    /// backends; training needs the tensor path (`false`).
     ///
     /// # Errors
     /// As [`CascadeGeometry::new`].
-    pub fn for_inference(
-        rig: &Rig,
-        config: &NetConfig,
-        hypotheses: &InvDepthHypotheses,
-        device: &Device,
-        host_correlation: bool,
-    ) -> Result<Self, NetError> {
-        Self::with_correlation(rig, config, hypotheses, device, host_correlation)
-    }
-
-    fn with_correlation(
+    pub fn with_host_correlation(
         rig: &Rig,
         config: &NetConfig,
         hypotheses: &InvDepthHypotheses,

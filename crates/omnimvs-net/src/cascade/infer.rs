@@ -26,7 +26,7 @@ impl CascadeInference {
     pub const NAME: &'static str = "cascade";
 
     /// Prepares `net` for `dataset`'s rig on `device`; the stages correlate on the host when
-    /// `host_correlation` (CPU backends, see [`CascadeGeometry::for_inference`]).
+    /// `host_correlation` (CPU backends, see [`CascadeGeometry::with_host_correlation`]).
     ///
     /// # Errors
     /// [`NetError`] when the rig does not fit the network or the masks cannot be read.
@@ -37,7 +37,7 @@ impl CascadeInference {
         host_correlation: bool,
     ) -> Result<Self, NetError> {
         let spec = sweep_spec(&net.config, dataset)?;
-        let geometry = CascadeGeometry::for_inference(
+        let geometry = CascadeGeometry::with_host_correlation(
             &dataset.rig,
             &net.config,
             &spec.hypotheses,

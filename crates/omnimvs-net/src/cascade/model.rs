@@ -13,7 +13,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use super::geometry::StageTaps;
 use crate::config::{Family, NetConfig};
 use crate::error::NetError;
-use crate::model::blocks::{ConvBn2d, fold_into};
+use crate::model::blocks::{ConvBn2d, fold_into_conv2d};
 use crate::model::softargmin::entropy;
 
 /// Gray input images: one channel.
@@ -173,12 +173,7 @@ impl PanoConv2d {
     /// Folds an inference-mode batch norm into the convolution.
     #[must_use]
     pub fn fold_batch_norm(mut self) -> Self {
-        fold_into(
-            &mut self.conv.weight,
-            &mut self.conv.bias,
-            self.bn.take(),
-            0,
-        );
+        fold_into_conv2d(&mut self.conv, self.bn.take());
         self
     }
 

@@ -37,7 +37,7 @@ fn batch_norm_affine(bn: &BatchNorm) -> (Tensor<1>, Tensor<1>) {
 
 /// Folds an inference-mode batch norm, when there is one, into a convolution's weight (output
 /// channels along `out_dim`) and bias: `w' = w * scale`, `b' = b * scale + shift`.
-pub(crate) fn fold_into<const D: usize>(
+fn fold_into<const D: usize>(
     weight: &mut Param<Tensor<D>>,
     bias: &mut Option<Param<Tensor<1>>>,
     bn: Option<BatchNorm>,
@@ -56,6 +56,11 @@ pub(crate) fn fold_into<const D: usize>(
     };
     *weight = Param::from_tensor(folded);
     *bias = Some(Param::from_tensor(folded_bias));
+}
+
+/// Folds an inference-mode batch norm, when there is one, into a 2D convolution.
+pub(crate) fn fold_into_conv2d(conv: &mut Conv2d, bn: Option<BatchNorm>) {
+    fold_into(&mut conv.weight, &mut conv.bias, bn, 0);
 }
 
 /// 2D convolution, optional batch norm, optional ReLU.
@@ -101,12 +106,7 @@ impl ConvBn2d {
 
     /// Folds an inference-mode batch norm into the convolution.
     pub fn fold_batch_norm(mut self) -> Self {
-        fold_into(
-            &mut self.conv.weight,
-            &mut self.conv.bias,
-            self.bn.take(),
-            0,
-        );
+        fold_into_conv2d(&mut self.conv, self.bn.take());
         self
     }
 
