@@ -65,7 +65,7 @@ enum Command {
     Parity(cmd::parity::Args),
     Sgm(cmd::sgm::Args),
     Synth(cmd::synth::Args),
-    Train(cmd::train::Args),
+    Train(Box<cmd::train::Args>),
     Eval(cmd::eval::Args),
 }
 

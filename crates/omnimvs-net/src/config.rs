@@ -84,6 +84,11 @@ pub struct CascadeParams {
     /// first cascades, and left out of the file): no such term.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub coarse_distribution_weight: f64,
+    /// Training only: the same cross-entropy for each refinement stage, over its per-pixel
+    /// hypotheses (scale half their spacing; where the truth lies outside them, the target
+    /// piles on the nearest). `0` (and left out of the file): no such term.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub refine_distribution_weight: f64,
 }
 
 fn is_zero(value: &f64) -> bool {
@@ -104,6 +109,7 @@ impl Default for CascadeParams {
             context_pairs: 0,
             stage_gates: false,
             coarse_distribution_weight: 0.0,
+            refine_distribution_weight: 0.0,
         }
     }
 }
@@ -341,12 +347,22 @@ impl NetConfig {
                 "channels must be positive and every stage needs at least 2 hypotheses".into(),
             ));
         }
-        let w = p.coarse_distribution_weight;
-        if !(w.is_finite() && w >= 0.0) {
-            return Err(invalid(
+        for (field, w) in [
+            (
                 "cascade.coarse_distribution_weight",
-                format!("expected a finite weight >= 0, got {w}"),
-            ));
+                p.coarse_distribution_weight,
+            ),
+            (
+                "cascade.refine_distribution_weight",
+                p.refine_distribution_weight,
+            ),
+        ] {
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(invalid(
+                    field,
+                    format!("expected a finite weight >= 0, got {w}"),
+                ));
+            }
         }
         if p.stage_intervals.iter().any(|&d| d.is_nan() || d <= 0.0) {
             return Err(invalid(

@@ -239,6 +239,7 @@ pub fn load_cascade_grown(
     // What only training reads may differ: the loss weights.
     shrunk.cascade.loss_weights = saved.cascade.loss_weights;
     shrunk.cascade.coarse_distribution_weight = saved.cascade.coarse_distribution_weight;
+    shrunk.cascade.refine_distribution_weight = saved.cascade.refine_distribution_weight;
     shrunk.cascade.context_pairs = saved.cascade.context_pairs;
     shrunk.cascade.stage_gates = saved.cascade.stage_gates;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs

@@ -6,14 +6,14 @@
 use std::path::Path;
 
 use burn::module::Module;
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::activation::softmax;
+use burn::tensor::{Device, Tensor};
 use omnimvs_data::gt::GroundTruth;
 
 use crate::error::TrainError;
 use crate::learner::{masked_l1, target_data_with};
 use crate::sample::{Sample, SampleSource};
 use omnimvs_net::cascade::geometry::crop_columns;
-use omnimvs_net::cascade::sampler::coarse_indices;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet};
 use omnimvs_net::config::NetConfig;
 use omnimvs_net::model::{OmniMvsNet, SweepTaps};
@@ -195,21 +195,28 @@ impl Trainable for CascadeNet {
             None => (sample.stage_gt[1].clone(), sample.gt.clone()),
         };
         let targets = [&sample.stage_gt[0], &mid, &fine];
-        let weights = self.config.cascade.loss_weights;
-        let distribution_weight = self.config.cascade.coarse_distribution_weight;
-        let mut total: Option<Tensor<1>> = (distribution_weight > 0.0).then(|| {
-            let spheres =
-                coarse_indices(self.config.cascade.coarse_spheres, self.config.num_invdepth);
-            distribution_ce(
-                out.stages[0].prob.clone(),
-                &sample.stage_gt[0],
-                &spheres,
-                &device,
-            )
-            .mul_scalar(distribution_weight)
-        });
-        for ((stage, gt), w) in out.stages.into_iter().zip(targets).zip(weights) {
-            let loss = index_l1(stage.index, gt, false, &device).mul_scalar(w);
+        let p = &self.config.cascade;
+        let coarse_spacing = (self.config.num_invdepth.saturating_sub(1)) as f64
+            / (p.coarse_spheres.saturating_sub(1)).max(1) as f64;
+        let spacings = [coarse_spacing, p.stage_intervals[0], p.stage_intervals[1]];
+        let distribution_weights = [
+            p.coarse_distribution_weight,
+            p.refine_distribution_weight,
+            p.refine_distribution_weight,
+        ];
+        let mut total: Option<Tensor<1>> = None;
+        for (((stage, gt), w), (dw, spacing)) in out
+            .stages
+            .into_iter()
+            .zip(targets)
+            .zip(p.loss_weights)
+            .zip(distribution_weights.into_iter().zip(spacings))
+        {
+            let mut loss = index_l1(stage.index, gt, false, &device).mul_scalar(w);
+            if dw > 0.0 {
+                let ce = distribution_ce(stage.prob, stage.hypotheses, gt, spacing / 2.0, &device);
+                loss = loss + ce.mul_scalar(dw);
+            }
             total = Some(match total {
                 Some(t) => t + loss,
                 None => loss,
@@ -233,48 +240,26 @@ impl Trainable for CascadeNet {
     }
 }
 
-/// Laplacian target distributions over `spheres` (fractional indices, `N` units, evenly
-/// spaced) around each pixel's exact ground-truth index, scale half the spacing:
-/// `[1, K, H, W]` data (zero at invalid pixels) and the valid mask `[1, 1, H, W]`.
-pub fn distribution_target(gt: &GroundTruth, spheres: &[f64]) -> (TensorData, TensorData) {
-    let (k, plane) = (spheres.len(), gt.width * gt.height);
-    let spacing = match spheres {
-        [first, .., last] => (last - first) / (k - 1) as f64,
-        _ => 1.0,
-    };
-    let scale = (spacing / 2.0).max(f64::EPSILON);
-    let mut target = vec![0f32; k * plane];
-    let mut weights = vec![0f64; k];
-    for (i, (&n, &valid)) in gt.index.iter().zip(&gt.valid).enumerate() {
-        if !valid {
-            continue;
-        }
-        for (w, &c) in weights.iter_mut().zip(spheres) {
-            *w = (-(c - f64::from(n)).abs() / scale).exp();
-        }
-        let sum: f64 = weights.iter().sum();
-        for (j, w) in weights.iter().enumerate() {
-            target[j * plane + i] = (w / sum) as f32;
-        }
-    }
-    let mask = gt.valid.iter().map(|&v| f32::from(u8::from(v))).collect();
-    (
-        TensorData::new(target, [1, k, gt.height, gt.width]),
-        TensorData::new(mask, [1, 1, gt.height, gt.width]),
-    )
-}
-
-/// Mean cross-entropy, over the valid pixels of `gt`, between [`distribution_target`] and a
-/// stage's distribution `prob` `[1, K, H, W]` over `spheres`.
+/// Mean cross-entropy, over the valid pixels of `gt`, between a stage's distribution `prob`
+/// over its hypotheses `hypotheses` (both `[1, K, H, W]`, hypotheses in `N` units) and a
+/// Laplacian of `scale` around each pixel's exact ground-truth index: it asks for one peak at
+/// the truth, where the L1 of the mean is content with any spread whose mean is right
+/// (AcfNet's unimodal supervision). Where the truth lies outside the hypotheses, the target
+/// piles on the nearest one. The target carries no gradient.
 pub fn distribution_ce(
     prob: Tensor<4>,
+    hypotheses: Tensor<4>,
     gt: &GroundTruth,
-    spheres: &[f64],
+    scale: f64,
     device: &Device,
 ) -> Tensor<1> {
-    let (target, mask) = distribution_target(gt, spheres);
-    let target = Tensor::<4>::from_data(target, device);
-    let mask = Tensor::<4>::from_data(mask, device);
+    let (index, mask) = target_data_with(gt, false);
+    let index = Tensor::<3>::from_data(index, device).unsqueeze_dim::<4>(1); // [1, 1, H, W]
+    let mask = Tensor::<3>::from_data(mask, device).unsqueeze_dim::<4>(1); // [1, 1, H, W]
+    let distance = (hypotheses - index)
+        .abs()
+        .div_scalar(scale.max(f64::EPSILON));
+    let target = softmax(distance.neg(), 1); // [1, K, H, W]
     let count = mask.clone().sum().clamp_min(1.0); // [1]
     let ce = (target * prob.clamp_min(1e-6).log()).sum_dim(1).neg(); // [1, 1, H, W]
     (ce * mask).sum() / count
@@ -329,56 +314,61 @@ fn index_l1(index: Tensor<3>, gt: &GroundTruth, round: bool, device: &Device) ->
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
+    use burn::tensor::TensorData;
 
-    /// Two valid pixels (indices 12.0 and 30.5) and an invalid one, on 5 spheres 0, 10.. 40.
-    fn three_pixels() -> (GroundTruth, Vec<f64>) {
-        let gt = GroundTruth {
+    /// Two valid pixels (indices 12.0 and 30.5) and an invalid one.
+    fn three_pixels() -> GroundTruth {
+        GroundTruth {
             width: 3,
             height: 1,
             index: vec![12.0, 30.5, 7.0],
             valid: vec![true, true, false],
-        };
-        (gt, vec![0.0, 10.0, 20.0, 30.0, 40.0])
-    }
-
-    #[test]
-    fn distribution_targets_peak_at_the_truth_and_sum_to_one() {
-        let (gt, spheres) = three_pixels();
-        let (target, mask) = distribution_target(&gt, &spheres);
-        let t = target.try_to_vec::<f32>().unwrap();
-        let at = |k: usize, i: usize| t[k * 3 + i];
-        for i in 0..2 {
-            let sum: f32 = (0..5).map(|k| at(k, i)).sum();
-            assert!((sum - 1.0).abs() < 1e-5, "pixel {i} sums to {sum}");
         }
-        // Pixel 0 (12.0) peaks at sphere 10, then 20; pixel 1 (30.5) at 30, then 40.
-        assert!(at(1, 0) > at(2, 0) && at(2, 0) > at(0, 0) && at(0, 0) > at(4, 0));
-        assert!(at(3, 1) > at(4, 1) && at(4, 1) > at(2, 1));
-        // Laplacian of scale 5 (half the spacing): neighbours 2 and 8 units away.
-        let ratio = at(1, 0) / at(2, 0);
-        assert!((ratio - (6.0f32 / 5.0).exp()).abs() < 1e-3, "ratio {ratio}");
-        assert!((0..5).all(|k| at(k, 2) == 0.0));
-        assert_eq!(mask.try_to_vec::<f32>().unwrap(), vec![1.0, 1.0, 0.0]);
     }
 
-    #[test]
-    fn the_cross_entropy_prefers_a_peak_at_the_truth() {
-        let (gt, spheres) = three_pixels();
+    /// `[1, K, 1, 3]` from per-pixel values over `K = 5`.
+    fn per_pixel(values: [[f32; 5]; 3], device: &Device) -> Tensor<4> {
+        let data: Vec<f32> = (0..5)
+            .flat_map(|k| values.iter().map(move |p| p[k]))
+            .collect();
+        Tensor::<4>::from_data(TensorData::new(data, [1, 5, 1, 3]), device)
+    }
+
+    fn ce(prob: [[f32; 5]; 3], hypotheses: [[f32; 5]; 3], scale: f64) -> f32 {
         let device = Device::flex();
-        let prob = |per_pixel: [[f32; 5]; 3]| {
-            // [1, K, 1, 3] from per-pixel distributions.
-            let data: Vec<f32> = (0..5)
-                .flat_map(|k| per_pixel.iter().map(move |p| p[k]))
+        let loss = distribution_ce(
+            per_pixel(prob, &device),
+            per_pixel(hypotheses, &device),
+            &three_pixels(),
+            scale,
+            &device,
+        );
+        loss.into_data().try_to_vec::<f32>().unwrap()[0]
+    }
+
+    const SPHERES: [[f32; 5]; 3] = [[0.0, 10.0, 20.0, 30.0, 40.0]; 3];
+
+    #[test]
+    fn the_cross_entropy_is_least_at_the_laplacian_around_the_truth() {
+        // The target itself: a Laplacian of scale 5 over the spheres, normalised.
+        let laplacian = |truth: f32| {
+            let w: Vec<f32> = SPHERES[0]
+                .iter()
+                .map(|&c| (-(c - truth).abs() / 5.0).exp())
                 .collect();
-            Tensor::<4>::from_data(TensorData::new(data, [1, 5, 1, 3]), &device)
-        };
-        let ce = |p| {
-            distribution_ce(prob(p), &gt, &spheres, &device)
-                .into_data()
-                .try_to_vec::<f32>()
-                .unwrap()[0]
+            let sum: f32 = w.iter().sum();
+            std::array::from_fn(|k| w[k] / sum)
         };
         let flat = [0.2; 5];
+        let target = [laplacian(12.0), laplacian(30.5), flat];
+        let at_target = ce(target, SPHERES, 5.0);
+        // Cross-entropy is the target's entropy there and more anywhere else.
+        let entropy = |p: &[f32; 5]| -p.iter().map(|x| x * x.ln()).sum::<f32>();
+        let expected = (entropy(&target[0]) + entropy(&target[1])) / 2.0;
+        assert!(
+            (at_target - expected).abs() < 1e-4,
+            "{at_target} vs {expected}"
+        );
         let right = [
             [0.05, 0.8, 0.1, 0.03, 0.02],
             [0.02, 0.03, 0.1, 0.75, 0.1],
@@ -389,11 +379,38 @@ mod tests {
             [0.8, 0.1, 0.05, 0.03, 0.02],
             flat,
         ];
-        let (r, f, w) = (ce(right), ce([flat; 3]), ce(wrong));
-        assert!(r < f && f < w, "right {r}, flat {f}, wrong {w}");
+        let (r, f, w) = (
+            ce(right, SPHERES, 5.0),
+            ce([flat; 3], SPHERES, 5.0),
+            ce(wrong, SPHERES, 5.0),
+        );
+        assert!(
+            at_target < r && r < f && f < w,
+            "target {at_target}, right {r}, flat {f}, wrong {w}"
+        );
         // The invalid pixel does not count: changing it changes nothing.
         let mut other = right;
         other[2] = [0.96, 0.01, 0.01, 0.01, 0.01];
-        assert!((ce(other) - r).abs() < 1e-6);
+        assert!((ce(other, SPHERES, 5.0) - r).abs() < 1e-6);
+    }
+
+    #[test]
+    fn per_pixel_hypotheses_outside_the_truth_pile_the_target_on_the_nearest() {
+        // Pixel 0's hypotheses 20..28 all lie above its truth 12: the target is heaviest on
+        // 20, so a distribution peaked there beats one peaked at 28.
+        let mut hypotheses = SPHERES;
+        hypotheses[0] = [20.0, 22.0, 24.0, 26.0, 28.0];
+        let flat = [0.2; 5];
+        let low = [
+            [0.9, 0.04, 0.03, 0.02, 0.01],
+            [0.02, 0.03, 0.1, 0.75, 0.1],
+            flat,
+        ];
+        let high = [
+            [0.01, 0.02, 0.03, 0.04, 0.9],
+            [0.02, 0.03, 0.1, 0.75, 0.1],
+            flat,
+        ];
+        assert!(ce(low, hypotheses, 1.0) < ce(high, hypotheses, 1.0));
     }
 }

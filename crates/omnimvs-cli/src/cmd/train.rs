@@ -119,6 +119,10 @@ pub struct Args {
     /// one peak at the truth, not just a right mean.
     #[arg(long, conflicts_with = "resume")]
     pub coarse_distribution: Option<f64>,
+    /// Cascade: the same cross-entropy for each refinement stage over its per-pixel
+    /// hypotheses (`refine_distribution_weight`; 0 in the first cascades).
+    #[arg(long, conflicts_with = "resume")]
+    pub refine_distribution: Option<f64>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
@@ -349,15 +353,19 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
             if args.context_pairs.is_some()
                 || args.stage_gates.is_some()
                 || args.coarse_distribution.is_some()
+                || args.refine_distribution.is_some()
             {
                 if net.family != Family::Cascade {
                     bail!(
-                        "--context-pairs, --stage-gates and --coarse-distribution are options \
-                         of --preset cascade"
+                        "--context-pairs, --stage-gates, --coarse-distribution and \
+                         --refine-distribution are options of --preset cascade"
                     );
                 }
                 if let Some(weight) = args.coarse_distribution {
                     net.cascade.coarse_distribution_weight = weight;
+                }
+                if let Some(weight) = args.refine_distribution {
+                    net.cascade.refine_distribution_weight = weight;
                 }
                 if let Some(pairs) = args.context_pairs {
                     net.cascade.context_pairs = pairs;

@@ -352,6 +352,8 @@ pub struct StageOutput {
     pub prob: Tensor<4>,
     /// Expected hypothesis index in `N` units `[B, H, W]`.
     pub index: Tensor<3>,
+    /// The hypotheses the distribution is over, `N` units `[1, K, H, W]` (no gradient).
+    pub hypotheses: Tensor<4>,
 }
 
 impl StageOutput {
@@ -511,8 +513,14 @@ impl CascadeNet {
     /// `[1 or B, K, H, W]` (`N` units).
     pub fn soft_argmax(scores: Tensor<4>, hypotheses: Tensor<4>) -> StageOutput {
         let prob = softmax(scores, 1); // [B, K, H, W]
-        let index = (prob.clone() * hypotheses).sum_dim(1).squeeze_dim(1); // [B, H, W]
-        StageOutput { prob, index }
+        let index = (prob.clone() * hypotheses.clone())
+            .sum_dim(1)
+            .squeeze_dim(1); // [B, H, W]
+        StageOutput {
+            prob,
+            index,
+            hypotheses,
+        }
     }
 
     /// Coarse stage from the stride-8 features of every camera.
