@@ -81,7 +81,7 @@ pub struct ForwardOptions {
     pub repeats: usize,
     /// Fold the batch norms into the convolutions.
     pub fold_batch_norm: bool,
-    /// Sweep on the device (GPU backends) instead of the host.
+    /// Sweep (the cascade: its correlation) on the device (GPU backends) instead of the host.
     pub device_sweep: bool,
 }
 
@@ -209,7 +209,8 @@ impl CascadeBenchReport {
 }
 
 /// Times the cascade's forward pass per stage on random images for `rig` (random weights,
-/// inference mode, batch norms folded when `fold_batch_norm` as `infer` runs it, `warmup`
+/// inference mode; batch norms folded and the correlation on the host or the device as
+/// `options` say, `infer` folds them and correlates on the host on a CPU; `options.warmup`
 /// unmeasured runs first).
 ///
 /// # Errors
@@ -218,21 +219,26 @@ pub fn bench_cascade_forward(
     config: &NetConfig,
     rig: &Rig,
     min_depth_m: f64,
-    warmup: usize,
-    repeats: usize,
-    fold_batch_norm: bool,
+    options: ForwardOptions,
     device: &Device,
 ) -> Result<CascadeBenchReport> {
     let net = CascadeNet::new(config, device)?.valid();
     // The network's own parameters, batch norms included (folding merges them).
     let params = net.num_params();
+    let ForwardOptions {
+        warmup,
+        repeats,
+        fold_batch_norm,
+        device_sweep,
+    } = options;
     let net = if fold_batch_norm {
         net.fold_batch_norm()
     } else {
         net
     };
     let hypotheses = InvDepthHypotheses::new(config.num_invdepth, min_depth_m)?;
-    let geometry = CascadeGeometry::new(rig, config, &hypotheses, device)?;
+    let geometry =
+        CascadeGeometry::with_host_correlation(rig, config, &hypotheses, device, !device_sweep)?;
     let images = random_images(config, device);
     let mut runs = Vec::new();
     for run in 0..warmup + repeats {

@@ -166,9 +166,12 @@ fn bench_cascade(
         config,
         &rig.rig,
         rig.min_depth_m,
-        args.warmup,
-        args.repeats,
-        !args.no_fold,
+        ForwardOptions {
+            warmup: args.warmup,
+            repeats: args.repeats,
+            fold_batch_norm: !args.no_fold,
+            device_sweep: args.backend.is_gpu(),
+        },
         device,
     )
     .context("forward benchmark")?;
