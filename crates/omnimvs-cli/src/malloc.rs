@@ -4,9 +4,9 @@
 //! few hundred megabytes of tensors in every frame. glibc serves blocks above its mmap
 //! threshold with fresh `mmap`s and gives freed memory back to the system, so every frame
 //! page-faults its tensors in again and the kernel zeroes each page: a fifth of the cascade's
-//! CPU time on 4 frames was system time (README, "Performance"). With `mmap` off for the
-//! heap and trimming off, freed blocks are reused and the peak memory is unchanged (the
-//! process keeps what it peaked at, which it needed anyway).
+//! CPU time on 4 frames was system time (`crates/omnimvs-net/README.md`, "Inference on a
+//! CPU"). With `mmap` off for the heap and trimming off, freed blocks are reused and the peak
+//! memory is unchanged (the process keeps what it peaked at, which it needed anyway).
 //!
 //! The user's own settings win: nothing is changed when `GLIBC_TUNABLES` names a
 //! `glibc.malloc` tunable.

@@ -219,9 +219,9 @@ pub fn load_cascade(path: &Path, device: &Device) -> Result<CascadeNet, NetError
 /// Loads cascade weights into a network of `config`, which may have grown from the
 /// weights' own configuration (the file's JSON): more context pairs at stride 8
 /// (`context_pairs`) or gated refinement stages (`stage_gates`), other loss weights (training
-/// only), everything else equal. The
-/// new modules keep their starting values, which leave the network's answer as it was (or
-/// nearly: the gates start at 0.98), so training goes on from the loaded network.
+/// only), everything else equal. The new modules keep their starting values, which leave the
+/// network's answer as it was (or nearly: the gates start at 0.98), so training goes on from
+/// the loaded network.
 ///
 /// # Errors
 /// [`NetError::Weights`] when the file's network is not `config` or a part of it; see

@@ -69,8 +69,9 @@ fn normalise(px: f64, size: u32) -> f32 {
 /// `size = (width, height)`: its fisheye pixel normalised for
 /// `grid_sample(align_corners=True)` as `[x, y]`, with [`INVALID_PIXEL`] for a
 /// coordinate that is negative or has no projection. Only the direction of
-/// `p_cam` matters. The network's per-pixel sampler uses it too, so that its
-/// positions equal the table's on the spheres they share.
+/// `p_cam` matters. The network's per-pixel sampler projects on its own and normalises
+/// through [`normalized_pixel`], so that its positions equal the table's on the spheres they
+/// share.
 pub fn normalized_position(camera: &Camera, size: (u32, u32), p_cam: &Vector3<f64>) -> [f32; 2] {
     normalized_pixel(camera.model.project(p_cam).map(|px| (px.col, px.row)), size)
 }

@@ -14,6 +14,7 @@ use crate::error::TrainError;
 use crate::learner::{masked_l1, target_data_with};
 use crate::sample::{Sample, SampleSource};
 use omnimvs_net::cascade::geometry::crop_columns;
+use omnimvs_net::cascade::sampler::coarse_spacing;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet};
 use omnimvs_net::config::NetConfig;
 use omnimvs_net::model::{OmniMvsNet, SweepTaps};
@@ -196,9 +197,11 @@ impl Trainable for CascadeNet {
         };
         let targets = [&sample.stage_gt[0], &mid, &fine];
         let p = &self.config.cascade;
-        let coarse_spacing = (self.config.num_invdepth.saturating_sub(1)) as f64
-            / (p.coarse_spheres.saturating_sub(1)).max(1) as f64;
-        let spacings = [coarse_spacing, p.stage_intervals[0], p.stage_intervals[1]];
+        let spacings = [
+            coarse_spacing(p.coarse_spheres, self.config.num_invdepth),
+            p.stage_intervals[0],
+            p.stage_intervals[1],
+        ];
         let distribution_weights = [
             p.coarse_distribution_weight,
             p.refine_distribution_weight,
@@ -212,9 +215,10 @@ impl Trainable for CascadeNet {
             .zip(p.loss_weights)
             .zip(distribution_weights.into_iter().zip(spacings))
         {
-            let mut loss = index_l1(stage.index, gt, false, &device).mul_scalar(w);
+            let (target, mask) = target_tensors(gt, false, &device);
+            let mut loss = masked_l1(stage.index, target.clone(), mask.clone()).mul_scalar(w);
             if dw > 0.0 {
-                let ce = distribution_ce(stage.prob, stage.hypotheses, gt, spacing / 2.0, &device);
+                let ce = distribution_ce(stage.prob, stage.hypotheses, target, mask, spacing / 2.0);
                 loss = loss + ce.mul_scalar(dw);
             }
             total = Some(match total {
@@ -240,22 +244,22 @@ impl Trainable for CascadeNet {
     }
 }
 
-/// Mean cross-entropy, over the valid pixels of `gt`, between a stage's distribution `prob`
-/// over its hypotheses `hypotheses` (both `[1, K, H, W]`, hypotheses in `N` units) and a
-/// Laplacian of `scale` around each pixel's exact ground-truth index: it asks for one peak at
-/// the truth, where the L1 of the mean is content with any spread whose mean is right
-/// (AcfNet's unimodal supervision). Where the truth lies outside the hypotheses, the target
-/// piles on the nearest one. The target carries no gradient.
+/// Mean cross-entropy, over the pixels of `mask`, between a stage's distribution `prob` over
+/// its hypotheses `hypotheses` (both `[1, K, H, W]`, hypotheses in `N` units) and a Laplacian
+/// of `scale` around each pixel's exact ground-truth index `target` (`[1, H, W]`, with `mask`
+/// as [`target_tensors`] makes them): it asks for one peak at the truth, where the L1 of the
+/// mean is content with any spread whose mean is right (AcfNet's unimodal supervision). Where
+/// the truth lies outside the hypotheses, the target piles on the nearest one. The target
+/// carries no gradient.
 pub fn distribution_ce(
     prob: Tensor<4>,
     hypotheses: Tensor<4>,
-    gt: &GroundTruth,
+    target: Tensor<3>,
+    mask: Tensor<3>,
     scale: f64,
-    device: &Device,
 ) -> Tensor<1> {
-    let (index, mask) = target_data_with(gt, false);
-    let index = Tensor::<3>::from_data(index, device).unsqueeze_dim::<4>(1); // [1, 1, H, W]
-    let mask = Tensor::<3>::from_data(mask, device).unsqueeze_dim::<4>(1); // [1, 1, H, W]
+    let index = target.unsqueeze_dim::<4>(1); // [1, 1, H, W]
+    let mask = mask.unsqueeze_dim::<4>(1); // [1, 1, H, W]
     let distance = (hypotheses - index)
         .abs()
         .div_scalar(scale.max(f64::EPSILON));
@@ -302,9 +306,15 @@ fn no_images(expected: usize) -> TrainError {
 /// target is the rounded ground-truth index when `round` (the paper's network, as trained so
 /// far), the exact index otherwise.
 fn index_l1(index: Tensor<3>, gt: &GroundTruth, round: bool, device: &Device) -> Tensor<1> {
+    let (target, mask) = target_tensors(gt, round, device);
+    masked_l1(index, target, mask)
+}
+
+/// The ground-truth indices (rounded when `round`) and the valid mask of `gt` as `[1, H, W]`
+/// tensors on `device`.
+fn target_tensors(gt: &GroundTruth, round: bool, device: &Device) -> (Tensor<3>, Tensor<3>) {
     let (target, mask) = target_data_with(gt, round);
-    masked_l1(
-        index,
+    (
         Tensor::from_data(target, device),
         Tensor::from_data(mask, device),
     )
@@ -336,12 +346,13 @@ mod tests {
 
     fn ce(prob: [[f32; 5]; 3], hypotheses: [[f32; 5]; 3], scale: f64) -> f32 {
         let device = Device::flex();
+        let (target, mask) = target_tensors(&three_pixels(), false, &device);
         let loss = distribution_ce(
             per_pixel(prob, &device),
             per_pixel(hypotheses, &device),
-            &three_pixels(),
+            target,
+            mask,
             scale,
-            &device,
         );
         loss.into_data().try_to_vec::<f32>().unwrap()[0]
     }

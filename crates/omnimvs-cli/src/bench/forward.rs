@@ -209,9 +209,9 @@ impl CascadeBenchReport {
 }
 
 /// Times the cascade's forward pass per stage on random images for `rig` (random weights,
-/// inference mode; batch norms folded and the correlation on the host or the device as
-/// `options` say, `infer` folds them and correlates on the host on a CPU; `options.warmup`
-/// unmeasured runs first).
+/// inference mode, `options.warmup` unmeasured runs first). `options` say whether the batch
+/// norms are folded and the correlation runs on the device; `infer` folds them and correlates
+/// on the host on a CPU.
 ///
 /// # Errors
 /// For a configuration that is not a cascade or a rig that does not fit it.

@@ -42,6 +42,8 @@ pub struct StageTaps {
 pub struct HostTaps {
     /// Taps of every camera into its feature map, flat over `[K, H, W]`.
     pub cameras: Vec<Vec<Taps>>,
+    /// Size `[rows, cols]` of the feature maps the taps index into.
+    pub feature_size: [usize; 2],
     /// Number of camera pairs that see each sample, flat over `[K, H, W]`.
     pub pair_count: Vec<f32>,
     /// Share of the cameras that see each sample, flat over `[K, H, W]`.
@@ -102,20 +104,21 @@ impl StageTaps {
             .collect();
         let share = 1.0 / grids.len() as f32;
         let visibility: Vec<f32> = count.iter().map(|c| c * share).collect();
-        let volume = |data: &[f32]| {
-            Tensor::<5>::from_data(TensorData::new(data.to_vec(), [1, 1, k, h, w]), device)
-        };
+        let host = host.then(|| HostTaps {
+            cameras: host_cameras,
+            feature_size,
+            pair_count: pairs.clone(),
+            visibility: visibility.clone(),
+        });
+        let volume =
+            |data: Vec<f32>| Tensor::<5>::from_data(TensorData::new(data, [1, 1, k, h, w]), device);
         Ok(Self {
             cameras,
             hypotheses: hypothesis_tensor(index, k, h, w, device),
-            visibility: volume(&visibility),
-            pair_count: volume(&pairs),
+            visibility: volume(visibility),
+            pair_count: volume(pairs),
             center: None,
-            host: host.then_some(HostTaps {
-                cameras: host_cameras,
-                pair_count: pairs,
-                visibility,
-            }),
+            host,
         })
     }
 

@@ -61,10 +61,16 @@ pub fn correlation(
     let mut channels = 0;
     for feature in features {
         let [b, c, rows, cols] = feature.dims();
-        if b != 1 || c == 0 || c > MAX_CHANNELS || (channels != 0 && c != channels) {
+        if b != 1
+            || c == 0
+            || c > MAX_CHANNELS
+            || (channels != 0 && c != channels)
+            || [rows, cols] != taps.feature_size
+        {
+            let [rows_t, cols_t] = taps.feature_size;
             return Err(shape_error(
                 "feature maps",
-                vec![1, channels.max(1), rows, cols],
+                vec![1, channels.max(1), rows_t, cols_t],
                 vec![b, c, rows, cols],
             ));
         }
@@ -73,14 +79,6 @@ pub fn correlation(
     }
     if groups == 0 || channels % groups != 0 {
         return Err(shape_error("groups", vec![channels], vec![groups]));
-    }
-    let sizes: Vec<usize> = tables.iter().map(|t| t.len() / channels).collect();
-    let bad_tap = taps.cameras.iter().zip(&sizes).any(|(cam, &pixels)| {
-        cam.iter()
-            .any(|t| t.index.iter().any(|&i| i as usize >= pixels))
-    });
-    if bad_tap {
-        return Err(shape_error("taps inside the feature maps", sizes, vec![]));
     }
 
     let per_group = channels / groups;

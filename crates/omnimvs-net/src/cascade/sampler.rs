@@ -156,9 +156,22 @@ impl PixelSampler {
 
 /// `count` hypothesis indices evenly spaced over `0..=N-1` (the coarse spheres).
 pub fn coarse_indices(count: usize, num_invdepth: usize) -> Vec<f64> {
-    let last = num_invdepth.saturating_sub(1) as f64;
-    let denom = count.saturating_sub(1).max(1) as f64;
-    (0..count).map(|k| k as f64 * last / denom).collect()
+    let (last, intervals) = coarse_span(count, num_invdepth);
+    (0..count).map(|k| k as f64 * last / intervals).collect()
+}
+
+/// The spacing of [`coarse_indices`], in index units of `N`.
+pub fn coarse_spacing(count: usize, num_invdepth: usize) -> f64 {
+    let (last, intervals) = coarse_span(count, num_invdepth);
+    last / intervals
+}
+
+/// The last coarse index (`N - 1`) and the number of intervals between the spheres.
+fn coarse_span(count: usize, num_invdepth: usize) -> (f64, f64) {
+    (
+        num_invdepth.saturating_sub(1) as f64,
+        count.saturating_sub(1).max(1) as f64,
+    )
 }
 
 /// `k` per-pixel hypotheses spaced by `interval` around `center` (fractional indices,
