@@ -111,6 +111,15 @@ fn stages_have_the_expected_shapes_and_stay_in_range() {
     assert!(net.forward(&learner_images[..3], &geometry).is_err());
 }
 
+/// Largest absolute difference between two equally long slices.
+fn max_difference(a: &[f32], b: &[f32]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0f32, f32::max)
+}
+
 /// Gives a batch norm inference statistics and an affine part away from the identity, from
 /// `seed` (channel `c` of seed `s`: mean, variance, scale and shift all differ).
 fn perturb(bn: &mut burn::nn::BatchNorm, seed: usize) {
@@ -170,11 +179,7 @@ fn folding_the_batch_norms_keeps_every_stage_answer() {
     for (a, b) in plain.stages.iter().zip(&folded.stages) {
         let a = read_values(a.prob.clone(), "plain").unwrap();
         let b = read_values(b.prob.clone(), "folded").unwrap();
-        let max = a
-            .iter()
-            .zip(&b)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0f32, f32::max);
+        let max = max_difference(&a, &b);
         assert!(max < 1e-4, "probabilities differ by {max}");
         // The perturbation reaches the answer: the distributions are not uniform.
         let spread = a.iter().fold(0f32, |m, &x| m.max(x)) - a.iter().fold(1f32, |m, &x| m.min(x));
@@ -197,11 +202,7 @@ fn the_host_correlation_answers_as_the_tensor_one() {
     for (stage, (x, y)) in a.stages.iter().zip(&b.stages).enumerate() {
         let x = read_values(x.prob.clone(), "tensor").unwrap();
         let y = read_values(y.prob.clone(), "host").unwrap();
-        let max = x
-            .iter()
-            .zip(&y)
-            .map(|(p, q)| (p - q).abs())
-            .fold(0f32, f32::max);
+        let max = max_difference(&x, &y);
         assert!(max < 1e-5, "stage {stage}: probabilities differ by {max}");
     }
     // The volumes themselves, on the coarse stage's taps.
@@ -220,13 +221,8 @@ fn the_host_correlation_answers_as_the_tensor_one() {
         "host",
     )
     .unwrap();
-    assert_eq!(x.len(), y.len());
     let scale = x.iter().fold(0f32, |m, v| m.max(v.abs()));
-    let max = x
-        .iter()
-        .zip(&y)
-        .map(|(p, q)| (p - q).abs())
-        .fold(0f32, f32::max);
+    let max = max_difference(&x, &y);
     assert!(
         scale > 1e-3 && max <= 1e-5 * scale,
         "volumes differ by {max} (scale {scale})"
