@@ -282,7 +282,14 @@ fn bench_checks_the_json_folder_before_running() {
     let e = stderr(&o);
     assert!(e.contains("--json") && e.contains("missing"), "{e}");
     assert!(!e.contains("panicked"), "{e}");
-    assert!(!stdout(&o).contains("preset paper"), "{}", stdout(&o));
+    assert!(!stdout(&o).contains("network paper"), "{}", stdout(&o));
+    // A configuration file that is not there is named, before anything runs.
+    let missing = dir.path().join("net.json");
+    let o = omnimvs(&["bench", "--config", missing.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("--config") && e.contains("net.json"), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
 }
 
 #[test]

@@ -89,10 +89,20 @@ pub struct CascadeParams {
     /// piles on the nearest). `0` (and left out of the file): no such term.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub refine_distribution_weight: f64,
+    /// The photometric cue ([`crate::cascade::photo`]): every stage's cost volume gets one
+    /// more channel, the ZNCC of the cameras' own images over a 5 x 5 window of its samples
+    /// (no weights, no gradient). Its input weights start at zero, so a trained network grows
+    /// into it unchanged. `false` (and left out of the file): the cascades before it.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub zncc_cue: bool,
 }
 
 fn is_zero(value: &f64) -> bool {
     *value == 0.0
+}
+
+fn is_false(value: &bool) -> bool {
+    !*value
 }
 
 impl Default for CascadeParams {
@@ -110,6 +120,7 @@ impl Default for CascadeParams {
             stage_gates: false,
             coarse_distribution_weight: 0.0,
             refine_distribution_weight: 0.0,
+            zncc_cue: false,
         }
     }
 }

@@ -218,8 +218,9 @@ pub fn load_cascade(path: &Path, device: &Device) -> Result<CascadeNet, NetError
 
 /// Loads cascade weights into a network of `config`, which may have grown from the
 /// weights' own configuration (the file's JSON): more context pairs at stride 8
-/// (`context_pairs`) or gated refinement stages (`stage_gates`), other loss weights (training
-/// only), everything else equal. The new modules keep their starting values, which leave the
+/// (`context_pairs`), gated refinement stages (`stage_gates`), the photometric cue
+/// (`zncc_cue`, [`CascadeNet::with_zncc_cue`]), other loss weights (training only),
+/// everything else equal. The new modules keep their starting values, which leave the
 /// network's answer as it was (or nearly: the gates start at 0.98), so training goes on from
 /// the loaded network.
 ///
@@ -242,14 +243,16 @@ pub fn load_cascade_grown(
     shrunk.cascade.refine_distribution_weight = saved.cascade.refine_distribution_weight;
     shrunk.cascade.context_pairs = saved.cascade.context_pairs;
     shrunk.cascade.stage_gates = saved.cascade.stage_gates;
+    shrunk.cascade.zncc_cue = saved.cascade.zncc_cue;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
-        && (!saved.cascade.stage_gates || config.cascade.stage_gates);
+        && (!saved.cascade.stage_gates || config.cascade.stage_gates)
+        && (!saved.cascade.zncc_cue || config.cascade.zncc_cue);
     if shrunk != saved || !grows {
         return Err(weights_error(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
-             (only `context_pairs` may grow, `stage_gates` switch on and the loss weights \
-             differ)",
+             (only `context_pairs` may grow, `stage_gates` and `zncc_cue` switch on and the \
+             loss weights differ)",
         ));
     }
     let old_ctx = 2 * saved.cascade.context_pairs;
@@ -261,7 +264,16 @@ pub fn load_cascade_grown(
                 .and_then(|i| i.parse::<usize>().ok())
                 .is_some_and(|i| i >= old_ctx)
     };
-    apply_file_except(CascadeNet::new(config, device)?, path, is_new)
+    // The cue widens the first convolution of every stage: load into the network without
+    // it, then widen (zero weights for the cue).
+    let mut without_cue = config.clone();
+    without_cue.cascade.zncc_cue = saved.cascade.zncc_cue;
+    let net = apply_file_except(CascadeNet::new(&without_cue, device)?, path, is_new)?;
+    Ok(if config.cascade.zncc_cue {
+        net.with_zncc_cue()
+    } else {
+        net
+    })
 }
 
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes

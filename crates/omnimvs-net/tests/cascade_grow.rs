@@ -1,5 +1,5 @@
-//! A trained cascade grows into context pairs at stride 8 and gated refinement stages
-//! without changing its answer (the gates start at 0.98: within 2 % of each refinement's
+//! A trained cascade grows into context pairs at stride 8, gated refinement stages and the
+//! photometric cue without changing its answer (the gates start at 0.98: within 2 % of each refinement's
 //! step), a file of the grown network does not load into the smaller one, and the new
 //! modules receive gradients. Uses the published rig of `sunny_single` from
 //! `../shared/data/omnimvs-samples`.
@@ -10,6 +10,7 @@ use burn::tensor::Device;
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::CascadeGeometry;
 use omnimvs_net::cascade::model::read_values;
+use omnimvs_net::cascade::photo::ImagePyramid;
 use omnimvs_net::{CascadeNet, NetConfig, weights};
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]
@@ -113,5 +114,91 @@ fn the_new_modules_learn() {
     for i in [1, 3] {
         let bn = net.features.ctx8[i].bn.as_ref().unwrap();
         norm(&format!("features.ctx8.{i}.bn.gamma"), read1(bn.gamma.id));
+    }
+}
+
+#[test]
+fn a_network_grows_into_the_photometric_cue_unchanged_and_learns_it() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let config = micro_config();
+    let mut cued = config.clone();
+    cued.cascade.zncc_cue = true;
+    let device = Device::flex();
+    let small = CascadeNet::new(&config, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("small.safetensors");
+    weights::save_module(&small, &config, &path).unwrap();
+    let big = weights::load_cascade_grown(&path, &cued, &device).unwrap();
+    assert!(big.config.cascade.zncc_cue);
+    // The first convolution of every stage reads one more channel per hypothesis.
+    let inputs = |net: &CascadeNet| {
+        [
+            net.coarse.c0[0].conv.weight.dims()[1],
+            net.mid.convs[0].conv.weight.dims()[1],
+            net.fine.convs[0].conv.weight.dims()[1],
+        ]
+    };
+    let [c, m, f] = inputs(&small);
+    assert_eq!(inputs(&big), [c + 8, m + 4, f + 3]);
+
+    let inputs = images(&config, &device);
+    let plain = CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap();
+    let with_cue = CascadeGeometry::new(&ds.rig, &cued, &hyps, &device).unwrap();
+    let before = small.forward(&inputs, &plain).unwrap();
+    let after = big.forward(&inputs, &with_cue).unwrap();
+    for s in 0..3 {
+        let a = read_values(before.stages[s].index.clone(), "index").unwrap();
+        let b = read_values(after.stages[s].index.clone(), "index").unwrap();
+        let diff = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f32, f32::max);
+        assert!(diff < 1e-4, "stage {s} moved by {diff}");
+    }
+    // The cue is there: ZNCC values, not all zero.
+    let pyramid = ImagePyramid::from_inputs(&inputs).unwrap();
+    let cue = with_cue.coarse_cue(Some(&pyramid)).unwrap().unwrap();
+    assert_eq!(cue.dims(), [1, 1, 8, 4, 16]);
+    let cue = read_values(cue, "cue").unwrap();
+    assert!(cue.iter().all(|z| (-1.0..=1.0).contains(z)));
+    assert!(cue.iter().any(|&z| z.abs() > 0.05), "{cue:?}");
+    // A network with the cue needs it, and its file does not load into one without.
+    assert!(big.forward(&inputs, &plain).is_err());
+    let big_path = dir.path().join("big.safetensors");
+    weights::save_module(&big, &cued, &big_path).unwrap();
+    assert!(weights::load_cascade_grown(&big_path, &config, &device).is_err());
+
+    // The cue's weights, zero at the start, get gradients.
+    let device = Device::flex().autodiff();
+    let net = weights::load_cascade_grown(&path, &cued, &device).unwrap();
+    let geometry = CascadeGeometry::new(&ds.rig, &cued, &hyps, &device).unwrap();
+    let out = net.forward(&images(&cued, &device), &geometry).unwrap();
+    let loss = out
+        .stages
+        .into_iter()
+        .map(|s| s.index.sub_scalar(10.0).abs().mean())
+        .reduce(|a, b| a + b)
+        .unwrap();
+    let grads = GradientsParams::from_grads(loss.backward(), &net);
+    let firsts = [
+        ("coarse", &net.coarse.c0[0], 8),
+        ("mid", &net.mid.convs[0], 4),
+        ("fine", &net.fine.convs[0], 3),
+    ];
+    for (name, conv, k) in firsts {
+        let [c_out, c_in, kh, kw] = conv.conv.weight.dims();
+        let grad = grads
+            .get::<4>(conv.conv.weight.id)
+            .unwrap_or_else(|| panic!("no gradient for {name}"))
+            .narrow(1, c_in - k, k);
+        assert_eq!(grad.dims(), [c_out, k, kh, kw]);
+        let norm: f32 = read_values(grad, "grad")
+            .unwrap()
+            .iter()
+            .map(|g| g.abs())
+            .sum();
+        assert!(norm > 0.0 && norm.is_finite(), "{name}: {norm}");
     }
 }

@@ -28,6 +28,10 @@ pub struct Args {
     /// Network: tiny, paper or cascade.
     #[arg(long, value_enum, default_value_t = Preset::Tiny)]
     pub preset: Preset,
+    /// A network configuration JSON (the file beside a weights file, e.g.
+    /// models/omnimvs-cascade.json) to time instead of the preset's network.
+    #[arg(long, conflicts_with = "preset")]
+    pub config: Option<PathBuf>,
     #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
     pub backend: Backend,
     /// Measured forward passes.
@@ -81,15 +85,21 @@ enum Forward {
 pub fn run(args: &Args) -> Result<()> {
     let backend = args.backend;
     let device = backend.device()?;
-    let config = args.preset.config();
+    let (config, name) = match &args.config {
+        Some(path) => (
+            omnimvs_net::weights::read_config(path)
+                .with_context(|| format!("--config {}", path.display()))?,
+            path.display().to_string(),
+        ),
+        None => (args.preset.config(), args.preset.name().to_string()),
+    };
     let device_sweep = match args.sweep {
         SweepPlace::Auto => backend.is_gpu(),
         SweepPlace::Host => false,
         SweepPlace::Device => true,
     };
     outln!(
-        "preset {} (CH {}, N {}, {}x{} output, {} cameras of {}x{}), backend {backend}, sweep on the {}",
-        args.preset,
+        "network {name} (CH {}, N {}, {}x{} output, {} cameras of {}x{}), backend {backend}, sweep on the {}",
         config.channels,
         config.num_invdepth,
         config.out_height,
@@ -110,7 +120,7 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(path) = &args.json {
         let report = Report {
             backend: backend.to_string(),
-            preset: args.preset.name().to_string(),
+            preset: name,
             device_sweep,
             forward,
             train_step,

@@ -113,6 +113,11 @@ pub struct Args {
     /// (`stage_gates`; off in the first cascades). Taken with --init like --context-pairs.
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub stage_gates: Option<Switch>,
+    /// Cascade: the photometric cue, the ZNCC of the cameras' own images at every stage's
+    /// samples as one more channel of its volume (`zncc_cue`; off before `cascade-8`). Its
+    /// weights start at zero, so --init with a network without it goes on from its answer.
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub zncc_cue: Option<Switch>,
     /// Cascade: weight of a cross-entropy between the coarse stage's distribution over its
     /// spheres and a Laplacian around the ground truth, beside the stages' L1
     /// (`coarse_distribution_weight`; 0 in the first cascades): it asks the coarse stage for
@@ -352,13 +357,14 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
             let mut net = args.preset.config();
             if args.context_pairs.is_some()
                 || args.stage_gates.is_some()
+                || args.zncc_cue.is_some()
                 || args.coarse_distribution.is_some()
                 || args.refine_distribution.is_some()
             {
                 if net.family != Family::Cascade {
                     bail!(
-                        "--context-pairs, --stage-gates, --coarse-distribution and \
-                         --refine-distribution are options of --preset cascade"
+                        "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution \
+                         and --refine-distribution are options of --preset cascade"
                     );
                 }
                 if let Some(weight) = args.coarse_distribution {
@@ -372,6 +378,9 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 }
                 if let Some(gates) = args.stage_gates {
                     net.cascade.stage_gates = gates == Switch::On;
+                }
+                if let Some(cue) = args.zncc_cue {
+                    net.cascade.zncc_cue = cue == Switch::On;
                 }
             }
             let config = TrainConfig {

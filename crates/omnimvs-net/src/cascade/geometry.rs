@@ -11,6 +11,7 @@ use omnimvs_camera::Rig;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
 use super::model::{CascadeNet, StageOutput, hypothesis_tensor, read_values};
+use super::photo::ImagePyramid;
 use super::sampler::{PixelSampler, coarse_indices, hypotheses_around};
 use crate::config::NetConfig;
 use crate::error::NetError;
@@ -35,6 +36,10 @@ pub struct StageTaps {
     /// The taps on the host, for the inference-only correlation kernel
     /// ([`super::host::correlation`]); `cameras` is then empty. `None`: the device taps.
     pub host: Option<HostTaps>,
+    /// The photometric cue at the samples `[1, 1, K, H, W]` ([`super::photo`]) of a
+    /// refinement stage of a network with `zncc_cue`; `None` otherwise (the coarse stage's
+    /// taps serve every frame, its cue is made per frame by [`CascadeGeometry::coarse_cue`]).
+    pub cue: Option<Tensor<5>>,
 }
 
 /// A stage's taps on the host: what the host correlation kernel reads (no gradient).
@@ -119,6 +124,7 @@ impl StageTaps {
             pair_count: volume(pairs),
             center: None,
             host,
+            cue: None,
         })
     }
 
@@ -163,6 +169,9 @@ pub struct CascadeGeometry {
     /// Whether the stages correlate on the host (inference on a CPU backend, no gradient:
     /// [`CascadeGeometry::with_host_correlation`]) or through device tensors (training, GPUs).
     pub host_correlation: bool,
+    /// The coarse stage's sample positions, one grid per camera, kept for the photometric
+    /// cue when the network has one (`zncc_cue`); empty otherwise.
+    pub coarse_grids: Vec<SweepGrid>,
 }
 
 impl CascadeGeometry {
@@ -230,12 +239,29 @@ impl CascadeGeometry {
             config: config.clone(),
             device: device.clone(),
             host_correlation,
+            coarse_grids: if config.cascade.zncc_cue {
+                coarse_grids
+            } else {
+                Vec::new()
+            },
         })
+    }
+
+    /// The photometric cue of the coarse stage for one frame's `images`; `None` when the
+    /// network has none.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when the images are not one per camera of the rig.
+    pub fn coarse_cue(&self, images: Option<&ImagePyramid>) -> Result<Option<Tensor<5>>, NetError> {
+        images
+            .map(|pyramid| pyramid.zncc_tensor(2, &self.coarse_grids, &self.device))
+            .transpose()
     }
 
     /// The taps of refinement stage `stage` (1: half, 2: full resolution) around `previous`,
     /// an index map (`N` units) on the previous stage's whole grid, for the stage's columns
-    /// `cols` (all of them, or a training window).
+    /// `cols` (all of them, or a training window); with the frame's `images`, the photometric
+    /// cue at the taps' samples too.
     ///
     /// # Errors
     /// [`NetError::Shape`] for a map of another size or a window outside the grid.
@@ -244,6 +270,7 @@ impl CascadeGeometry {
         stage: usize,
         previous: &[f32],
         cols: Range<usize>,
+        images: Option<&ImagePyramid>,
     ) -> Result<StageTaps, NetError> {
         let from = self.samplers[stage - 1].grid();
         if previous.len() != from.len() {
@@ -282,6 +309,10 @@ impl CascadeGeometry {
             TensorData::new(center, [1, h, w]),
             &self.device,
         ));
+        // Stage 1 samples the half-size images, stage 2 the inputs themselves.
+        taps.cue = images
+            .map(|pyramid| pyramid.zncc_tensor(2 - stage, &grids, &self.device))
+            .transpose()?;
         Ok(taps)
     }
 }
@@ -477,12 +508,19 @@ impl CascadeNet {
         let pyramid = self.features.forward(Tensor::cat(batch, 0)); // [B', C, h, w] x 3
         let levels: [Vec<Tensor<4>>; 3] =
             pyramid.map(|f| (0..cams).map(|c| f.clone().narrow(0, c, 1)).collect());
+        // The images themselves for the photometric cue, when the network has it.
+        let photo = if self.config.cascade.zncc_cue {
+            Some(ImagePyramid::from_inputs(images)?)
+        } else {
+            None
+        };
         timings.features = lap(&device);
-        let coarse = self.coarse_stage(&levels[2], &geometry.coarse)?;
+        let coarse_cue = geometry.coarse_cue(photo.as_ref())?;
+        let coarse = self.coarse_stage(&levels[2], &geometry.coarse, coarse_cue)?;
         timings.coarse = lap(&device);
         let coarse_index = read_values(coarse.index.clone(), "coarse index")?;
         let mid_cols = window.scaled(2);
-        let mid_taps = geometry.refine_taps(1, &coarse_index, mid_cols.clone())?;
+        let mid_taps = geometry.refine_taps(1, &coarse_index, mid_cols.clone(), photo.as_ref())?;
         let mid = self.refine_stage(1, &levels[1], &mid_taps)?;
         timings.mid = lap(&device);
         // The fine stage's centres: the half-resolution estimate inside the window, the
@@ -495,7 +533,7 @@ impl CascadeNet {
             let at = row * mid_grid.width + mid_cols.start;
             mid_index[at..at + w].copy_from_slice(values);
         }
-        let fine_taps = geometry.refine_taps(2, &mid_index, window.scaled(1))?;
+        let fine_taps = geometry.refine_taps(2, &mid_index, window.scaled(1), photo.as_ref())?;
         let fine = self.refine_stage(0, &levels[0], &fine_taps)?;
         timings.fine = lap(&device);
         timings.total = start.elapsed().as_secs_f64();

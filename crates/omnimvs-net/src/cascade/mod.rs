@@ -21,12 +21,15 @@
 //! - [`geometry`]: a stage's taps on the device, a rig's geometry, the forward pass.
 //! - [`host`]: the correlation of a stage on the host, for inference on a CPU.
 //! - [`model`]: the burn modules.
+//! - [`photo`]: the photometric cue (`zncc_cue`), ZNCC of the cameras' own images at a
+//!   stage's samples, one more channel of its volume.
 //! - [`infer`]: the network on a dataset's frames.
 
 pub mod geometry;
 pub mod host;
 pub mod infer;
 pub mod model;
+pub mod photo;
 pub mod sampler;
 
 pub use geometry::{

@@ -395,23 +395,25 @@ impl CascadeNet {
         }
         config.validate()?;
         let p = &config.cascade;
+        // Per hypothesis: the groups' correlations, the visibility and, with it, the cue.
+        let extra = 1 + usize::from(p.zncc_cue);
         Ok(Self {
             features: CascadeFeatures::new(p.feature_channels, p.context_pairs, device),
             coarse: CoarseRegularizer::new(
-                (p.groups[2] + 1) * p.coarse_spheres,
+                (p.groups[2] + extra) * p.coarse_spheres,
                 p.coarse_spheres,
                 p.coarse_channels,
                 device,
             ),
             mid: StageRegularizer::new(
-                (p.groups[1] + 1) * p.stage_hypotheses[0],
+                (p.groups[1] + extra) * p.stage_hypotheses[0],
                 p.stage_channels[0],
                 p.stage_hypotheses[0],
                 p.stage_gates,
                 device,
             ),
             fine: StageRegularizer::new(
-                (p.groups[0] + 1) * p.stage_hypotheses[1],
+                (p.groups[0] + extra) * p.stage_hypotheses[1],
                 p.stage_channels[1],
                 p.stage_hypotheses[1],
                 p.stage_gates,
@@ -432,6 +434,37 @@ impl CascadeNet {
             fine: self.fine.fold_batch_norm(),
             config: self.config,
         }
+    }
+
+    /// The network with the photometric cue switched on (`zncc_cue`): the first convolution
+    /// of every stage gets the cue's input channels (one per hypothesis, after the existing
+    /// ones) with zero weights, so it answers exactly as before until training moves them.
+    /// A network that has the cue already is returned as it is.
+    #[must_use]
+    pub fn with_zncc_cue(mut self) -> Self {
+        if self.config.cascade.zncc_cue {
+            return self;
+        }
+        let p = &self.config.cascade;
+        let ks = [
+            p.coarse_spheres,
+            p.stage_hypotheses[0],
+            p.stage_hypotheses[1],
+        ];
+        let firsts = [
+            &mut self.coarse.c0[0],
+            &mut self.mid.convs[0],
+            &mut self.fine.convs[0],
+        ];
+        for (first, k) in firsts.into_iter().zip(ks) {
+            let weight = first.conv.weight.val(); // [C_out, C_in, 3, 3]
+            let [c_out, _, kh, kw] = weight.dims();
+            let zeros = Tensor::zeros([c_out, k, kh, kw], &weight.device());
+            let widened = Tensor::cat(vec![weight, zeros], 1).detach(); // a leaf again
+            first.conv.weight = Param::from_tensor(widened);
+        }
+        self.config.cascade.zncc_cue = true;
+        self
     }
 
     /// Group-wise correlation of one stage: every camera's features `[1, C, rows, cols]`
@@ -523,16 +556,43 @@ impl CascadeNet {
         }
     }
 
-    /// Coarse stage from the stride-8 features of every camera.
+    /// A stage's volume `[1, G + 1, K, H, W]` with the photometric cue `[1, 1, K, H, W]`
+    /// appended when the network has it (`[1, G + 2, K, H, W]`), as it is otherwise.
     ///
     /// # Errors
-    /// See [`CascadeNet::correlation`].
+    /// [`NetError::Shape`] when the network has the cue and it is missing.
+    fn with_cue(
+        &self,
+        volume: Tensor<5>,
+        cue: Option<Tensor<5>>,
+        taps: &StageTaps,
+    ) -> Result<Tensor<5>, NetError> {
+        if !self.config.cascade.zncc_cue {
+            return Ok(volume);
+        }
+        let Some(cue) = cue else {
+            return Err(NetError::Shape {
+                what: "photometric cue of a stage (the network has `zncc_cue`)".into(),
+                expected: vec![1, 1, taps.num_hypotheses(), taps.height(), taps.width()],
+                actual: vec![0],
+            });
+        };
+        Ok(Tensor::cat(vec![volume, cue], 1))
+    }
+
+    /// Coarse stage from the stride-8 features of every camera and, with `zncc_cue`, the
+    /// photometric cue at its samples.
+    ///
+    /// # Errors
+    /// See [`CascadeNet::correlation`]; a missing cue.
     pub fn coarse_stage(
         &self,
         features: &[Tensor<4>],
         taps: &StageTaps,
+        cue: Option<Tensor<5>>,
     ) -> Result<StageOutput, NetError> {
         let volume = Self::correlation(features, taps, self.config.cascade.groups[2])?;
+        let volume = self.with_cue(volume, cue, taps)?;
         let scores = self.coarse.forward(fold_volume(volume)); // [B, K, H, W]
         Ok(Self::soft_argmax(scores, taps.hypotheses.clone()))
     }
@@ -550,6 +610,7 @@ impl CascadeNet {
     ) -> Result<StageOutput, NetError> {
         let groups = self.config.cascade.groups[level];
         let volume = Self::correlation(features, taps, groups)?;
+        let volume = self.with_cue(volume, taps.cue.clone(), taps)?;
         let regularizer = if level == 1 { &self.mid } else { &self.fine };
         let (scores, gate) = regularizer.forward(fold_volume(volume)); // [B, K, H, W]
         let mut out = Self::soft_argmax(scores, taps.hypotheses.clone());

@@ -1,0 +1,377 @@
+//! The photometric cue of the cascade's stages (`zncc_cue`): at every sample of a stage, the
+//! ZNCC of the cameras' own input images (not learnt features) over a window of the stage's
+//! grid, averaged over the pairs of cameras that both see the whole window, as ZNCC+SGM
+//! matches them (`omnimvs_stereo::Matcher`), appended to the stage's cost volume as one more
+//! channel.
+//!
+//! Why: the learnt features are few (8 channels at stride 2) and the refinement stages tell
+//! one index of `N = 192` apart, a third of a stride-2 pixel; plain intensities sampled
+//! bilinearly from the full-size image keep the sub-pixel detail the learnt features lose, and
+//! cost no learning. The cue carries no gradient (it has no weights, and the hypotheses it is
+//! computed at carry none either).
+//!
+//! Each stage samples the image at a resolution matched to its grid (about two image pixels
+//! between neighbouring samples): the coarse stage a quarter-size image, the half-resolution
+//! stage a half-size one, the full-resolution stage the input itself (2x2 box averages).
+//! For a refinement stage the window's neighbours are taken at their own hypotheses of the same
+//! slot (the same offset from their own centres), which are the same depth where the centre
+//! map is smooth.
+
+use burn::tensor::{Device, Tensor, TensorData};
+use omnimvs_stereo::{ZNCC_VARIANCE_EPS, camera_pairs};
+use rayon::prelude::*;
+
+use super::model::read_values;
+use crate::error::NetError;
+use crate::taps::{SweepGrid, bilinear_taps};
+
+/// Half the side of the ZNCC window (5 x 5 samples of a stage's grid).
+pub const ZNCC_RADIUS: usize = 2;
+
+/// A sample counts as seen by a camera when its bilinear taps inside the image weigh at least
+/// this much (all four neighbours inside, up to rounding).
+const SEEN_WEIGHT: f32 = 0.999;
+
+/// Every camera's input image at the three resolutions the stages sample: level 0 the input
+/// (full-resolution stage), level 1 halved (half-resolution stage), level 2 quartered
+/// (coarse stage), by 2x2 box averages.
+#[derive(Clone, Debug)]
+pub struct ImagePyramid {
+    /// `[level][camera]`: row-major values of `sizes[level]`.
+    levels: [Vec<Vec<f32>>; 3],
+    /// `[rows, cols]` of each level.
+    sizes: [[usize; 2]; 3],
+}
+
+impl ImagePyramid {
+    /// The pyramid of `images`, one row-major `[rows, cols]` image per camera.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when there is no image, an image has another size, or the images
+    /// are too small to quarter.
+    pub fn new(images: Vec<Vec<f32>>, [rows, cols]: [usize; 2]) -> Result<Self, NetError> {
+        if images.is_empty()
+            || rows < 4
+            || cols < 4
+            || images.iter().any(|i| i.len() != rows * cols)
+        {
+            return Err(NetError::Shape {
+                what: "images of the photometric cue".into(),
+                expected: vec![rows, cols],
+                actual: images.iter().map(Vec::len).collect(),
+            });
+        }
+        let half: Vec<Vec<f32>> = images.par_iter().map(|i| halve(i, rows, cols)).collect();
+        let [hr, hc] = [rows / 2, cols / 2];
+        let quarter: Vec<Vec<f32>> = half.par_iter().map(|i| halve(i, hr, hc)).collect();
+        Ok(Self {
+            levels: [images, half, quarter],
+            sizes: [[rows, cols], [hr, hc], [hr / 2, hc / 2]],
+        })
+    }
+
+    /// The pyramid of a frame's network inputs, `[1, 1, rows, cols]` per camera (read back
+    /// from the device).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] for inputs of another shape or that cannot be read.
+    pub fn from_inputs(images: &[Tensor<4>]) -> Result<Self, NetError> {
+        let Some(first) = images.first() else {
+            return Err(NetError::Shape {
+                what: "images of the photometric cue".into(),
+                expected: vec![1],
+                actual: vec![0],
+            });
+        };
+        let [_, _, rows, cols] = first.dims();
+        let values = images
+            .iter()
+            .map(|image| {
+                let dims = image.dims();
+                if dims != [1, 1, rows, cols] {
+                    return Err(NetError::Shape {
+                        what: "input image of the photometric cue".into(),
+                        expected: vec![1, 1, rows, cols],
+                        actual: dims.to_vec(),
+                    });
+                }
+                read_values(image.clone(), "input image")
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Self::new(values, [rows, cols])
+    }
+
+    /// Number of cameras.
+    pub fn num_cameras(&self) -> usize {
+        self.levels[0].len()
+    }
+
+    /// `[rows, cols]` of `level`.
+    pub fn size(&self, level: usize) -> [usize; 2] {
+        self.sizes[level]
+    }
+
+    /// The cue at the samples of `grids` (one per camera, `K` planes of `rows x cols`
+    /// samples each), reading the images of `level`: `K * rows * cols` values in `[-1, 1]`,
+    /// 0 where no pair of cameras sees the whole window.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when the grids are not one per camera of one size, or `level` is
+    /// not 0, 1 or 2.
+    pub fn zncc(&self, level: usize, grids: &[SweepGrid]) -> Result<Vec<f32>, NetError> {
+        let Some(first) = grids.first() else {
+            return Err(NetError::Shape {
+                what: "grids of the photometric cue".into(),
+                expected: vec![self.num_cameras()],
+                actual: vec![0],
+            });
+        };
+        let (k, h, w) = (first.num_spheres, first.height, first.width);
+        if level > 2
+            || grids.len() != self.num_cameras()
+            || grids
+                .iter()
+                .any(|g| (g.num_spheres, g.height, g.width) != (k, h, w))
+        {
+            return Err(NetError::Shape {
+                what: "grids of the photometric cue (one per camera, one size)".into(),
+                expected: vec![self.num_cameras(), k, h, w],
+                actual: vec![grids.len(), level],
+            });
+        }
+        let [rows, cols] = self.sizes[level];
+        let images = &self.levels[level];
+        let plane = h * w;
+        let mut out = vec![0f32; k * plane];
+        out.par_chunks_mut(plane)
+            .enumerate()
+            .for_each(|(slot, dst)| {
+                // Every camera's samples of this plane and whether it sees them.
+                let samples: Vec<(Vec<f32>, Vec<f32>)> = grids
+                    .iter()
+                    .zip(images)
+                    .map(|(grid, image)| {
+                        let coords = &grid.coords[2 * slot * plane..2 * (slot + 1) * plane];
+                        sample_plane(coords, image, rows, cols)
+                    })
+                    .collect();
+                zncc_plane(&samples, h, w, ZNCC_RADIUS, dst);
+            });
+        Ok(out)
+    }
+
+    /// [`ImagePyramid::zncc`] as a `[1, 1, K, rows, cols]` tensor on `device`, the layout of
+    /// a stage's cost volume channels.
+    ///
+    /// # Errors
+    /// See [`ImagePyramid::zncc`].
+    pub fn zncc_tensor(
+        &self,
+        level: usize,
+        grids: &[SweepGrid],
+        device: &Device,
+    ) -> Result<Tensor<5>, NetError> {
+        let values = self.zncc(level, grids)?;
+        let (k, h, w) = (grids[0].num_spheres, grids[0].height, grids[0].width);
+        Ok(Tensor::from_data(
+            TensorData::new(values, [1, 1, k, h, w]),
+            device,
+        ))
+    }
+}
+
+/// A `rows x cols` image halved by 2x2 box averages (a last odd row or column is dropped).
+fn halve(image: &[f32], rows: usize, cols: usize) -> Vec<f32> {
+    let (hr, hc) = (rows / 2, cols / 2);
+    let mut out = Vec::with_capacity(hr * hc);
+    for r in 0..hr {
+        let top = &image[2 * r * cols..(2 * r + 1) * cols];
+        let bottom = &image[(2 * r + 1) * cols..(2 * r + 2) * cols];
+        for c in 0..hc {
+            out.push(0.25 * (top[2 * c] + top[2 * c + 1] + bottom[2 * c] + bottom[2 * c + 1]));
+        }
+    }
+    out
+}
+
+/// Bilinear samples of `image` at the normalised positions `coords` (`(x, y)` pairs) and,
+/// for each, 1 where the sample is missing (not every neighbour inside the image; its value
+/// is then 0).
+fn sample_plane(coords: &[f32], image: &[f32], rows: usize, cols: usize) -> (Vec<f32>, Vec<f32>) {
+    coords
+        .chunks_exact(2)
+        .map(|xy| {
+            let taps = bilinear_taps(xy[0], xy[1], rows, cols);
+            let seen: f32 = taps.weight.iter().sum();
+            if seen < SEEN_WEIGHT {
+                return (0.0, 1.0);
+            }
+            let value: f32 = taps
+                .index
+                .iter()
+                .zip(&taps.weight)
+                .map(|(&i, &wt)| wt * image[i as usize])
+                .sum();
+            (value, 0.0)
+        })
+        .unzip()
+}
+
+/// Window sums of a `h x w` map over `(2 r + 1)^2` windows: rows beyond the top and bottom
+/// are not there (clipped), columns wrap around (longitude is a ring).
+fn box_sum(map: &[f32], h: usize, w: usize, r: usize) -> Vec<f32> {
+    let mut vertical = vec![0f32; h * w];
+    for y in 0..h {
+        let dst = &mut vertical[y * w..(y + 1) * w];
+        for src in y.saturating_sub(r)..(y + r + 1).min(h) {
+            for (d, &s) in dst.iter_mut().zip(&map[src * w..(src + 1) * w]) {
+                *d += s;
+            }
+        }
+    }
+    let mut out = vec![0f32; h * w];
+    for y in 0..h {
+        let row = &vertical[y * w..(y + 1) * w];
+        for (x, d) in out[y * w..(y + 1) * w].iter_mut().enumerate() {
+            *d = (0..=2 * r).map(|dx| row[(x + w * r + dx - r) % w]).sum();
+        }
+    }
+    out
+}
+
+/// One camera's window statistics over a plane of samples.
+struct WindowStats<'a> {
+    /// The samples themselves.
+    values: &'a [f32],
+    /// Window mean.
+    mean: Vec<f32>,
+    /// `1 / std` of the window (variance plus ZNCC+SGM's epsilon).
+    inv_std: Vec<f32>,
+    /// Whether the camera sees every sample of the window.
+    whole: Vec<bool>,
+}
+
+impl<'a> WindowStats<'a> {
+    fn new(values: &'a [f32], missing: &[f32], h: usize, w: usize, r: usize) -> Self {
+        let squares: Vec<f32> = values.iter().map(|v| v * v).collect();
+        let sum = box_sum(values, h, w, r);
+        let sq = box_sum(&squares, h, w, r);
+        let mut mean = vec![0f32; h * w];
+        let mut inv_std = vec![0f32; h * w];
+        for i in 0..h * w {
+            let n = window_count(i / w, h, r);
+            mean[i] = sum[i] / n;
+            let var = (sq[i] / n - mean[i] * mean[i]).max(0.0);
+            inv_std[i] = 1.0 / (var + ZNCC_VARIANCE_EPS).sqrt();
+        }
+        let whole = box_sum(missing, h, w, r).iter().map(|&m| m < 0.5).collect();
+        Self {
+            values,
+            mean,
+            inv_std,
+            whole,
+        }
+    }
+}
+
+/// The cue of one plane of samples (`(values, missing)` per camera, `h x w` each) into
+/// `out`: mean ZNCC over the camera pairs that both see the whole window, 0 without one.
+fn zncc_plane(samples: &[(Vec<f32>, Vec<f32>)], h: usize, w: usize, r: usize, out: &mut [f32]) {
+    let stats: Vec<WindowStats> = samples
+        .iter()
+        .map(|(values, missing)| WindowStats::new(values, missing, h, w, r))
+        .collect();
+    let mut total = vec![0f32; h * w];
+    let mut pairs = vec![0f32; h * w];
+    for (a, b) in camera_pairs(samples.len()) {
+        let (sa, sb) = (&stats[a], &stats[b]);
+        if !sa.whole.iter().zip(&sb.whole).any(|(&x, &y)| x && y) {
+            continue; // the two cameras share no window
+        }
+        let products: Vec<f32> = sa
+            .values
+            .iter()
+            .zip(sb.values)
+            .map(|(x, y)| x * y)
+            .collect();
+        let prod = box_sum(&products, h, w, r);
+        for i in 0..h * w {
+            if sa.whole[i] && sb.whole[i] {
+                let n = window_count(i / w, h, r);
+                let cov = prod[i] / n - sa.mean[i] * sb.mean[i];
+                total[i] += (cov * sa.inv_std[i] * sb.inv_std[i]).clamp(-1.0, 1.0);
+                pairs[i] += 1.0;
+            }
+        }
+    }
+    for ((o, &t), &p) in out.iter_mut().zip(&total).zip(&pairs) {
+        *o = if p > 0.0 { t / p } else { 0.0 };
+    }
+}
+
+/// Samples in the window of a pixel of row `y` (rows clipped to the grid).
+fn window_count(y: usize, h: usize, r: usize) -> f32 {
+    let rows = (y + r).min(h - 1) - y.saturating_sub(r) + 1;
+    (rows * (2 * r + 1)) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_sums_clip_rows_and_wrap_columns() {
+        let (h, w) = (3, 5);
+        let map: Vec<f32> = (0..h * w).map(|i| i as f32).collect();
+        let sums = box_sum(&map, h, w, 1);
+        // Row 0, column 0: rows 0-1, columns 4, 0, 1.
+        let expected = [4.0, 0.0, 1.0, 9.0, 5.0, 6.0].iter().sum::<f32>();
+        assert_eq!(sums[0], expected);
+        // Row 1, column 2: rows 0-2, columns 1-3.
+        let expected: f32 = (0..3)
+            .flat_map(|y| (1..4).map(move |x| (y * w + x) as f32))
+            .sum();
+        assert_eq!(sums[w + 2], expected);
+    }
+
+    #[test]
+    fn identical_views_score_one_and_unseen_windows_zero() {
+        let (h, w) = (6, 8);
+        let texture: Vec<f32> = (0..h * w).map(|i| ((i * 7919) % 13) as f32).collect();
+        let seen = vec![0f32; h * w];
+        let mut out = vec![0f32; h * w];
+        // Two cameras seeing the same texture, a third its negative, seen everywhere.
+        let negative: Vec<f32> = texture.iter().map(|v| -2.0 * v + 3.0).collect();
+        let samples = vec![
+            (texture.clone(), seen.clone()),
+            (texture.clone(), seen.clone()),
+            (negative, seen.clone()),
+        ];
+        zncc_plane(&samples[..2], h, w, 1, &mut out);
+        assert!(out.iter().all(|&z| z > 0.99), "{out:?}");
+        // Pairs (0, 1) = 1, (0, 2) = (1, 2) = -1: mean -1/3.
+        zncc_plane(&samples, h, w, 1, &mut out);
+        assert!(out.iter().all(|&z| (z + 1.0 / 3.0).abs() < 0.01), "{out:?}");
+        // A camera that misses one sample: windows containing it have no pair.
+        let mut missing = seen;
+        missing[2 * w + 3] = 1.0;
+        let samples = vec![(texture.clone(), vec![0.0; h * w]), (texture, missing)];
+        zncc_plane(&samples, h, w, 1, &mut out);
+        assert_eq!(out[2 * w + 3], 0.0);
+        assert_eq!(out[w + 4], 0.0);
+        assert!(out[5 * w + 7] > 0.99);
+    }
+
+    #[test]
+    fn the_pyramid_halves_by_box_averages() {
+        let image: Vec<f32> = (0..8 * 8).map(|i| i as f32).collect();
+        let pyramid = ImagePyramid::new(vec![image], [8, 8]).unwrap();
+        assert_eq!(pyramid.size(1), [4, 4]);
+        assert_eq!(pyramid.size(2), [2, 2]);
+        // Level 1 (0, 0): mean of 0, 1, 8, 9.
+        assert_eq!(pyramid.levels[1][0][0], 4.5);
+        // Level 2 (0, 0): mean of the 4 x 4 block at the origin.
+        assert_eq!(pyramid.levels[2][0][0], 13.5);
+        assert!(ImagePyramid::new(vec![vec![0.0; 10]], [8, 8]).is_err());
+    }
+}
