@@ -5,19 +5,21 @@
 #   scripts/speed/cascade_vs_sgm.sh [OMNIMVS_BIN] [DATASET] [FRAMES] [ROUNDS]
 #
 # Defaults: target/release/omnimvs, ../data/test-things-s7001 (made by `omnimvs synth`), 1..4,
-# 5 rounds after one unmeasured warm-up round. Prints wall, user and system seconds and peak
+# 5 rounds after one unmeasured warm-up round; WEIGHTS=FILE times other cascade weights than
+# the bundled `cascade`. Prints wall, user and system seconds and peak
 # resident memory of every run, then the medians and the ratio of the medians.
 set -euo pipefail
 BIN=${1:-target/release/omnimvs}
 DATA=${2:-../data/test-things-s7001}
 FRAMES=${3:-1..4}
 ROUNDS=${4:-5}
+WEIGHTS=${WEIGHTS:-cascade}
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 command -v /usr/bin/time >/dev/null || { echo "needs /usr/bin/time (GNU time)" >&2; exit 1; }
 run() { # METHOD -> "wall user sys peak_kb"
   local args=(sgm "$DATA" --frames "$FRAMES" --out "$OUT/$1")
-  [ "$1" = cascade ] && args=(infer "$DATA" --frames "$FRAMES" --weights cascade --out "$OUT/$1")
+  [ "$1" = cascade ] && args=(infer "$DATA" --frames "$FRAMES" --weights "$WEIGHTS" --out "$OUT/$1")
   rm -rf "${OUT:?}/$1"
   /usr/bin/time -f "%e %U %S %M" -o "$OUT/time" "$BIN" "${args[@]}" >/dev/null 2>"$OUT/err" ||
     { cat "$OUT/err" >&2; exit 1; }

@@ -229,11 +229,16 @@ fn box_sum(map: &[f32], h: usize, w: usize, r: usize) -> Vec<f32> {
             }
         }
     }
+    // Along each row, through a copy with `r` columns of the other end on each side (no
+    // index arithmetic per sample; the same sums in the same order as modulo indexing).
     let mut out = vec![0f32; h * w];
-    for y in 0..h {
-        let row = &vertical[y * w..(y + 1) * w];
-        for (x, d) in out[y * w..(y + 1) * w].iter_mut().enumerate() {
-            *d = (0..=2 * r).map(|dx| row[(x + w * r + dx - r) % w]).sum();
+    let mut ring = vec![0f32; w + 2 * r];
+    for (row, dst) in vertical.chunks_exact(w).zip(out.chunks_exact_mut(w)) {
+        for (j, v) in ring.iter_mut().enumerate() {
+            *v = row[(j + w * r - r) % w];
+        }
+        for (d, window) in dst.iter_mut().zip(ring.windows(2 * r + 1)) {
+            *d = window.iter().sum();
         }
     }
     out
@@ -252,17 +257,19 @@ struct WindowStats<'a> {
 }
 
 impl<'a> WindowStats<'a> {
-    fn new(values: &'a [f32], missing: &[f32], h: usize, w: usize, r: usize) -> Self {
+    fn new(values: &'a [f32], missing: &[f32], counts: &[f32], w: usize, r: usize) -> Self {
+        let h = counts.len();
         let squares: Vec<f32> = values.iter().map(|v| v * v).collect();
         let sum = box_sum(values, h, w, r);
         let sq = box_sum(&squares, h, w, r);
         let mut mean = vec![0f32; h * w];
         let mut inv_std = vec![0f32; h * w];
-        for i in 0..h * w {
-            let n = window_count(i / w, h, r);
-            mean[i] = sum[i] / n;
-            let var = (sq[i] / n - mean[i] * mean[i]).max(0.0);
-            inv_std[i] = 1.0 / (var + ZNCC_VARIANCE_EPS).sqrt();
+        for (y, &n) in counts.iter().enumerate() {
+            for i in y * w..(y + 1) * w {
+                mean[i] = sum[i] / n;
+                let var = (sq[i] / n - mean[i] * mean[i]).max(0.0);
+                inv_std[i] = 1.0 / (var + ZNCC_VARIANCE_EPS).sqrt();
+            }
         }
         let whole = box_sum(missing, h, w, r).iter().map(|&m| m < 0.5).collect();
         Self {
@@ -277,9 +284,10 @@ impl<'a> WindowStats<'a> {
 /// The cue of one plane of samples (`(values, missing)` per camera, `h x w` each) into
 /// `out`: mean ZNCC over the camera pairs that both see the whole window, 0 without one.
 fn zncc_plane(samples: &[(Vec<f32>, Vec<f32>)], h: usize, w: usize, r: usize, out: &mut [f32]) {
+    let counts: Vec<f32> = (0..h).map(|y| window_count(y, h, r)).collect();
     let stats: Vec<WindowStats> = samples
         .iter()
-        .map(|(values, missing)| WindowStats::new(values, missing, h, w, r))
+        .map(|(values, missing)| WindowStats::new(values, missing, &counts, w, r))
         .collect();
     let mut total = vec![0f32; h * w];
     let mut pairs = vec![0f32; h * w];
@@ -295,12 +303,13 @@ fn zncc_plane(samples: &[(Vec<f32>, Vec<f32>)], h: usize, w: usize, r: usize, ou
             .map(|(x, y)| x * y)
             .collect();
         let prod = box_sum(&products, h, w, r);
-        for i in 0..h * w {
-            if sa.whole[i] && sb.whole[i] {
-                let n = window_count(i / w, h, r);
-                let cov = prod[i] / n - sa.mean[i] * sb.mean[i];
-                total[i] += (cov * sa.inv_std[i] * sb.inv_std[i]).clamp(-1.0, 1.0);
-                pairs[i] += 1.0;
+        for (y, &n) in counts.iter().enumerate() {
+            for i in y * w..(y + 1) * w {
+                if sa.whole[i] && sb.whole[i] {
+                    let cov = prod[i] / n - sa.mean[i] * sb.mean[i];
+                    total[i] += (cov * sa.inv_std[i] * sb.inv_std[i]).clamp(-1.0, 1.0);
+                    pairs[i] += 1.0;
+                }
             }
         }
     }
