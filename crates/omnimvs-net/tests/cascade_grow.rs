@@ -28,6 +28,15 @@ fn grown(config: &NetConfig) -> NetConfig {
     big
 }
 
+/// A loss that pulls every stage's answer towards index 10 (for gradients to check).
+fn pull_to_ten(out: omnimvs_net::cascade::CascadeOutput) -> burn::tensor::Tensor<1> {
+    out.stages
+        .into_iter()
+        .map(|s| s.index.sub_scalar(10.0).abs().mean())
+        .reduce(|a, b| a + b)
+        .unwrap()
+}
+
 #[test]
 fn a_grown_network_answers_as_the_one_it_grew_from() {
     let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
@@ -87,14 +96,8 @@ fn the_new_modules_learn() {
     let net = CascadeNet::new(&config, &device).unwrap();
     let geometry = CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap();
     let out = net.forward(&images(&config, &device), &geometry).unwrap();
-    // Pull every stage towards index 10: the gates and the context pairs get gradients.
-    let loss = out
-        .stages
-        .into_iter()
-        .map(|s| s.index.sub_scalar(10.0).abs().mean())
-        .reduce(|a, b| a + b)
-        .unwrap();
-    let grads = GradientsParams::from_grads(loss.backward(), &net);
+    // The gates and the context pairs get gradients.
+    let grads = GradientsParams::from_grads(pull_to_ten(out).backward(), &net);
     let norm = |name: &str, grad: Option<Vec<f32>>| {
         let grad = grad.unwrap_or_else(|| panic!("no gradient for {name}"));
         let norm: f32 = grad.iter().map(|g| g.abs()).sum();
@@ -175,13 +178,7 @@ fn a_network_grows_into_the_photometric_cue_unchanged_and_learns_it() {
     let net = weights::load_cascade_grown(&path, &cued, &device).unwrap();
     let geometry = CascadeGeometry::new(&ds.rig, &cued, &hyps, &device).unwrap();
     let out = net.forward(&images(&cued, &device), &geometry).unwrap();
-    let loss = out
-        .stages
-        .into_iter()
-        .map(|s| s.index.sub_scalar(10.0).abs().mean())
-        .reduce(|a, b| a + b)
-        .unwrap();
-    let grads = GradientsParams::from_grads(loss.backward(), &net);
+    let grads = GradientsParams::from_grads(pull_to_ten(out).backward(), &net);
     let firsts = [
         ("coarse", &net.coarse.c0[0], 8),
         ("mid", &net.mid.convs[0], 4),
