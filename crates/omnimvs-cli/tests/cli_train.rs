@@ -3,7 +3,9 @@
 //! a run stopped after one epoch and continued with `--resume` ends with the same weights and
 //! losses as the run made in one go (even after an attempt whose checkpoint could not be put in
 //! place, which leaves the previous checkpoint as it was), and `infer --weights RUN/model.safetensors` reads the
-//! weights back and scores the validation frame as the trainer's validation did.
+//! weights back and scores the validation frame as the trainer's validation did. A run started
+//! from those weights (`--init`) validates them before its first step and keeps them as best
+//! unless an epoch beats them.
 
 mod support;
 
@@ -159,4 +161,38 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
         (infer_mae - val_mae).abs() < 1e-3,
         "infer MAE {infer_mae}, the trainer's validation MAE {val_mae}"
     );
+
+    // Fine-tuning from those weights: they are validated before the first step (the same MAE
+    // as the trainer's last validation and infer's), and best.safetensors holds whichever of
+    // them and the epoch validated better.
+    let tuned = dir.path().join("tuned");
+    let stdout = train(
+        &tuned,
+        &["--init", weights.to_str().unwrap(), "--lr", "0.05"],
+    );
+    assert!(stdout.contains("start (--init weights"), "{stdout}");
+    let start_mae = read_json(&tuned.join("start.json"))["val"]["mae"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (start_mae - val_mae).abs() < 1e-6,
+        "start.json MAE {start_mae}, the weights' validation MAE {val_mae}"
+    );
+    let maes: Vec<f64> = epochs(&tuned)
+        .iter()
+        .map(|e| e["val"]["mae"].as_f64().unwrap())
+        .collect();
+    let best = tensor_bytes(&tuned.join("best.safetensors"));
+    if maes[1] < start_mae.min(maes[0]) {
+        assert!(best == tensor_bytes(&tuned.join("model.safetensors")));
+        assert!(stdout.contains("best epoch 2"), "{stdout}");
+    } else if maes[0] < start_mae {
+        assert!(stdout.contains("best epoch 1"), "{stdout}");
+    } else {
+        assert!(
+            best == tensor_bytes(&weights),
+            "best must stay the --init weights"
+        );
+        assert!(stdout.contains("no epoch beat them"), "{stdout}");
+    }
 }

@@ -74,6 +74,13 @@ pub struct TrainConfig {
     /// Per-camera photometric augmentation (exposure, gamma, vignetting, blur, noise) of the
     /// training images (`None`: the rendered images as they are; absent in older runs).
     pub photometric: Option<PhotometricAugment>,
+    /// Batch norms keep their running statistics during training and normalise with them, as
+    /// at inference (their scale and shift still learn). Fine-tuning with one sample a step
+    /// wants this: batch statistics of one augmented window, and running statistics that
+    /// follow the last few of them, moved validation more than the weights did (absent in
+    /// older runs: off).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub frozen_norm_stats: bool,
 }
 
 impl Default for TrainConfig {
@@ -101,6 +108,7 @@ impl Default for TrainConfig {
             init: None,
             column_window: None,
             photometric: None,
+            frozen_norm_stats: false,
         }
     }
 }

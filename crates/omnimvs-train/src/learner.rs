@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use burn::module::{Flag, Module, ModuleMapper, Param};
 use burn::optim::decay::WeightDecayConfig;
 use burn::optim::momentum::MomentumConfig;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer, SgdConfig};
@@ -59,6 +60,27 @@ fn ckpt_error(path: &Path, message: impl std::fmt::Display) -> TrainError {
     }
 }
 
+/// Turns every module-owned training flag off (in these networks: the batch norms', which then
+/// normalise with their running statistics and leave them as they are, while their scale and
+/// shift still take gradients).
+struct NormStatsFrozen;
+
+impl ModuleMapper for NormStatsFrozen {
+    fn map_flag(&mut self, flag: Param<Flag>) -> Param<Flag> {
+        Param::initialized(flag.id, Flag::new(false))
+    }
+}
+
+/// `net` with its batch norms' statistics frozen when `frozen` (see
+/// [`TrainConfig::frozen_norm_stats`]).
+fn with_norm_stats<M: Module>(net: M, frozen: bool) -> M {
+    if frozen {
+        net.map(&mut NormStatsFrozen)
+    } else {
+        net
+    }
+}
+
 /// The network being trained (on an autodiff device) and its optimiser.
 pub struct Learner<M = OmniMvsNet> {
     /// The network.
@@ -69,6 +91,7 @@ pub struct Learner<M = OmniMvsNet> {
     pub device: Device,
     optimizer: Optimizer,
     optimizer_config: OptimizerSettings,
+    frozen_norm_stats: bool,
 }
 
 /// The settings [`Learner::load_checkpoint`] needs to rebuild the optimiser.
@@ -127,7 +150,10 @@ impl<M: Trainable> Learner<M> {
         config.validate()?;
         let device = device.clone().autodiff();
         device.seed(config.seed);
-        let net = M::build(&config.net, config.init.as_deref(), &device)?;
+        let net = with_norm_stats(
+            M::build(&config.net, config.init.as_deref(), &device)?,
+            config.frozen_norm_stats,
+        );
         let built = net.config();
         if built.out_height != config.net.out_height
             || built.out_width != config.net.out_width
@@ -156,6 +182,7 @@ impl<M: Trainable> Learner<M> {
             device,
             optimizer: config.optimizer,
             optimizer_config: settings,
+            frozen_norm_stats: config.frozen_norm_stats,
         })
     }
 
@@ -253,6 +280,7 @@ impl<M: Trainable> Learner<M> {
             .net
             .load_from(&mut store)
             .map_err(|e| ckpt_error(&model, e))?;
+        self.net = with_norm_stats(self.net.clone(), self.frozen_norm_stats);
         if !result.missing.is_empty() || !result.errors.is_empty() {
             return Err(ckpt_error(
                 &model,

@@ -6,7 +6,9 @@
 //! RUN_DIR/metrics.jsonl            one EpochRecord per line
 //! RUN_DIR/curves.png               training and validation loss per epoch
 //! RUN_DIR/model.safetensors+.json  weights after the last finished epoch
-//! RUN_DIR/best.safetensors+.json   weights of the epoch with the lowest validation MAE
+//! RUN_DIR/best.safetensors+.json   weights of the epoch with the lowest validation MAE (with
+//!                                  --init: the initial weights until an epoch beats them)
+//! RUN_DIR/start.json               validation of the --init weights before the first step
 //! RUN_DIR/latest.json              which checkpoint to resume from
 //! RUN_DIR/checkpoints/epoch-EEEE/  model.bpk, optim.bpk, state.json
 //! ```
@@ -84,8 +86,24 @@ pub struct RunState {
     pub epochs_done: usize,
     /// Every finished epoch.
     pub history: Vec<EpochRecord>,
-    /// Epoch (1-based) with the lowest validation MAE so far and that MAE.
+    /// Epoch (1-based) with the lowest validation MAE so far and that MAE; epoch 0 is the
+    /// `--init` weights, validated before the first step.
     pub best: Option<(usize, f64)>,
+    /// Validation of the `--init` weights before the first step (runs started from weights).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<StartRecord>,
+}
+
+/// Validation of the weights a fine-tuning run starts from (`start.json`), so that its epochs
+/// are compared with where they began and `best` only moves when training helped.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StartRecord {
+    /// Mean validation loss (index units).
+    pub val_loss: Option<f64>,
+    /// The paper's metrics on the validation frames.
+    pub val: Option<Metrics>,
+    /// Wall time of the validation, seconds.
+    pub val_seconds: f64,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -346,11 +364,40 @@ impl<M: Trainable> Trainer<M> {
         on_step: &mut dyn FnMut(&StepInfo),
         on_epoch: &mut dyn FnMut(&EpochRecord),
     ) -> Result<(), TrainError> {
+        self.validate_start()?;
         while self.state.epochs_done < self.config.epochs {
             let record = self.train_epoch(on_step)?;
             on_epoch(&record);
         }
         Ok(())
+    }
+
+    /// Validates the `--init` weights of a run that has not finished an epoch yet, once:
+    /// records them (`state.start`, `start.json`) and makes them the best so far (epoch 0,
+    /// `best.safetensors`), so that an epoch is only kept as best when it beats its start.
+    /// Returns the record when it validated now; `None` for a run without `--init`, one past
+    /// its first epoch or one validated already.
+    ///
+    /// # Errors
+    /// [`TrainError`] when a frame cannot be read or a file cannot be written.
+    pub fn validate_start(&mut self) -> Result<Option<StartRecord>, TrainError> {
+        if self.config.init.is_none() || self.state.epochs_done > 0 || self.state.start.is_some() {
+            return Ok(None);
+        }
+        let start = Instant::now();
+        let (val_loss, val) = self.validate()?;
+        let record = StartRecord {
+            val_loss,
+            val,
+            val_seconds: start.elapsed().as_secs_f64(),
+        };
+        self.state.start = Some(record);
+        write_json(&self.run_dir.join("start.json"), &record)?;
+        if let Some(m) = val {
+            self.state.best = Some((0, m.mae));
+            export_weights(&self.learner, &self.run_dir, "best")?;
+        }
+        Ok(Some(record))
     }
 
     /// Trains one epoch, validates, writes the log, the curves and a checkpoint.

@@ -173,3 +173,64 @@ fn checkpoints_are_burns_own_files_written_whole() {
         );
     }
 }
+
+/// Loss of `sample` by the learner's network in training mode (autodiff device) and by its
+/// inference copy (batch norms on running statistics), before any step and after three.
+fn train_and_inference_losses(frozen: bool) -> Vec<(f32, f32)> {
+    use omnimvs_net::model::SweepTaps;
+    use omnimvs_train::Trainable;
+    let config = TrainConfig {
+        frozen_norm_stats: frozen,
+        ..train_config(3)
+    };
+    let mut learner = Learner::new(&config, &Device::flex()).unwrap();
+    let sample = micro_sample(&config.net);
+    let grids = synthetic_grids(&config.net);
+    let taps = learner.taps(&grids);
+    let order = [0, 1];
+    let plain = learner.device.clone().without_autodiff();
+    let plain_taps = SweepTaps::for_grids(&grids, config.net.feature_size(), &plain);
+    let mut losses = Vec::new();
+    for _ in 0..2 {
+        let train = learner
+            .loss(&sample, &taps, &order)
+            .unwrap()
+            .into_scalar::<f32>();
+        let images = learner.image_tensors_on(&sample, &plain);
+        let inference = learner
+            .inference_net()
+            .loss(&images, &plain_taps, &order, &sample)
+            .unwrap()
+            .into_scalar::<f32>();
+        losses.push((train, inference));
+        for _ in 0..3 {
+            learner.step(&sample, &taps, &order, 0.01).unwrap();
+        }
+    }
+    losses
+}
+
+#[test]
+fn frozen_norm_statistics_train_as_inference_runs() {
+    // Frozen: training normalises as inference does, before and after steps (the steps
+    // leave the running statistics alone, and the weights learn: slowly here, as a fresh
+    // network's running statistics, mean 0 and variance 1, do not normalise its activations;
+    // 3e-5 in 3 steps where batch statistics give 0.4).
+    let frozen = train_and_inference_losses(true);
+    for (train, inference) in &frozen {
+        assert!(
+            (train - inference).abs() <= 1e-4 * inference.abs().max(1.0),
+            "frozen statistics: training loss {train}, inference loss {inference}"
+        );
+    }
+    assert!(
+        (frozen[0].0 - frozen[1].0).abs() > 1e-5,
+        "the steps did not change the network: {frozen:?}"
+    );
+    // Not frozen: training normalises with the batch's statistics, which differ.
+    let batch = train_and_inference_losses(false);
+    assert!(
+        (batch[0].0 - batch[0].1).abs() > 1e-3,
+        "batch statistics should differ from fresh running ones: {batch:?}"
+    );
+}

@@ -7,6 +7,7 @@ use anyhow::{Context, Result, bail};
 use burn::tensor::Device;
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::FrameRange;
+use omnimvs_data::metrics::Metrics;
 use omnimvs_net::{CascadeNet, Family, OmniMvsNet};
 use omnimvs_train::mccnn::{CostTrainConfig, CostTrainer};
 use omnimvs_train::sweepnet::{SweepTrainConfig, SweepTrainer};
@@ -104,6 +105,11 @@ pub struct Args {
     /// from the next epoch, `off` stops it.
     #[arg(long, value_enum)]
     pub photometric: Option<Switch>,
+    /// Batch norms normalise with their running statistics during training too and leave them
+    /// as they are (`frozen_norm_stats`; their scale and shift still learn): for fine-tuning
+    /// with --init, where one window's batch statistics drift validation away.
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub frozen_norm_stats: Option<Switch>,
     /// Cascade: context residual pairs at stride 8, dilated 4 and 8 in turn (`context_pairs`
     /// of the configuration; 0 in the first cascades). They start as the identity, so --init
     /// with a network without them goes on from its answer.
@@ -271,14 +277,18 @@ fn train_cost(args: &Args, device: &Device) -> Result<()> {
     Ok(())
 }
 
-fn print_epoch(r: &EpochRecord) {
-    let val = match (r.val_loss, r.val) {
+fn val_text(loss: Option<f64>, metrics: Option<Metrics>) -> String {
+    match (loss, metrics) {
         (Some(loss), Some(m)) => format!(
             "val loss {loss:.3}  >1 {:.2}%  >3 {:.2}%  >5 {:.2}%  MAE {:.3}  RMS {:.3}",
             m.over1_pct, m.over3_pct, m.over5_pct, m.mae, m.rms
         ),
         _ => "no validation frames".into(),
-    };
+    }
+}
+
+fn print_epoch(r: &EpochRecord) {
+    let val = val_text(r.val_loss, r.val);
     outln!(
         "epoch {:3}  lr {:.0e}  train loss {:.3}  {} steps  {:.3} steps/s (loader wait {:.1} s)  {val}",
         r.epoch,
@@ -407,6 +417,7 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 column_window: args.column_window,
                 photometric: (args.photometric == Some(Switch::On))
                     .then(PhotometricAugment::default),
+                frozen_norm_stats: args.frozen_norm_stats == Some(Switch::On),
                 ..TrainConfig::default()
             };
             Trainer::<M>::create(config, out, &device)
@@ -420,7 +431,7 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         .fold((0, 0), |acc, (t, v)| (acc.0 + t.len(), acc.1 + v.len()));
     outln!(
         "{}: {} training and {} validation frames from {} dataset(s); epochs {}..{} of {}; \
-         {} rotations up to {} deg; camera permutation {}; photometric augmentation {}",
+         {} rotations up to {} deg; camera permutation {}; photometric augmentation {}{}",
         trainer.run_dir.display(),
         train,
         val,
@@ -435,6 +446,11 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
             "on"
         } else {
             "off"
+        },
+        if config.frozen_norm_stats {
+            "; batch-norm statistics frozen"
+        } else {
+            ""
         }
     );
     let last = match args.stop_after {
@@ -460,6 +476,14 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         bar.set_message(format!("{loss:.3} (avg {smooth:.3})"));
         bar.inc(1);
     };
+    if let Some(start) = trainer.validate_start()? {
+        bar.suspend(|| {
+            outln!(
+                "start (--init weights, before any step)  {}",
+                val_text(start.val_loss, start.val)
+            )
+        });
+    }
     while trainer.state.epochs_done < last {
         let record = trainer.train_epoch(&mut on_step)?;
         bar.suspend(|| print_epoch(&record));
@@ -469,8 +493,19 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         "{} epoch(s) in {:.1} s; weights {}; best {}",
         trainer.state.epochs_done,
         started.elapsed().as_secs_f64(),
-        trainer.run_dir.join("model.safetensors").display(),
+        if trainer.state.epochs_done == 0 {
+            "none yet".to_string()
+        } else {
+            trainer
+                .run_dir
+                .join("model.safetensors")
+                .display()
+                .to_string()
+        },
         match trainer.state.best {
+            Some((0, mae)) => format!(
+                "the --init weights (val MAE {mae:.3}; no epoch beat them): best.safetensors"
+            ),
             Some((epoch, mae)) => format!("epoch {epoch} (val MAE {mae:.3}): best.safetensors"),
             None => "none (no validation frames)".into(),
         }
