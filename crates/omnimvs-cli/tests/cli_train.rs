@@ -4,8 +4,8 @@
 //! losses as the run made in one go (even after an attempt whose checkpoint could not be put in
 //! place, which leaves the previous checkpoint as it was), and `infer --weights RUN/model.safetensors` reads the
 //! weights back and scores the validation frame as the trainer's validation did. A run started
-//! from those weights (`--init`) validates them before its first step and keeps them as best
-//! unless an epoch beats them.
+//! from those weights (`--init`, with frozen batch-norm statistics) validates them before its
+//! first step and keeps them as best unless an epoch beats them.
 
 mod support;
 
@@ -168,9 +168,21 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
     let tuned = dir.path().join("tuned");
     let stdout = train(
         &tuned,
-        &["--init", weights.to_str().unwrap(), "--lr", "0.05"],
+        &[
+            "--init",
+            weights.to_str().unwrap(),
+            "--lr",
+            "0.05",
+            "--frozen-norm-stats",
+            "on",
+        ],
     );
     assert!(stdout.contains("start (--init weights"), "{stdout}");
+    assert!(stdout.contains("batch-norm statistics frozen"), "{stdout}");
+    assert_eq!(
+        read_json(&tuned.join("train_config.json"))["frozen_norm_stats"].as_bool(),
+        Some(true)
+    );
     let start_mae = read_json(&tuned.join("start.json"))["val"]["mae"]
         .as_f64()
         .unwrap();
