@@ -23,7 +23,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use burn::tensor::{Device, Tensor};
-use omnimvs_data::metrics::{Metrics, frame_metrics, mean_metrics};
+use omnimvs_data::metrics::{Metrics, Protocol, frame_metrics, mean_metrics, protocol_metrics};
+use omnimvs_sweep::SweepSpec;
 use serde::{Deserialize, Serialize};
 
 use crate::augment::RotationSet;
@@ -73,8 +74,11 @@ pub struct EpochRecord {
     pub loader_wait_seconds: f64,
     /// Mean validation loss (index units), if there are validation frames.
     pub val_loss: Option<f64>,
-    /// The paper's metrics on the validation frames.
+    /// The paper's metrics on the validation frames (sky scored as index 0, as trained).
     pub val: Option<Metrics>,
+    /// The same frames under the reference's protocol (sky not scored; absent in older runs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub val_reference: Option<Metrics>,
     /// Wall time of the validation, seconds.
     pub val_seconds: f64,
 }
@@ -100,8 +104,11 @@ pub struct RunState {
 pub struct StartRecord {
     /// Mean validation loss (index units).
     pub val_loss: Option<f64>,
-    /// The paper's metrics on the validation frames.
+    /// The paper's metrics on the validation frames (sky scored as index 0, as trained).
     pub val: Option<Metrics>,
+    /// The same frames under the reference's protocol (sky not scored; absent in older runs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub val_reference: Option<Metrics>,
     /// Wall time of the validation, seconds.
     pub val_seconds: f64,
 }
@@ -385,10 +392,11 @@ impl<M: Trainable> Trainer<M> {
             return Ok(None);
         }
         let start = Instant::now();
-        let (val_loss, val) = self.validate()?;
+        let (val_loss, val, val_reference) = self.validate()?;
         let record = StartRecord {
             val_loss,
             val,
+            val_reference,
             val_seconds: start.elapsed().as_secs_f64(),
         };
         self.state.start = Some(record);
@@ -447,7 +455,7 @@ impl<M: Trainable> Trainer<M> {
         drop(loader);
         let train_seconds = start.elapsed().as_secs_f64();
         let start = Instant::now();
-        let (val_loss, val) = self.validate()?;
+        let (val_loss, val, val_reference) = self.validate()?;
         let record = EpochRecord {
             epoch: epoch + 1,
             lr,
@@ -458,6 +466,7 @@ impl<M: Trainable> Trainer<M> {
             loader_wait_seconds: wait,
             val_loss,
             val,
+            val_reference,
             val_seconds: start.elapsed().as_secs_f64(),
         };
         self.state.epochs_done = epoch + 1;
@@ -475,16 +484,22 @@ impl<M: Trainable> Trainer<M> {
     }
 
     /// Mean loss and metrics on the validation frames (identity rotation and camera order,
-    /// inference mode), taken from the sources in turn up to `max_val_frames`.
+    /// inference mode), taken from the sources in turn up to `max_val_frames`: the metrics
+    /// with sky scored as index 0 (what training asks for), then under the reference's
+    /// protocol (sky not scored; `None` when no frame has a pixel it scores).
     ///
     /// # Errors
     /// [`TrainError`] when a frame cannot be read.
-    pub fn validate(&mut self) -> Result<(Option<f64>, Option<Metrics>), TrainError> {
+    #[allow(clippy::type_complexity)]
+    pub fn validate(
+        &mut self,
+    ) -> Result<(Option<f64>, Option<Metrics>, Option<Metrics>), TrainError> {
         let net = self.learner.inference_net();
         let device = self.learner.device.clone().without_autodiff();
         let c = net.config().clone();
         let mut losses = Vec::new();
         let mut metrics = Vec::new();
+        let mut reference = Vec::new();
         // Round-robin over the sources, so that a frame limit still sees every dataset.
         let longest = self.splits.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
         let frames: Vec<(usize, u32)> = (0..longest)
@@ -527,9 +542,15 @@ impl<M: Trainable> Trainer<M> {
                         actual: vec![],
                     })?;
             metrics.push(frame_metrics(&index, &sample.gt, c.num_invdepth)?);
+            let spec = SweepSpec::new(source.grid, source.hypotheses);
+            if let Some(truth) = source.dataset.eval_truth(frame, &spec)?
+                && let Ok(m) = protocol_metrics(&index, &truth, c.num_invdepth, Protocol::Reference)
+            {
+                reference.push(m);
+            }
         }
         let loss = (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64);
-        Ok((loss, mean_metrics(&metrics)))
+        Ok((loss, mean_metrics(&metrics), mean_metrics(&reference)))
     }
 
     fn write_outputs(&self, improved: bool) -> Result<(), TrainError> {

@@ -16,6 +16,7 @@ fn record(epoch: usize, train_loss: f64, val_loss: Option<f64>) -> EpochRecord {
         loader_wait_seconds: 0.0,
         val_loss,
         val: None,
+        val_reference: None,
         val_seconds: 0.1,
     }
 }

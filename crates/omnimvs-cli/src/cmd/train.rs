@@ -277,10 +277,17 @@ fn train_cost(args: &Args, device: &Device) -> Result<()> {
     Ok(())
 }
 
-fn val_text(loss: Option<f64>, metrics: Option<Metrics>) -> String {
+fn val_text(loss: Option<f64>, metrics: Option<Metrics>, reference: Option<Metrics>) -> String {
+    let reference = match reference {
+        Some(m) => format!(
+            "  | reference (no sky) >1 {:.2}%  >5 {:.2}%  MAE {:.3}",
+            m.over1_pct, m.over5_pct, m.mae
+        ),
+        None => String::new(),
+    };
     match (loss, metrics) {
         (Some(loss), Some(m)) => format!(
-            "val loss {loss:.3}  >1 {:.2}%  >3 {:.2}%  >5 {:.2}%  MAE {:.3}  RMS {:.3}",
+            "val loss {loss:.3}  >1 {:.2}%  >3 {:.2}%  >5 {:.2}%  MAE {:.3}  RMS {:.3}{reference}",
             m.over1_pct, m.over3_pct, m.over5_pct, m.mae, m.rms
         ),
         _ => "no validation frames".into(),
@@ -288,7 +295,7 @@ fn val_text(loss: Option<f64>, metrics: Option<Metrics>) -> String {
 }
 
 fn print_epoch(r: &EpochRecord) {
-    let val = val_text(r.val_loss, r.val);
+    let val = val_text(r.val_loss, r.val, r.val_reference);
     outln!(
         "epoch {:3}  lr {:.0e}  train loss {:.3}  {} steps  {:.3} steps/s (loader wait {:.1} s)  {val}",
         r.epoch,
@@ -480,7 +487,7 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         bar.suspend(|| {
             outln!(
                 "start (--init weights, before any step)  {}",
-                val_text(start.val_loss, start.val)
+                val_text(start.val_loss, start.val, start.val_reference)
             )
         });
     }
