@@ -91,7 +91,6 @@ pub struct Learner<M = OmniMvsNet> {
     pub device: Device,
     optimizer: Optimizer,
     optimizer_config: OptimizerSettings,
-    frozen_norm_stats: bool,
 }
 
 /// The settings [`Learner::load_checkpoint`] needs to rebuild the optimiser.
@@ -182,7 +181,6 @@ impl<M: Trainable> Learner<M> {
             device,
             optimizer: config.optimizer,
             optimizer_config: settings,
-            frozen_norm_stats: config.frozen_norm_stats,
         })
     }
 
@@ -266,7 +264,9 @@ impl<M: Trainable> Learner<M> {
         Ok(())
     }
 
-    /// Restores the model and the optimiser state written by [`Learner::save_checkpoint`].
+    /// Restores the model and the optimiser state written by [`Learner::save_checkpoint`]
+    /// (tensors only: the batch norms' training flags, frozen or not, stay as the learner was
+    /// built).
     ///
     /// # Errors
     /// [`TrainError`] when a file is missing or does not fit the network.
@@ -280,7 +280,6 @@ impl<M: Trainable> Learner<M> {
             .net
             .load_from(&mut store)
             .map_err(|e| ckpt_error(&model, e))?;
-        self.net = with_norm_stats(self.net.clone(), self.frozen_norm_stats);
         if !result.missing.is_empty() || !result.errors.is_empty() {
             return Err(ckpt_error(
                 &model,

@@ -36,4 +36,4 @@ pub use learner::{Learner, masked_l1};
 pub use photometric::PhotometricAugment;
 pub use sample::{Sample, SampleSource};
 pub use trainable::Trainable;
-pub use trainer::{EpochRecord, StartRecord, StepInfo, Trainer};
+pub use trainer::{EpochRecord, StartRecord, StepInfo, Trainer, Validation};

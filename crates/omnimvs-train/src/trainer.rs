@@ -98,6 +98,17 @@ pub struct RunState {
     pub start: Option<StartRecord>,
 }
 
+/// What [`Trainer::validate`] measures on the validation frames.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Validation {
+    /// Mean validation loss (index units), if there are validation frames.
+    pub loss: Option<f64>,
+    /// The paper's metrics, sky scored as index 0 (what training asks for).
+    pub with_sky: Option<Metrics>,
+    /// The reference's protocol (sky not scored; `None` when no frame has a pixel it scores).
+    pub reference: Option<Metrics>,
+}
+
 /// Validation of the weights a fine-tuning run starts from (`start.json`), so that its epochs
 /// are compared with where they began and `best` only moves when training helped.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -392,16 +403,16 @@ impl<M: Trainable> Trainer<M> {
             return Ok(None);
         }
         let start = Instant::now();
-        let (val_loss, val, val_reference) = self.validate()?;
+        let v = self.validate()?;
         let record = StartRecord {
-            val_loss,
-            val,
-            val_reference,
+            val_loss: v.loss,
+            val: v.with_sky,
+            val_reference: v.reference,
             val_seconds: start.elapsed().as_secs_f64(),
         };
         self.state.start = Some(record);
         write_json(&self.run_dir.join("start.json"), &record)?;
-        if let Some(m) = val {
+        if let Some(m) = v.with_sky {
             self.state.best = Some((0, m.mae));
             export_weights(&self.learner, &self.run_dir, "best")?;
         }
@@ -455,7 +466,7 @@ impl<M: Trainable> Trainer<M> {
         drop(loader);
         let train_seconds = start.elapsed().as_secs_f64();
         let start = Instant::now();
-        let (val_loss, val, val_reference) = self.validate()?;
+        let v = self.validate()?;
         let record = EpochRecord {
             epoch: epoch + 1,
             lr,
@@ -464,19 +475,19 @@ impl<M: Trainable> Trainer<M> {
             train_seconds,
             steps_per_second: steps as f64 / train_seconds.max(1e-9),
             loader_wait_seconds: wait,
-            val_loss,
-            val,
-            val_reference,
+            val_loss: v.loss,
+            val: v.with_sky,
+            val_reference: v.reference,
             val_seconds: start.elapsed().as_secs_f64(),
         };
         self.state.epochs_done = epoch + 1;
         self.state.history.push(record.clone());
-        let improved = match (val, self.state.best) {
+        let improved = match (v.with_sky, self.state.best) {
             (Some(m), Some((_, best))) => m.mae < best,
             (Some(_), None) => true,
             (None, _) => false,
         };
-        if improved && let Some(m) = val {
+        if improved && let Some(m) = v.with_sky {
             self.state.best = Some((epoch + 1, m.mae));
         }
         self.write_outputs(improved)?;
@@ -484,16 +495,12 @@ impl<M: Trainable> Trainer<M> {
     }
 
     /// Mean loss and metrics on the validation frames (identity rotation and camera order,
-    /// inference mode), taken from the sources in turn up to `max_val_frames`: the metrics
-    /// with sky scored as index 0 (what training asks for), then under the reference's
-    /// protocol (sky not scored; `None` when no frame has a pixel it scores).
+    /// inference mode), taken from the sources in turn up to `max_val_frames`, under both
+    /// protocols.
     ///
     /// # Errors
     /// [`TrainError`] when a frame cannot be read.
-    #[allow(clippy::type_complexity)]
-    pub fn validate(
-        &mut self,
-    ) -> Result<(Option<f64>, Option<Metrics>, Option<Metrics>), TrainError> {
+    pub fn validate(&mut self) -> Result<Validation, TrainError> {
         let net = self.learner.inference_net();
         let device = self.learner.device.clone().without_autodiff();
         let c = net.config().clone();
@@ -550,7 +557,11 @@ impl<M: Trainable> Trainer<M> {
             }
         }
         let loss = (!losses.is_empty()).then(|| losses.iter().sum::<f64>() / losses.len() as f64);
-        Ok((loss, mean_metrics(&metrics), mean_metrics(&reference)))
+        Ok(Validation {
+            loss,
+            with_sky: mean_metrics(&metrics),
+            reference: mean_metrics(&reference),
+        })
     }
 
     fn write_outputs(&self, improved: bool) -> Result<(), TrainError> {

@@ -175,7 +175,8 @@ fn checkpoints_are_burns_own_files_written_whole() {
 }
 
 /// Loss of `sample` by the learner's network in training mode (autodiff device) and by its
-/// inference copy (batch norms on running statistics), before any step and after three.
+/// inference copy (batch norms on running statistics), before any step, after three, and after
+/// three more and a checkpoint saved and loaded back (which restores tensors, not the flags).
 fn train_and_inference_losses(frozen: bool) -> Vec<(f32, f32)> {
     use omnimvs_net::model::SweepTaps;
     use omnimvs_train::Trainable;
@@ -190,8 +191,13 @@ fn train_and_inference_losses(frozen: bool) -> Vec<(f32, f32)> {
     let order = [0, 1];
     let plain = learner.device.clone().without_autodiff();
     let plain_taps = SweepTaps::for_grids(&grids, config.net.feature_size(), &plain);
+    let dir = tempfile::tempdir().unwrap();
     let mut losses = Vec::new();
-    for _ in 0..2 {
+    for round in 0..3 {
+        if round == 2 {
+            learner.save_checkpoint(dir.path()).unwrap();
+            learner.load_checkpoint(dir.path()).unwrap();
+        }
         let train = learner
             .loss(&sample, &taps, &order)
             .unwrap()
@@ -212,8 +218,8 @@ fn train_and_inference_losses(frozen: bool) -> Vec<(f32, f32)> {
 
 #[test]
 fn frozen_norm_statistics_train_as_inference_runs() {
-    // Frozen: training normalises as inference does, before and after steps (the steps
-    // leave the running statistics alone, and the weights learn: slowly here, as a fresh
+    // Frozen: training normalises as inference does, before and after steps and a
+    // checkpoint round trip (the steps leave the running statistics alone, and the weights learn: slowly here, as a fresh
     // network's running statistics, mean 0 and variance 1, do not normalise its activations;
     // 3e-5 in 3 steps where batch statistics give 0.4).
     let frozen = train_and_inference_losses(true);
