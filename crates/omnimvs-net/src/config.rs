@@ -95,10 +95,25 @@ pub struct CascadeParams {
     /// into it unchanged. `false` (and left out of the file): the cascades before it.
     #[serde(default, skip_serializing_if = "is_false")]
     pub zncc_cue: bool,
+    /// Training only: weight of sky pixels (ground-truth index exactly 0, inverse depth 0) in
+    /// every stage's losses, against 1 for the others. The reference's protocol does not score
+    /// sky; with weight 1 a things frame's large sky pulls answers near its edges, and near
+    /// objects, toward far. `1` (the cascades before `cascade-11`, and left out of the file):
+    /// sky counts as any pixel.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub sky_loss_weight: f64,
 }
 
 fn is_zero(value: &f64) -> bool {
     *value == 0.0
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn is_one(value: &f64) -> bool {
+    *value == 1.0
 }
 
 fn is_false(value: &bool) -> bool {
@@ -121,6 +136,7 @@ impl Default for CascadeParams {
             coarse_distribution_weight: 0.0,
             refine_distribution_weight: 0.0,
             zncc_cue: false,
+            sky_loss_weight: 1.0,
         }
     }
 }
@@ -367,6 +383,7 @@ impl NetConfig {
                 "cascade.refine_distribution_weight",
                 p.refine_distribution_weight,
             ),
+            ("cascade.sky_loss_weight", p.sky_loss_weight),
         ] {
             if !(w.is_finite() && w >= 0.0) {
                 return Err(invalid(
@@ -427,6 +444,24 @@ mod tests {
         // Files written before the family existed are the paper's network.
         let old: NetConfig = serde_json::from_str("{\"channels\": 8}").unwrap();
         assert_eq!(old.family, Family::OmniMvs);
+    }
+
+    #[test]
+    fn the_sky_loss_weight_is_one_unless_written() {
+        // Files written before the field existed weigh sky as any pixel; weight 1 is left out.
+        let cascade = NetConfig::cascade();
+        let json = serde_json::to_string(&cascade).unwrap();
+        assert!(!json.contains("sky_loss_weight"), "{json}");
+        let read: NetConfig = serde_json::from_str(&json).unwrap();
+        assert_eq!(read.cascade.sky_loss_weight, 1.0);
+        let mut light = NetConfig::cascade();
+        light.cascade.sky_loss_weight = 0.1;
+        let json = serde_json::to_string(&light).unwrap();
+        assert!(json.contains("\"sky_loss_weight\":0.1"), "{json}");
+        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), light);
+        light.cascade.sky_loss_weight = -0.5;
+        let err = light.validate().unwrap_err().to_string();
+        assert!(err.contains("cascade.sky_loss_weight"), "{err}");
     }
 
     #[test]

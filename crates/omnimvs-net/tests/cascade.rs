@@ -1,5 +1,6 @@
 //! The cascade network: per-pixel sampling equals the lookup table on the spheres they share,
 //! every stage has the expected shape, folding the batch norms keeps its answers, the host correlation equals the tensor one, a window of longitudes answers as the whole panorama,
+//! the refinement stages follow the centres a caller gives them (another method's answer),
 //! and its weight files round-trip (training it: `omnimvs-train`'s `tests/cascade.rs`). Uses the published rig of `sunny_single` from
 //! `../shared/data/omnimvs-samples`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -9,7 +10,7 @@ use burn::tensor::Device;
 use omnimvs_camera::Rig;
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::model::read_values;
-use omnimvs_net::cascade::{CascadeGeometry, ColumnWindow, PixelSampler};
+use omnimvs_net::cascade::{CascadeGeometry, ColumnWindow, PixelSampler, SeedChoice};
 use omnimvs_net::{CascadeNet, NetConfig, weights};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LookupTable, SphereSet};
 
@@ -229,6 +230,67 @@ fn the_host_correlation_answers_as_the_tensor_one() {
     );
     // A wrong number of feature maps is refused.
     assert!(CascadeNet::correlation(&features[..3], &host.coarse, groups).is_err());
+}
+
+#[test]
+fn the_refinement_stages_follow_the_centres_they_are_given() {
+    let (rig, hyps) = sunny_rig();
+    for gates in [false, true] {
+        let mut config = micro_config();
+        config.cascade.stage_gates = gates;
+        let device = Device::flex();
+        let net = CascadeNet::new(&config, &device).unwrap();
+        let geometry = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
+        let images = micro_tensors(&config, &device);
+        let plain = net.forward(&images, &geometry).unwrap();
+        let fine_of = |out: &omnimvs_net::cascade::CascadeOutput| {
+            read_values(out.stages[2].index.clone(), "fine").unwrap()
+        };
+        let own = read_values(plain.stages[0].index.clone(), "coarse").unwrap();
+        // Its own coarse answer as the centres: the plain forward pass.
+        let same = net
+            .forward_with_centres(&images, &geometry, |c| Ok(c.to_vec()))
+            .unwrap();
+        assert_eq!(max_difference(&fine_of(&plain), &fine_of(&same)), 0.0);
+        // Centres at index 20 everywhere: the half-resolution hypotheses bracket 20 only
+        // (4 hypotheses 2 apart: 17..23), whatever the coarse stage said.
+        let moved = net
+            .forward_with_centres(&images, &geometry, |c| Ok(vec![20.0; c.len()]))
+            .unwrap();
+        let mid = read_values(moved.stages[1].hypotheses.clone(), "hypotheses").unwrap();
+        assert!(mid.iter().all(|&n| (17.0..=23.0).contains(&n)), "{mid:?}");
+        assert!(
+            net.forward_with_centres(&images, &geometry, |c| Ok(vec![20.0; c.len() - 1]))
+                .is_err()
+        );
+        // Seeded with its own coarse answer, both runs of the half stage are one: every
+        // choice between them answers as the plain pass (the joint soft argmax leaves the
+        // gates out, so only without them).
+        for choice in [SeedChoice::Peak, SeedChoice::Mass, SeedChoice::Joint] {
+            let seeded = net
+                .forward_seeded(&images, &geometry, &own, choice)
+                .unwrap();
+            let d = max_difference(&fine_of(&plain), &fine_of(&seeded));
+            if choice != SeedChoice::Joint || !gates {
+                assert!(d < 1e-4, "{choice:?}, gates {gates}: {d}");
+            }
+        }
+        // A seed elsewhere: the joint soft argmax is over both runs' hypotheses.
+        let joint = net
+            .forward_seeded(
+                &images,
+                &geometry,
+                &vec![20.0; own.len()],
+                SeedChoice::Joint,
+            )
+            .unwrap();
+        let k = config.cascade.stage_hypotheses[0];
+        assert_eq!(joint.stages[1].hypotheses.dims()[1], 2 * k);
+        assert!(
+            net.forward_seeded(&images, &geometry, &own[1..], SeedChoice::Peak)
+                .is_err()
+        );
+    }
 }
 
 #[test]

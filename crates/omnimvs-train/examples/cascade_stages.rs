@@ -42,6 +42,11 @@ fn main() {
     // Per refinement stage, on the pixels within its reach: |centre - truth|, |answer - truth|,
     // count.
     let mut within = [[0f64; 3]; 3];
+    // Per stage and ground-truth band (index below 40, 40..80, 80 and above; sky apart): signed
+    // error sum, |error| sum, count, and counts of |error| above each of THRESHOLDS.
+    const BANDS: [f32; 2] = [40.0, 80.0];
+    const THRESHOLDS: [f32; 6] = [2.0, 5.0, 7.5, 10.0, 15.0, 30.0];
+    let mut bands = [[[0f64; 3 + THRESHOLDS.len()]; 3]; 3];
     for frame in first..=last {
         let sample = source.load(0, frame, 0, None).unwrap();
         let images = sample.image_tensors([config.input_height, config.input_width], &device);
@@ -79,6 +84,16 @@ fn main() {
                 }
                 sums[stage][0] += f64::from(e);
                 sums[stage][1] += 1.0;
+                let band = BANDS.iter().filter(|&&b| t >= b).count();
+                let b = &mut bands[stage][band];
+                b[0] += f64::from(n - t);
+                b[1] += f64::from(e);
+                b[2] += 1.0;
+                for (k, &th) in THRESHOLDS.iter().enumerate() {
+                    if e > th {
+                        b[3 + k] += 1.0;
+                    }
+                }
                 if stage < 2 && e > reach(stage + 1) + 0.5 {
                     sums[stage][2] += 1.0;
                 }
@@ -111,6 +126,32 @@ fn main() {
                 100.0 * w[2] / s[1],
                 w[0] / w[2],
                 w[1] / w[2]
+            );
+        }
+    }
+    println!(
+        "non-sky pixels by ground-truth index band: bias (answer - truth), MAE, share of the \
+         stage's pixels, % with |error| above {THRESHOLDS:?}"
+    );
+    for (stage, per_band) in bands.iter().enumerate() {
+        let total: f64 = per_band.iter().map(|b| b[2]).sum();
+        for (band, b) in per_band.iter().enumerate() {
+            let range = match band {
+                0 => format!("0..{}", BANDS[0]),
+                1 => format!("{}..{}", BANDS[0], BANDS[1]),
+                _ => format!("{}..", BANDS[1]),
+            };
+            let over: Vec<String> = b[3..]
+                .iter()
+                .map(|c| format!("{:.1}", 100.0 * c / b[2].max(1.0)))
+                .collect();
+            println!(
+                "{:6} {range:>7}  bias {:+.2}  MAE {:.2}  share {:.1}%  over {}",
+                names[stage],
+                b[0] / b[2].max(1.0),
+                b[1] / b[2].max(1.0),
+                100.0 * b[2] / total.max(1.0),
+                over.join(" / ")
             );
         }
     }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use burn::module::Module;
 use burn::tensor::activation::softmax;
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_data::gt::GroundTruth;
 
 use crate::error::TrainError;
@@ -215,7 +215,7 @@ impl Trainable for CascadeNet {
             .zip(p.loss_weights)
             .zip(distribution_weights.into_iter().zip(spacings))
         {
-            let (target, mask) = target_tensors(gt, false, &device);
+            let (target, mask) = loss_tensors(gt, p.sky_loss_weight, &device);
             let mut loss = masked_l1(stage.index, target.clone(), mask.clone()).mul_scalar(w);
             if dw > 0.0 {
                 let ce = distribution_ce(stage.prob, stage.hypotheses, target, mask, spacing / 2.0);
@@ -310,6 +310,31 @@ fn index_l1(index: Tensor<3>, gt: &GroundTruth, round: bool, device: &Device) ->
     masked_l1(index, target, mask)
 }
 
+/// The exact ground-truth indices of `gt` and its per-pixel loss weights as `[1, H, W]`
+/// tensors on `device`: 0 for invalid pixels, `sky_weight` for sky (a valid index of exactly
+/// 0, which [`omnimvs_data::gt::ground_truth_index`] gives inverse depth 0 and nothing else
+/// finite: every positive inverse depth lies above `d_0`), 1 for the rest. [`masked_l1`] and
+/// [`distribution_ce`] divide by the weights' sum, so they are weighted means.
+fn loss_tensors(gt: &GroundTruth, sky_weight: f64, device: &Device) -> (Tensor<3>, Tensor<3>) {
+    let (target, _) = target_data_with(gt, false);
+    let weights = TensorData::new(
+        gt.index
+            .iter()
+            .zip(&gt.valid)
+            .map(|(&n, &v)| match (v, n == 0.0) {
+                (false, _) => 0.0,
+                (true, true) => sky_weight as f32,
+                (true, false) => 1.0,
+            })
+            .collect::<Vec<f32>>(),
+        [1, gt.height, gt.width],
+    );
+    (
+        Tensor::from_data(target, device),
+        Tensor::from_data(weights, device),
+    )
+}
+
 /// The ground-truth indices (rounded when `round`) and the valid mask of `gt` as `[1, H, W]`
 /// tensors on `device`.
 fn target_tensors(gt: &GroundTruth, round: bool, device: &Device) -> (Tensor<3>, Tensor<3>) {
@@ -324,7 +349,6 @@ fn target_tensors(gt: &GroundTruth, round: bool, device: &Device) -> (Tensor<3>,
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
-    use burn::tensor::TensorData;
 
     /// Two valid pixels (indices 12.0 and 30.5) and an invalid one.
     fn three_pixels() -> GroundTruth {
@@ -403,6 +427,43 @@ mod tests {
         let mut other = right;
         other[2] = [0.96, 0.01, 0.01, 0.01, 0.01];
         assert!((ce(other, SPHERES, 5.0) - r).abs() < 1e-6);
+    }
+
+    #[test]
+    fn sky_pixels_weigh_as_asked_in_the_stage_losses() {
+        let device = Device::flex();
+        // Sky (index 0), a near pixel (index 150.5) and an invalid one.
+        let gt = GroundTruth {
+            width: 3,
+            height: 1,
+            index: vec![0.0, 150.5, 0.0],
+            valid: vec![true, true, false],
+        };
+        let l1 = |answer: [f32; 3], sky_weight: f64| {
+            let (target, weights) = loss_tensors(&gt, sky_weight, &device);
+            let index =
+                Tensor::<3>::from_data(TensorData::new(answer.to_vec(), [1, 1, 3]), &device);
+            masked_l1(index, target, weights)
+                .into_data()
+                .try_to_vec::<f32>()
+                .unwrap()[0]
+        };
+        let (target, weights) = loss_tensors(&gt, 0.25, &device);
+        assert_eq!(
+            target.into_data().try_to_vec::<f32>().unwrap(),
+            vec![0.0, 150.5, 0.0]
+        );
+        assert_eq!(
+            weights.into_data().try_to_vec::<f32>().unwrap(),
+            vec![0.25, 1.0, 0.0]
+        );
+        // Sky 10 off and the near pixel 2 off: a weighted mean, the invalid pixel not counted.
+        let answer = [10.0, 148.5, 99.0];
+        assert!((l1(answer, 1.0) - 6.0).abs() < 1e-5);
+        assert!((l1(answer, 0.25) - (0.25 * 10.0 + 2.0) / 1.25).abs() < 1e-5);
+        // Weight 0: sky does not count at all.
+        assert!((l1(answer, 0.0) - 2.0).abs() < 1e-5);
+        assert!((l1([50.0, 148.5, 0.0], 0.0) - 2.0).abs() < 1e-5);
     }
 
     #[test]

@@ -134,6 +134,11 @@ pub struct Args {
     /// hypotheses (`refine_distribution_weight`; 0 in the first cascades).
     #[arg(long, conflicts_with = "resume")]
     pub refine_distribution: Option<f64>,
+    /// Cascade: weight of sky pixels in every stage's losses, against 1 for the others
+    /// (`sky_loss_weight`; 1 before `cascade-11`). The reference's metrics do not score sky;
+    /// below 1, a frame's large sky pulls near objects and edges toward far less.
+    #[arg(long, conflicts_with = "resume")]
+    pub sky_weight: Option<f64>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
@@ -377,11 +382,12 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 || args.zncc_cue.is_some()
                 || args.coarse_distribution.is_some()
                 || args.refine_distribution.is_some()
+                || args.sky_weight.is_some()
             {
                 if net.family != Family::Cascade {
                     bail!(
-                        "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution \
-                         and --refine-distribution are options of --preset cascade"
+                        "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
+                         --refine-distribution and --sky-weight are options of --preset cascade"
                     );
                 }
                 if let Some(weight) = args.coarse_distribution {
@@ -389,6 +395,9 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 }
                 if let Some(weight) = args.refine_distribution {
                     net.cascade.refine_distribution_weight = weight;
+                }
+                if let Some(weight) = args.sky_weight {
+                    net.cascade.sky_loss_weight = weight;
                 }
                 if let Some(pairs) = args.context_pairs {
                     net.cascade.context_pairs = pairs;

@@ -6,6 +6,7 @@
 use std::ops::Range;
 use std::time::Instant;
 
+use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::Rig;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
@@ -402,6 +403,23 @@ pub struct CascadeTimings {
     pub total: f64,
 }
 
+/// How [`CascadeNet::forward_seeded`] turns its two half-resolution runs into one answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SeedChoice {
+    /// One soft argmax over both runs' hypotheses together (their gates unused).
+    Joint,
+    /// Per pixel, the run whose distribution has the higher peak.
+    Peak,
+    /// Per pixel, the run with the larger log-sum-exp of its scores.
+    Mass,
+}
+
+/// `log(sum(exp(scores)))` over the hypotheses of `[B, K, H, W]` scores: `[B, H, W]`.
+fn logsumexp(scores: Tensor<4>) -> Tensor<3> {
+    let max = scores.clone().max_dim(1); // [B, 1, H, W]
+    ((scores - max.clone()).exp().sum_dim(1).log() + max).squeeze_dim(1)
+}
+
 /// The three stages' results: coarse, half and full resolution.
 #[derive(Clone, Debug)]
 pub struct CascadeOutput {
@@ -458,17 +476,108 @@ impl CascadeNet {
         timed: bool,
         training: bool,
     ) -> Result<(CascadeOutput, CascadeTimings), NetError> {
-        let [_, mid_grid, fine_grid] = geometry.samplers.each_ref().map(|s| *s.grid());
-        let window = match window {
-            Some(w) => {
-                w.check(fine_grid.width)?;
-                w
-            }
-            None => ColumnWindow {
-                start: 0,
-                width: fine_grid.width,
-            },
+        self.forward_centred(images, geometry, window, timed, training, |coarse| {
+            Ok(coarse.to_vec())
+        })
+    }
+
+    /// [`CascadeNet::forward`] with the refinement stages centred where `centres` says: it
+    /// gets the coarse stage's index map (`N` units, on the coarse grid, row-major) and
+    /// returns the map, same grid, around which the half-resolution stage places its
+    /// hypotheses. What a caller can learn with it: how far the refinement stages carry
+    /// another method's answer (a classical seed such as ZNCC+SGM's, resampled to the coarse
+    /// grid), or an oracle's. The coarse stage's own output stays in the result.
+    ///
+    /// # Errors
+    /// See [`CascadeNet::forward`]; what `centres` returns, and a map of another size.
+    pub fn forward_with_centres(
+        &self,
+        images: &[Tensor<4>],
+        geometry: &CascadeGeometry,
+        centres: impl FnOnce(&[f32]) -> Result<Vec<f32>, NetError>,
+    ) -> Result<CascadeOutput, NetError> {
+        self.forward_centred(images, geometry, None, false, false, centres)
+            .map(|(out, _)| out)
+    }
+
+    /// [`CascadeNet::forward`] with the half-resolution stage run twice, with the same
+    /// weights: around the coarse stage's answer and around `seed` (an index map in `N` units
+    /// on the coarse grid, another method's answer); `choice` says how the two become the
+    /// centres of the full-resolution stage. The result's half-resolution stage is the run
+    /// around the coarse answer when `choice` picks per pixel.
+    ///
+    /// # Errors
+    /// See [`CascadeNet::forward`]; a seed of another size.
+    pub fn forward_seeded(
+        &self,
+        images: &[Tensor<4>],
+        geometry: &CascadeGeometry,
+        seed: &[f32],
+        choice: SeedChoice,
+    ) -> Result<CascadeOutput, NetError> {
+        let (levels, photo) = self.feature_levels(images, false)?;
+        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry)?;
+        let coarse_index = read_values(coarse.index.clone(), "coarse index")?;
+        let mid_grid = *geometry.samplers[1].grid();
+        let cols = 0..mid_grid.width;
+        let run = |centres: &[f32]| -> Result<_, NetError> {
+            let taps = geometry.refine_taps(1, centres, cols.clone(), photo.as_ref())?;
+            let (scores, gate) = self.refine_scores(1, &levels[1], &taps)?;
+            Ok((scores, gate, taps))
         };
+        let (scores_a, gate_a, taps_a) = run(&coarse_index)?;
+        let (scores_b, gate_b, taps_b) = run(seed)?;
+        let gated = |scores: Tensor<4>, gate: Option<Tensor<3>>, taps: &StageTaps| {
+            let mut out = Self::soft_argmax(scores, taps.hypotheses.clone());
+            if let (Some(gate), Some(center)) = (gate, taps.center.clone()) {
+                out.index = center.clone() + gate * (out.index - center);
+            }
+            out
+        };
+        let mid = match choice {
+            SeedChoice::Joint => Self::soft_argmax(
+                Tensor::cat(vec![scores_a, scores_b], 1),
+                Tensor::cat(
+                    vec![taps_a.hypotheses.clone(), taps_b.hypotheses.clone()],
+                    1,
+                ),
+            ),
+            SeedChoice::Peak | SeedChoice::Mass => {
+                let confidence = |scores: &Tensor<4>| match choice {
+                    SeedChoice::Peak => softmax(scores.clone(), 1).max_dim(1).squeeze_dim::<3>(1),
+                    _ => logsumexp(scores.clone()),
+                };
+                let pick_a = confidence(&scores_a)
+                    .greater_equal(confidence(&scores_b))
+                    .float(); // [1, H, W]
+                let a = gated(scores_a, gate_a, &taps_a);
+                let b = gated(scores_b, gate_b, &taps_b);
+                let index =
+                    a.index.clone() * pick_a.clone() + b.index * pick_a.neg().add_scalar(1.0);
+                StageOutput { index, ..a }
+            }
+        };
+        let mid_index = read_values(mid.index.clone(), "half-resolution index")?;
+        let fine_taps = geometry.refine_taps(
+            2,
+            &mid_index,
+            0..geometry.samplers[2].grid().width,
+            photo.as_ref(),
+        )?;
+        let fine = self.refine_stage(0, &levels[0], &fine_taps)?;
+        Ok(CascadeOutput {
+            stages: [coarse, mid, fine],
+        })
+    }
+
+    /// Every camera's feature pyramid (strides 2, 4, 8; one batch through the extractor,
+    /// padded when `training`, see [`CascadeNet::forward_window`]) and, when the network has
+    /// the photometric cue, the images' own pyramid.
+    fn feature_levels(
+        &self,
+        images: &[Tensor<4>],
+        training: bool,
+    ) -> Result<([Vec<Tensor<4>>; 3], Option<ImagePyramid>), NetError> {
         if images.len() != self.config.num_cameras {
             return Err(NetError::Shape {
                 what: "images per frame".into(),
@@ -483,6 +592,54 @@ impl CascadeNet {
                 actual: image.dims().to_vec(),
             });
         }
+        let cams = images.len();
+        let mut batch = images.to_vec();
+        if training {
+            while batch.len() < MIN_TRAINING_BATCH {
+                batch.push(images[0].clone());
+            }
+        }
+        let pyramid = self.features.forward(Tensor::cat(batch, 0)); // [B', C, h, w] x 3
+        let levels = pyramid.map(|f| (0..cams).map(|c| f.clone().narrow(0, c, 1)).collect());
+        let photo = if self.config.cascade.zncc_cue {
+            Some(ImagePyramid::from_inputs(images)?)
+        } else {
+            None
+        };
+        Ok((levels, photo))
+    }
+
+    /// The coarse stage on the stride-8 features of `levels` (and the photometric cue).
+    fn coarse_of(
+        &self,
+        levels: &[Vec<Tensor<4>>; 3],
+        photo: Option<&ImagePyramid>,
+        geometry: &CascadeGeometry,
+    ) -> Result<StageOutput, NetError> {
+        let cue = geometry.coarse_cue(photo)?;
+        self.coarse_stage(&levels[2], &geometry.coarse, cue)
+    }
+
+    fn forward_centred(
+        &self,
+        images: &[Tensor<4>],
+        geometry: &CascadeGeometry,
+        window: Option<ColumnWindow>,
+        timed: bool,
+        training: bool,
+        centres: impl FnOnce(&[f32]) -> Result<Vec<f32>, NetError>,
+    ) -> Result<(CascadeOutput, CascadeTimings), NetError> {
+        let [_, mid_grid, fine_grid] = geometry.samplers.each_ref().map(|s| *s.grid());
+        let window = match window {
+            Some(w) => {
+                w.check(fine_grid.width)?;
+                w
+            }
+            None => ColumnWindow {
+                start: 0,
+                width: fine_grid.width,
+            },
+        };
         let start = Instant::now();
         let mut last = start;
         // Seconds since the previous lap, after the device finished (only when timed).
@@ -498,27 +655,11 @@ impl CascadeNet {
         };
         let device = geometry.device.clone();
         let mut timings = CascadeTimings::default();
-        let cams = images.len();
-        let mut batch = images.to_vec();
-        if training {
-            while batch.len() < MIN_TRAINING_BATCH {
-                batch.push(images[0].clone());
-            }
-        }
-        let pyramid = self.features.forward(Tensor::cat(batch, 0)); // [B', C, h, w] x 3
-        let levels: [Vec<Tensor<4>>; 3] =
-            pyramid.map(|f| (0..cams).map(|c| f.clone().narrow(0, c, 1)).collect());
-        // The images themselves for the photometric cue, when the network has it.
-        let photo = if self.config.cascade.zncc_cue {
-            Some(ImagePyramid::from_inputs(images)?)
-        } else {
-            None
-        };
+        let (levels, photo) = self.feature_levels(images, training)?;
         timings.features = lap(&device);
-        let coarse_cue = geometry.coarse_cue(photo.as_ref())?;
-        let coarse = self.coarse_stage(&levels[2], &geometry.coarse, coarse_cue)?;
+        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry)?;
         timings.coarse = lap(&device);
-        let coarse_index = read_values(coarse.index.clone(), "coarse index")?;
+        let coarse_index = centres(&read_values(coarse.index.clone(), "coarse index")?)?;
         let mid_cols = window.scaled(2);
         let mid_taps = geometry.refine_taps(1, &coarse_index, mid_cols.clone(), photo.as_ref())?;
         let mid = self.refine_stage(1, &levels[1], &mid_taps)?;

@@ -33,7 +33,7 @@ pub mod photo;
 pub mod sampler;
 
 pub use geometry::{
-    CascadeGeometry, CascadeOutput, CascadeTimings, ColumnWindow, HostTaps, StageTaps,
+    CascadeGeometry, CascadeOutput, CascadeTimings, ColumnWindow, HostTaps, SeedChoice, StageTaps,
 };
 pub use infer::CascadeInference;
 pub use model::{CascadeNet, StageOutput};

@@ -608,11 +608,7 @@ impl CascadeNet {
         features: &[Tensor<4>],
         taps: &StageTaps,
     ) -> Result<StageOutput, NetError> {
-        let groups = self.config.cascade.groups[level];
-        let volume = Self::correlation(features, taps, groups)?;
-        let volume = self.with_cue(volume, taps.cue.clone(), taps)?;
-        let regularizer = if level == 1 { &self.mid } else { &self.fine };
-        let (scores, gate) = regularizer.forward(fold_volume(volume)); // [B, K, H, W]
+        let (scores, gate) = self.refine_scores(level, features, taps)?;
         let mut out = Self::soft_argmax(scores, taps.hypotheses.clone());
         if let Some(gate) = gate {
             let Some(center) = taps.center.clone() else {
@@ -626,6 +622,24 @@ impl CascadeNet {
             out.index = center.clone() + gate * (out.index - center); // [B, H, W]
         }
         Ok(out)
+    }
+
+    /// A refinement stage's scores over its hypotheses `[B, K, H, W]` (before the soft argmax)
+    /// and, when the stage has one, its gate `[B, H, W]`.
+    ///
+    /// # Errors
+    /// See [`CascadeNet::correlation`].
+    pub fn refine_scores(
+        &self,
+        level: usize,
+        features: &[Tensor<4>],
+        taps: &StageTaps,
+    ) -> Result<(Tensor<4>, Option<Tensor<3>>), NetError> {
+        let groups = self.config.cascade.groups[level];
+        let volume = Self::correlation(features, taps, groups)?;
+        let volume = self.with_cue(volume, taps.cue.clone(), taps)?;
+        let regularizer = if level == 1 { &self.mid } else { &self.fine };
+        Ok(regularizer.forward(fold_volume(volume))) // [B, K, H, W]
     }
 }
 
