@@ -181,6 +181,8 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
             "0.05",
             "--frozen-norm-stats",
             "on",
+            "--select-by",
+            "reference",
         ],
     );
     assert!(stdout.contains("start (--init weights"), "{stdout}");
@@ -196,10 +198,19 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
         (start_mae - val_mae).abs() < 1e-6,
         "start.json MAE {start_mae}, the weights' validation MAE {val_mae}"
     );
+    assert_eq!(
+        read_json(&tuned.join("train_config.json"))["select_by"].as_str(),
+        Some("reference")
+    );
+    // The best epoch is picked by the reference protocol's MAE (--select-by reference).
+    let start_mae = read_json(&tuned.join("start.json"))["val_reference"]["mae"]
+        .as_f64()
+        .unwrap();
     let maes: Vec<f64> = epochs(&tuned)
         .iter()
-        .map(|e| e["val"]["mae"].as_f64().unwrap())
+        .map(|e| e["val_reference"]["mae"].as_f64().unwrap())
         .collect();
+    assert!(stdout.contains("reference protocol"), "{stdout}");
     let best = tensor_bytes(&tuned.join("best.safetensors"));
     if maes[1] < start_mae.min(maes[0]) {
         assert!(best == tensor_bytes(&tuned.join("model.safetensors")));

@@ -22,6 +22,18 @@ pub enum Optimizer {
     Adam,
 }
 
+/// Which validation protocol decides the best epoch (`best.safetensors`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Selection {
+    /// MAE with sky scored as index 0 (`val` in `metrics.jsonl`, what training asks for).
+    #[default]
+    WithSky,
+    /// MAE under the reference's protocol, sky not scored (`val_reference`, the paper's
+    /// tables and issue #11's bar).
+    Reference,
+}
+
 /// Everything that decides a training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -81,6 +93,14 @@ pub struct TrainConfig {
     /// older runs: off).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub frozen_norm_stats: bool,
+    /// The protocol whose validation MAE picks `best.safetensors` (absent in older runs:
+    /// with sky).
+    #[serde(skip_serializing_if = "is_with_sky")]
+    pub select_by: Selection,
+}
+
+fn is_with_sky(selection: &Selection) -> bool {
+    *selection == Selection::WithSky
 }
 
 impl Default for TrainConfig {
@@ -109,6 +129,7 @@ impl Default for TrainConfig {
             column_window: None,
             photometric: None,
             frozen_norm_stats: false,
+            select_by: Selection::WithSky,
         }
     }
 }

@@ -28,7 +28,7 @@ use omnimvs_sweep::SweepSpec;
 use serde::{Deserialize, Serialize};
 
 use crate::augment::RotationSet;
-use crate::config::TrainConfig;
+use crate::config::{Selection, TrainConfig};
 use crate::error::TrainError;
 use crate::learner::{Learner, target_data};
 use crate::loader::{Loader, PlanItem};
@@ -107,6 +107,16 @@ pub struct Validation {
     pub with_sky: Option<Metrics>,
     /// The reference's protocol (sky not scored; `None` when no frame has a pixel it scores).
     pub reference: Option<Metrics>,
+}
+
+impl Validation {
+    /// The metrics of the protocol that picks the best epoch.
+    pub fn selected(&self, selection: Selection) -> Option<Metrics> {
+        match selection {
+            Selection::WithSky => self.with_sky,
+            Selection::Reference => self.reference,
+        }
+    }
 }
 
 /// Validation of the weights a fine-tuning run starts from (`start.json`), so that its epochs
@@ -412,7 +422,7 @@ impl<M: Trainable> Trainer<M> {
         };
         self.state.start = Some(record);
         write_json(&self.run_dir.join("start.json"), &record)?;
-        if let Some(m) = v.with_sky {
+        if let Some(m) = v.selected(self.config.select_by) {
             self.state.best = Some((0, m.mae));
             export_weights(&self.learner, &self.run_dir, "best")?;
         }
@@ -482,12 +492,13 @@ impl<M: Trainable> Trainer<M> {
         };
         self.state.epochs_done = epoch + 1;
         self.state.history.push(record.clone());
-        let improved = match (v.with_sky, self.state.best) {
+        let selected = v.selected(self.config.select_by);
+        let improved = match (selected, self.state.best) {
             (Some(m), Some((_, best))) => m.mae < best,
             (Some(_), None) => true,
             (None, _) => false,
         };
-        if improved && let Some(m) = v.with_sky {
+        if improved && let Some(m) = selected {
             self.state.best = Some((epoch + 1, m.mae));
         }
         self.write_outputs(improved)?;

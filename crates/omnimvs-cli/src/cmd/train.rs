@@ -13,7 +13,8 @@ use omnimvs_train::mccnn::{CostTrainConfig, CostTrainer};
 use omnimvs_train::sweepnet::{SweepTrainConfig, SweepTrainer};
 use omnimvs_train::trainer::read_run_config;
 use omnimvs_train::{
-    EpochRecord, Optimizer, PhotometricAugment, StepInfo, TrainConfig, Trainable, Trainer,
+    EpochRecord, Optimizer, PhotometricAugment, Selection, StepInfo, TrainConfig, Trainable,
+    Trainer,
 };
 
 use crate::args::{BACKEND_HELP, Preset, parse_backend};
@@ -110,6 +111,11 @@ pub struct Args {
     /// with --init, where one window's batch statistics drift validation away.
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub frozen_norm_stats: Option<Switch>,
+    /// The validation MAE that picks `best.safetensors` (`select_by`): `with-sky` (sky scored
+    /// as index 0, what training asks for) or `reference` (the reference's protocol, sky not
+    /// scored: the paper's tables).
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub select_by: Option<SelectArg>,
     /// Cascade: context residual pairs at stride 8, dilated 4 and 8 in turn (`context_pairs`
     /// of the configuration; 0 in the first cascades). They start as the identity, so --init
     /// with a network without them goes on from its answer.
@@ -330,6 +336,15 @@ pub enum OptimizerArg {
     Adam,
 }
 
+/// `--select-by`: the protocol whose validation MAE picks the best epoch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SelectArg {
+    /// Sky scored as index 0.
+    WithSky,
+    /// The reference's protocol (sky not scored).
+    Reference,
+}
+
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
     if args.cost == Some(CostNet::Sweepnet) || args.resume.as_deref().is_some_and(is_sweep_run) {
@@ -434,6 +449,10 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 photometric: (args.photometric == Some(Switch::On))
                     .then(PhotometricAugment::default),
                 frozen_norm_stats: args.frozen_norm_stats == Some(Switch::On),
+                select_by: match args.select_by {
+                    Some(SelectArg::Reference) => Selection::Reference,
+                    Some(SelectArg::WithSky) | None => Selection::WithSky,
+                },
                 ..TrainConfig::default()
             };
             Trainer::<M>::create(config, out, &device)
@@ -447,7 +466,7 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         .fold((0, 0), |acc, (t, v)| (acc.0 + t.len(), acc.1 + v.len()));
     outln!(
         "{}: {} training and {} validation frames from {} dataset(s); epochs {}..{} of {}; \
-         {} rotations up to {} deg; camera permutation {}; photometric augmentation {}{}",
+         {} rotations up to {} deg; camera permutation {}; photometric augmentation {}{}{}",
         trainer.run_dir.display(),
         train,
         val,
@@ -467,6 +486,10 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
             "; batch-norm statistics frozen"
         } else {
             ""
+        },
+        match config.select_by {
+            Selection::WithSky => "",
+            Selection::Reference => "; best epoch by the reference protocol's MAE",
         }
     );
     let last = match args.stop_after {
@@ -520,11 +543,23 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
         },
         match trainer.state.best {
             Some((0, mae)) => format!(
-                "the --init weights (val MAE {mae:.3}; no epoch beat them): best.safetensors"
+                "the --init weights (val MAE{} {mae:.3}; no epoch beat them): best.safetensors",
+                protocol_note(config.select_by)
             ),
-            Some((epoch, mae)) => format!("epoch {epoch} (val MAE {mae:.3}): best.safetensors"),
+            Some((epoch, mae)) => format!(
+                "epoch {epoch} (val MAE{} {mae:.3}): best.safetensors",
+                protocol_note(config.select_by)
+            ),
             None => "none (no validation frames)".into(),
         }
     );
     Ok(())
+}
+
+/// How the final line names the MAE that picked the best epoch.
+fn protocol_note(selection: Selection) -> &'static str {
+    match selection {
+        Selection::WithSky => "",
+        Selection::Reference => ", reference protocol,",
+    }
 }
