@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """360-degree depth of the real `itbt_sample` frame with omnimvs from Python: the classical
-method (ZNCC + SGM) and the bundled network, side by side in one matplotlib figure.
+method (ZNCC + SGM) and the default bundled network (the cascade), side by side in one
+matplotlib figure.
 
     pip install ./crates/omnimvs-py matplotlib
     python examples/python/itbt_demo.py [DATASET] [--frame 1] [--out itbt_demo.png]
@@ -38,7 +39,7 @@ def main():
     t0 = time.perf_counter()
     sgm = omnimvs.sgm(ds, args.frame)  # 160x640, N = 192, inverse depth (1/m)
     t1 = time.perf_counter()
-    net = omnimvs.infer(ds, args.frame)  # the bundled omnimvs-tiny network, 32x128
+    net = omnimvs.infer(ds, args.frame)  # the bundled cascade network (the default), 160x640
     t2 = time.perf_counter()
     print(f"ZNCC+SGM {sgm.shape} in {t1 - t0:.1f} s, network {net.shape} in {t2 - t1:.1f} s")
 
@@ -51,7 +52,7 @@ def main():
         ax.set_title(f"camera {k + 1}")
         ax.axis("off")
     extent = (-180, 180, -45, 45)  # longitude, latitude in degrees (row 0 is the top)
-    for row, (name, inv_depth) in enumerate([("ZNCC + SGM", sgm), ("OmniMVS network (bundled)", net)], 1):
+    for row, (name, inv_depth) in enumerate([("ZNCC + SGM", sgm), ("bundled network (cascade)", net)], 1):
         ax = fig.add_subplot(grid[row, :])
         shown = ax.imshow(inv_depth, cmap="turbo", vmin=0, vmax=vmax, extent=extent, aspect="auto",
                           interpolation="nearest")

@@ -5,7 +5,8 @@
 #
 #   scripts/gpu/measure.sh env       # driver, GPU, PyTorch, Vulkan devices
 #   scripts/gpu/measure.sh data      # a synthetic dataset with exact ground truth (full size)
-#   scripts/gpu/measure.sh parity    # bundled model and a random paper-size network (its cost
+#   scripts/gpu/measure.sh parity    # bundled `tiny` (parity's default: the paper's network
+#                                    # family) and a random paper-size network (its cost
 #                                    # sharpened x100): every backend against cpu (max index
 #                                    # difference < 1e-3)
 #   scripts/gpu/measure.sh bench     # paper-preset forward per stage and train step, each
@@ -126,7 +127,7 @@ parity)
     for b in $backends; do
         s="$(safe "$b")"
         logged "parity-bundled-$s" omnimvs_for "$b" parity "$data" --frame 1 --backends "cpu,$b" \
-            --json "$out/parity-bundled-$s.json"
+            --weights tiny --json "$out/parity-bundled-$s.json"
         logged "parity-random-$preset-$s" omnimvs_for "$b" parity "$data" --frame 1 \
             --backends "cpu,$b" --weights random --preset "$preset" --cost-scale 100 \
             --json "$out/parity-random-$preset-$s.json"

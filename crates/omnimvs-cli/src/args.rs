@@ -66,7 +66,7 @@ impl std::fmt::Display for Size {
 pub enum Preset {
     /// The paper's OmniMVS network (CH 32, N 192, 160x640 output).
     Paper,
-    /// The paper's network at a quarter of its input size (the bundled model's sizes).
+    /// The paper's network at a quarter of its input size (the bundled `tiny` model's sizes).
     Tiny,
     /// The coarse-to-fine network for CPUs at the paper's output grid.
     Cascade,

@@ -11,7 +11,8 @@ use omnimvs_net::weights::{AnyNet, load_any, load_family};
 use omnimvs_net::{CascadeNet, Family};
 use omnimvs_net::{NetConfig, OmniMvsNet};
 
-/// `--weights` value that names the default bundled model (also the default value).
+/// `--weights` value that names the default bundled model, the cascade (also the default
+/// value of `infer` and `eval`).
 pub const BUNDLED: &str = "bundled";
 /// `--weights` value that asks for a randomly initialised network.
 pub const RANDOM: &str = "random";
@@ -19,8 +20,8 @@ pub const RANDOM: &str = "random";
 /// A `--weights` value.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Weights {
-    /// A model bundled into the binary (`bundled`: the default one, or by name: `tiny`,
-    /// `cascade`).
+    /// A model bundled into the binary (`bundled`: the default one, the cascade, or by name:
+    /// `cascade`, `tiny`).
     Bundled(BundledModel),
     /// A randomly initialised network of the `--preset` sizes.
     Random,
@@ -54,11 +55,13 @@ impl Weights {
         }
     }
 
-    /// Loads the network on `device`; `preset` sizes a PyTorch checkpoint or a random
-    /// network (our files carry their own sizes).
+    /// Loads the paper's network on `device`; `preset` sizes a PyTorch checkpoint or a random
+    /// network (our files carry their own sizes). For the commands that need the paper's
+    /// family (`parity`); the others take either family with [`Weights::load_family`].
     ///
     /// # Errors
-    /// An unknown preset, or a file that cannot be read or does not match the network.
+    /// An unknown preset, a file that cannot be read or does not match the network, or a
+    /// cascade (the bundled default is one: `--weights tiny` names the paper's).
     pub fn load(&self, preset: &str, device: &Device) -> Result<OmniMvsNet> {
         let base = NetConfig::preset(preset)?;
         Ok(match self {

@@ -314,7 +314,8 @@ fn parity_compares_backends_on_a_real_frame() {
     assert_eq!(rows.len(), 2, "{v}");
     assert_eq!(rows[1]["device_sweep"], true);
     assert!(rows[1]["max_abs_diff"].as_f64().unwrap() < 1e-3, "{v}");
-    // The bundled model gives a structured map on the real frame, not a flat one.
+    // The bundled `tiny` (parity's default: the paper's network family) gives a structured map
+    // on the real frame, not a flat one.
     assert!(v["reference_spread"].as_f64().unwrap() > 5.0, "{v}");
 
     // A random network is nearly flat; --cost-scale sharpens it into a structured map.

@@ -33,8 +33,8 @@ fn eval_prints_both_protocols_at_one_grid() {
     );
     assert!(o.status.success(), "{}", text(&o.stderr));
 
-    // A small evaluation grid keeps SGM fast; the bundled network answers at 32x128, N = 64,
-    // and is resampled to it.
+    // A small evaluation grid keeps SGM fast; the default bundled network, the cascade,
+    // answers at 160x640, N = 192, and is resampled to it.
     let out = dir.path().join("eval");
     let o = omnimvs(
         &[
@@ -68,7 +68,10 @@ fn eval_prints_both_protocols_at_one_grid() {
     );
     for table in [&stdout[reference..with_sky], &stdout[with_sky..]] {
         assert!(table.contains("| method | >1 (%) |"), "{table}");
-        assert!(table.contains("| net, native 32x128, N = 64 | "), "{table}");
+        assert!(
+            table.contains("| net, native 160x640, N = 192 | "),
+            "{table}"
+        );
         assert!(
             table.contains("| ZNCC+SGM, native 40x160, N = 48 | "),
             "{table}"
@@ -92,11 +95,11 @@ fn eval_prints_both_protocols_at_one_grid() {
             net["native"]["height"].as_u64(),
             net["native"]["width"].as_u64()
         ),
-        (Some(32), Some(128))
+        (Some(160), Some(640))
     );
     assert_eq!(
         (net["native"]["ndepth"].as_u64(), &net["resampled"]),
-        (Some(64), &true.into())
+        (Some(192), &true.into())
     );
     let sgm = &report["methods"][1];
     assert_eq!(

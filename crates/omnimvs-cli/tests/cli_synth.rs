@@ -144,8 +144,8 @@ fn bundled_model_runs_from_any_folder() {
     let o = run(&["infer", "../things", "--frames", "1", "--out", "net"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let settings = std::fs::read_to_string(work.join("net/infer.json")).unwrap();
-    // The default bundled model (`bundled tiny (models/omnimvs-tiny.safetensors)`: the file
-    // is not read, it is compiled in).
-    assert!(settings.contains("bundled"), "{settings}");
+    // The default bundled model (`bundled cascade (models/omnimvs-cascade.safetensors)`: the
+    // file is not read, it is compiled in).
+    assert!(settings.contains("bundled cascade"), "{settings}");
     assert!(work.join("net/00001_index.tiff").is_file());
 }

@@ -41,7 +41,7 @@ fn images(c: &NetConfig, device: &Device) -> Vec<Tensor<4>> {
         .collect()
 }
 
-/// Index map of the bundled model on `backend`, host sweep or device sweep.
+/// Index map of the bundled `tiny` model on `backend`, host sweep or device sweep.
 fn index_map(backend: Backend, device_sweep: bool) -> Vec<f32> {
     let device = backend.device().unwrap();
     let net = load_any(&bundled_model(), &NetConfig::tiny(), &device)

@@ -56,7 +56,7 @@ fn prediction_values(prediction: &Bound<'_, PyAny>) -> PyResult<(Vec<f64>, usize
 ///
 /// Args:
 ///     prediction: inverse depth (1/m), a 2-D `numpy.float32` (or float64) array on its own
-///         grid, e.g. `sgm`'s 160x640 or the bundled network's 32x128.
+///         grid, e.g. `sgm`'s or the bundled cascade's 160x640, or the bundled `tiny`'s 32x128.
 ///     dataset: the `omnimvs.Dataset` with the frame's ground truth.
 ///     frame: the frame.
 ///     height, width, ndepth: the evaluation grid and its N (the unit of `E`), `omnimvs

@@ -14,9 +14,9 @@ use crate::dataset::PyRig;
 use crate::error::{IntoPyResult, bad_argument, detached, with_context};
 use crate::images::{frame_source, map_to_array};
 
-/// Loads the network as `omnimvs infer --weights` does: a bundled model (the default one for
-/// `None`, or by name: `"tiny"`, `"cascade"`), or a file of either family (our `.safetensors`
-/// with its `.json`, or a reference PyTorch checkpoint sized by `preset`).
+/// Loads the network as `omnimvs infer --weights` does: a bundled model (the default one, the
+/// cascade, for `None`, or by name: `"cascade"`, `"tiny"`), or a file of either family (our
+/// `.safetensors` with its `.json`, or a reference PyTorch checkpoint sized by `preset`).
 fn load_network(
     weights: Option<&Path>,
     preset: &str,
@@ -34,17 +34,18 @@ fn load_network(
 }
 
 /// 360-degree inverse depth by a network, as `omnimvs infer` computes it: a `numpy.float32`
-/// array `(height, width)` of inverse depth (1/m) on the network's output grid (32x128 over
-/// +-45 degrees for the bundled `omnimvs-tiny` model; a weights file of the paper's network
-/// or of the cascade family brings its own).
+/// array `(height, width)` of inverse depth (1/m) on the network's output grid (160x640 over
+/// +-45 degrees, N = 192, for the default bundled cascade; 32x128, N = 64, for the bundled
+/// `"tiny"`; a weights file of the paper's network or of the cascade family brings its own).
 ///
 /// Args:
 ///     source: an `omnimvs.Dataset`, or the frame's images as a list of `numpy.uint8` arrays
 ///         `(rows, cols)`, one per camera in the rig's order (then `rig` is required).
 ///     frame: the frame of the dataset (only with a Dataset).
-///     weights: `None` for the default bundled model, `"tiny"` or `"cascade"` for a bundled
-///         model by name, or a weights file: our `.safetensors` (with its
-///         `.json` beside it) or a reference PyTorch checkpoint (`.pt`/`.pth`).
+///     weights: `None` for the default bundled model (the cascade), `"cascade"` or `"tiny"`
+///         (the paper's network, small) for a bundled model by name, or a weights file: our
+///         `.safetensors` (with its `.json` beside it) or a reference PyTorch checkpoint
+///         (`.pt`/`.pth`).
 ///     preset: the sizes of a PyTorch checkpoint, `"paper"` or `"tiny"`.
 ///     backend: the compute backend, `"cpu"` unless the package was built with the
 ///         `libtorch` or `wgpu` feature.

@@ -24,7 +24,7 @@ use omnimvs_sweep::{GrayImage, LutCache};
 use omnimvs_synth::rig::preset_rig;
 use omnimvs_synth::{DatasetWriter, SceneKind, Shard, SynthOptions};
 
-use crate::args::{Preset, Size};
+use crate::args::Size;
 use crate::cmd::{eval, infer, sgm};
 use crate::weights::Weights;
 
@@ -33,7 +33,8 @@ use crate::weights::Weights;
 /// Run the pipeline end to end on a default that needs nothing but this
 /// repository: render a few frames of a synthetic `things` scene with exact
 /// ground truth for the published 4-camera rig, estimate 360-degree depth with
-/// the classical method (ZNCC + SGM) and with the bundled network; print the
+/// the classical method (ZNCC + SGM) and with the bundled networks (the default
+/// cascade, then `tiny`); print the
 /// paper's metrics tables (the reference's protocol, and with sky scored); write pictures (inputs, panorama, ground truth,
 /// estimates, error maps) and a PLY point cloud. If the reference samples are beside the repository
 /// (../shared/data/omnimvs-samples), the real itbt_sample frame 1 is
@@ -66,8 +67,8 @@ struct Network {
     estimator: NetEstimator,
 }
 
-/// Every bundled network, the default first (`tiny` answers at 32x128, the cascade at the
-/// full 160x640), prepared for `ds` on the CPU.
+/// Every bundled network, the default first (the cascade answers at the full 160x640, `tiny`
+/// at 32x128), prepared for `ds` on the CPU.
 fn networks(ds: &Dataset) -> Result<Vec<Network>> {
     let device = Backend::Cpu.device()?;
     std::iter::once(BundledModel::DEFAULT)
@@ -78,7 +79,7 @@ fn networks(ds: &Dataset) -> Result<Vec<Network>> {
         )
         .map(|model| {
             let weights = Weights::Bundled(model);
-            let net = weights.load_family(Preset::Tiny.name(), &device)?;
+            let net = model.load(&device)?;
             let (estimator, status) = NetEstimator::new(
                 net,
                 ds,

@@ -21,7 +21,7 @@ use crate::weights::{BUNDLED, Weights};
 /// Per pixel
 /// E = |n_hat - n*| / N * 100 over scored pixels; the percentages of E > 1, 3, 5, the mean
 /// (MAE) and root mean square (RMS), averaged over frames. Every method runs at its own grid
-/// (the bundled network at 32x128, N = 64; a cascade network at 160x640; SGM at the
+/// (the bundled cascade at 160x640, N = 192; the bundled `tiny` at 32x128, N = 64; SGM at the
 /// evaluation grid); its output is turned into inverse depth with its own hypotheses,
 /// resampled on the sphere to the evaluation grid (--size, default 160x640 over +-45 deg,
 /// bilinear, longitude wrapping around) and scored as indices of the evaluation's N
@@ -40,8 +40,10 @@ pub struct Args {
     /// Methods, comma-separated: net, sgm.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "net,sgm")]
     pub method: Vec<Method>,
-    /// Network weights, comma-separated for several rows: `bundled` (the model compiled
-    /// into the binary, the default), our .safetensors files or reference checkpoints.
+    /// Network weights, comma-separated for several rows: `bundled` (the default: the
+    /// cascade compiled into the binary, 160x640, N = 192), a bundled model by name
+    /// (`cascade`, `tiny`: the paper's network, small, 32x128, N = 64), our .safetensors files
+    /// or reference checkpoints.
     #[arg(long, value_delimiter = ',', default_value = BUNDLED, value_parser = Weights::parse)]
     pub weights: Vec<Weights>,
     /// Architecture sizes of a reference PyTorch checkpoint or `--weights random`: paper,

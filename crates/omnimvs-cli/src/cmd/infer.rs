@@ -28,10 +28,11 @@ use crate::weights::{BUNDLED, Weights};
 pub struct Args {
     /// Dataset folder (or its config.yaml).
     pub dataset: PathBuf,
-    /// Weights: `bundled` (the `omnimvs-tiny` model compiled into the binary, the
-    /// default), our .safetensors (with its .json beside it), a reference PyTorch
-    /// checkpoint (.pt/.pth with net_state_dict and CH), or `random` for a randomly
-    /// initialised --preset network (smoke tests, timing).
+    /// Weights: `bundled` (the default: the cascade model compiled into the binary,
+    /// answering at 160x640 with N = 192), a bundled model by name (`cascade`, or `tiny`:
+    /// the paper's network, small, at 32x128 with N = 64), our .safetensors (with its .json
+    /// beside it), a reference PyTorch checkpoint (.pt/.pth with net_state_dict and CH), or
+    /// `random` for a randomly initialised --preset network (smoke tests, timing).
     #[arg(long, default_value = BUNDLED, value_parser = Weights::parse)]
     pub weights: Weights,
     /// Architecture sizes for a PyTorch checkpoint or `--weights random`: paper, tiny or

@@ -12,7 +12,7 @@ use omnimvs_sweep::LutCache;
 use serde::Serialize;
 
 use crate::args::{Preset, parse_backend, parse_output_file};
-use crate::weights::{BUNDLED, Weights};
+use crate::weights::Weights;
 
 /// Check that compute backends give the same network output on a real frame.
 ///
@@ -32,8 +32,10 @@ pub struct Args {
     /// cpu,libtorch-cuda:0.
     #[arg(long, value_delimiter = ',', value_parser = parse_backend, required = true)]
     pub backends: Vec<Backend>,
-    /// Weights: `bundled` (the default), a weights file, or `random` (a --preset network).
-    #[arg(long, default_value = BUNDLED, value_parser = Weights::parse)]
+    /// Weights of the paper's network family (this checks its host and device sweep
+    /// backends): `tiny` (the default, the bundled small one), a weights file, or `random` (a
+    /// --preset network). The bundled default of `infer`, the cascade, is not of this family.
+    #[arg(long, default_value = "tiny", value_parser = Weights::parse)]
     pub weights: Weights,
     /// Architecture sizes for a PyTorch checkpoint or `--weights random`: paper or tiny.
     #[arg(long, value_enum, default_value_t = Preset::Paper)]

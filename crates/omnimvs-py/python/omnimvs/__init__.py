@@ -8,7 +8,7 @@ command computes, returns numpy arrays, releases the GIL while it works and rais
 >>> ds = omnimvs.Dataset("itbt_sample")          # a folder with config.yaml and the images
 >>> ds.frames, ds.num_cameras, ds.min_depth
 >>> inv_depth = omnimvs.sgm(ds, 1)               # ZNCC + SGM, float32 (160, 640), 1/m
->>> net = omnimvs.infer(ds, 1)                   # the bundled network, float32 (32, 128)
+>>> net = omnimvs.infer(ds, 1)                   # the bundled cascade, float32 (160, 640)
 >>> rig = omnimvs.Rig.from_config("itbt_sample/config.yaml")
 >>> live = omnimvs.sgm(ds.images(1), rig=rig)    # images from anywhere, as uint8 arrays
 """

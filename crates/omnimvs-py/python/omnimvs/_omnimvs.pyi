@@ -113,6 +113,8 @@ def sgm(
 def infer(
     source: Dataset,
     frame: int,
+    # None: the default bundled model, the cascade (160x640); "cascade" or "tiny" (32x128) by
+    # name; or a weights file.
     weights: Optional[PathLike] = None,
     *,
     preset: str = "paper",
@@ -122,6 +124,8 @@ def infer(
 def infer(
     source: Sequence[Image],
     frame: None = None,
+    # None: the default bundled model, the cascade (160x640); "cascade" or "tiny" (32x128) by
+    # name; or a weights file.
     weights: Optional[PathLike] = None,
     *,
     preset: str = "paper",
