@@ -527,13 +527,6 @@ impl CascadeNet {
         };
         let (scores_a, gate_a, taps_a) = run(&coarse_index)?;
         let (scores_b, gate_b, taps_b) = run(seed)?;
-        let gated = |scores: Tensor<4>, gate: Option<Tensor<3>>, taps: &StageTaps| {
-            let mut out = Self::soft_argmax(scores, taps.hypotheses.clone());
-            if let (Some(gate), Some(center)) = (gate, taps.center.clone()) {
-                out.index = center.clone() + gate * (out.index - center);
-            }
-            out
-        };
         let mid = match choice {
             SeedChoice::Joint => Self::soft_argmax(
                 Tensor::cat(vec![scores_a, scores_b], 1),
@@ -550,8 +543,8 @@ impl CascadeNet {
                 let pick_a = confidence(&scores_a)
                     .greater_equal(confidence(&scores_b))
                     .float(); // [1, H, W]
-                let a = gated(scores_a, gate_a, &taps_a);
-                let b = gated(scores_b, gate_b, &taps_b);
+                let a = Self::gated_answer(scores_a, gate_a, &taps_a)?;
+                let b = Self::gated_answer(scores_b, gate_b, &taps_b)?;
                 let index =
                     a.index.clone() * pick_a.clone() + b.index * pick_a.neg().add_scalar(1.0);
                 StageOutput { index, ..a }

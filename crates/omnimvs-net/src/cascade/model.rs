@@ -609,6 +609,19 @@ impl CascadeNet {
         taps: &StageTaps,
     ) -> Result<StageOutput, NetError> {
         let (scores, gate) = self.refine_scores(level, features, taps)?;
+        Self::gated_answer(scores, gate, taps)
+    }
+
+    /// A refinement stage's answer from its `scores` over the hypotheses of `taps`: the soft
+    /// argmax, and with a `gate`, `centre + g (soft argmax - centre)`.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] for a gate with taps that have no centre.
+    pub fn gated_answer(
+        scores: Tensor<4>,
+        gate: Option<Tensor<3>>,
+        taps: &StageTaps,
+    ) -> Result<StageOutput, NetError> {
         let mut out = Self::soft_argmax(scores, taps.hypotheses.clone());
         if let Some(gate) = gate {
             let Some(center) = taps.center.clone() else {
