@@ -8,7 +8,7 @@
 # 1e-5 for the last 5 of 14 epochs, seed 18.
 # Resumable: rerun this script (it resumes from RUN's latest checkpoint).
 set -euo pipefail
-B=${OMNIMVS:-/work/bin/omnimvs-25b}
+B=${OMNIMVS:-/work/bin/omnimvs-25b}  # built at commit 55cce14
 RUN=${RUN:-/work/runs/cascade-12}
 INIT=${INIT:-/work/runs/c11e14.safetensors}
 if [ -f "$RUN/train_config.json" ]; then
