@@ -7,7 +7,7 @@ use std::path::Path;
 
 use burn::module::Module;
 use burn::tensor::activation::softmax;
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::{Device, Tensor};
 use omnimvs_data::gt::GroundTruth;
 
 use crate::error::TrainError;
@@ -215,7 +215,7 @@ impl Trainable for CascadeNet {
             .zip(p.loss_weights)
             .zip(distribution_weights.into_iter().zip(spacings))
         {
-            let (target, mask) = loss_tensors(gt, p.sky_loss_weight, &device);
+            let (target, mask) = target_tensors(gt, false, p.sky_loss_weight, &device);
             let mut loss = masked_l1(stage.index, target.clone(), mask.clone()).mul_scalar(w);
             if dw > 0.0 {
                 let ce = distribution_ce(stage.prob, stage.hypotheses, target, mask, spacing / 2.0);
@@ -306,42 +306,24 @@ fn no_images(expected: usize) -> TrainError {
 /// target is the rounded ground-truth index when `round` (the paper's network, as trained so
 /// far), the exact index otherwise.
 fn index_l1(index: Tensor<3>, gt: &GroundTruth, round: bool, device: &Device) -> Tensor<1> {
-    let (target, mask) = target_tensors(gt, round, device);
+    let (target, mask) = target_tensors(gt, round, 1.0, device);
     masked_l1(index, target, mask)
 }
 
-/// The exact ground-truth indices of `gt` and its per-pixel loss weights as `[1, H, W]`
-/// tensors on `device`: 0 for invalid pixels, `sky_weight` for sky (a valid index of exactly
-/// 0, which [`omnimvs_data::gt::ground_truth_index`] gives inverse depth 0 and nothing else
-/// finite: every positive inverse depth lies above `d_0`), 1 for the rest. [`masked_l1`] and
-/// [`distribution_ce`] divide by the weights' sum, so they are weighted means.
-fn loss_tensors(gt: &GroundTruth, sky_weight: f64, device: &Device) -> (Tensor<3>, Tensor<3>) {
-    let (target, _) = target_data_with(gt, false);
-    let weights = TensorData::new(
-        gt.index
-            .iter()
-            .zip(&gt.valid)
-            .map(|(&n, &v)| match (v, n == 0.0) {
-                (false, _) => 0.0,
-                (true, true) => sky_weight as f32,
-                (true, false) => 1.0,
-            })
-            .collect::<Vec<f32>>(),
-        [1, gt.height, gt.width],
-    );
+/// The ground-truth indices (rounded when `round`) and the per-pixel loss weights of `gt`
+/// (`sky_weight` for sky, see [`target_data_with`]) as `[1, H, W]` tensors on `device`.
+/// [`masked_l1`] and [`distribution_ce`] divide by the weights' sum, so they are weighted
+/// means.
+fn target_tensors(
+    gt: &GroundTruth,
+    round: bool,
+    sky_weight: f64,
+    device: &Device,
+) -> (Tensor<3>, Tensor<3>) {
+    let (target, weights) = target_data_with(gt, round, sky_weight);
     (
         Tensor::from_data(target, device),
         Tensor::from_data(weights, device),
-    )
-}
-
-/// The ground-truth indices (rounded when `round`) and the valid mask of `gt` as `[1, H, W]`
-/// tensors on `device`.
-fn target_tensors(gt: &GroundTruth, round: bool, device: &Device) -> (Tensor<3>, Tensor<3>) {
-    let (target, mask) = target_data_with(gt, round);
-    (
-        Tensor::from_data(target, device),
-        Tensor::from_data(mask, device),
     )
 }
 
@@ -349,6 +331,7 @@ fn target_tensors(gt: &GroundTruth, round: bool, device: &Device) -> (Tensor<3>,
 mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
+    use burn::tensor::TensorData;
 
     /// Two valid pixels (indices 12.0 and 30.5) and an invalid one.
     fn three_pixels() -> GroundTruth {
@@ -370,7 +353,7 @@ mod tests {
 
     fn ce(prob: [[f32; 5]; 3], hypotheses: [[f32; 5]; 3], scale: f64) -> f32 {
         let device = Device::flex();
-        let (target, mask) = target_tensors(&three_pixels(), false, &device);
+        let (target, mask) = target_tensors(&three_pixels(), false, 1.0, &device);
         let loss = distribution_ce(
             per_pixel(prob, &device),
             per_pixel(hypotheses, &device),
@@ -440,7 +423,7 @@ mod tests {
             valid: vec![true, true, false],
         };
         let l1 = |answer: [f32; 3], sky_weight: f64| {
-            let (target, weights) = loss_tensors(&gt, sky_weight, &device);
+            let (target, weights) = target_tensors(&gt, false, sky_weight, &device);
             let index =
                 Tensor::<3>::from_data(TensorData::new(answer.to_vec(), [1, 1, 3]), &device);
             masked_l1(index, target, weights)
@@ -448,7 +431,7 @@ mod tests {
                 .try_to_vec::<f32>()
                 .unwrap()[0]
         };
-        let (target, weights) = loss_tensors(&gt, 0.25, &device);
+        let (target, weights) = target_tensors(&gt, false, 0.25, &device);
         assert_eq!(
             target.into_data().try_to_vec::<f32>().unwrap(),
             vec![0.0, 150.5, 0.0]
