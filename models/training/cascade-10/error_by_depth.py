@@ -23,21 +23,32 @@ import omni_np as o  # noqa: E402
 BINS = [0, 10, 20, 40, 80, 193]
 
 
-def main():
-    ds, outs = sys.argv[1], sys.argv[2:]
+def signed_errors(ds, outs, frames=range(1, 21)):
+    """Per frame of `ds` (160x640, N = 192, the reference's ground truth and scored pixels):
+    the ground-truth index of the scored pixels and, per output folder of `outs`, the signed
+    index error (prediction - truth) there. Also used by ../cascade-11/seed_reach.py."""
     _, _, min_depth = o.load(ds)
-    err = {m: [[] for _ in BINS[:-1]] for m in outs}
-    for f in range(1, 21):
+    for f in frames:
         gt = o.gt_reference(ds, f, 160, 640, 45.0)
         gi, valid, min_inv, step = o.reference_gt_index(gt, min_depth)
+        errors = {}
         for m in outs:
             cand = [p for p in glob.glob(os.path.join(m, f"{f:05d}*.tif*"))
                     if "entropy" not in p and "index" not in p and "conf" not in p]
             pred = o.upsample(o.read_f32_tiff(sorted(cand, key=len)[0]), 160, 640)
             pi = (pred.astype(np.float64) - min_inv) / step
+            errors[m] = (pi - gi)[valid]
+        yield gi[valid], errors
+
+
+def main():
+    ds, outs = sys.argv[1], sys.argv[2:]
+    err = {m: [[] for _ in BINS[:-1]] for m in outs}
+    for gi, errors in signed_errors(ds, outs):
+        for m in outs:
             for b in range(len(BINS) - 1):
-                sel = valid & (gi >= BINS[b]) & (gi < BINS[b + 1])
-                err[m][b].append((pi - gi)[sel])
+                sel = (gi >= BINS[b]) & (gi < BINS[b + 1])
+                err[m][b].append(errors[m][sel])
     for m in outs:
         cells = []
         for b in range(len(BINS) - 1):

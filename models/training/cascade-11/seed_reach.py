@@ -4,40 +4,32 @@ share of reference-scored pixels (sky not scored) within the cascade's half-stag
 (+-7.5 index units of N = 192: 8 hypotheses 2 apart, plus half a step) and its full-stage reach
 (+-2.5), frames 1-20 at 160x640, per output folder; and, for every pair, the share where at
 least one of the two is within reach (what a refinement seeded by both could start from).
-Uses ../shared/tools/omni_np.py for the reference's ground truth and resampling.
+Reads the outputs through ../cascade-10/error_by_depth.py's `signed_errors` (omni_np.py's
+reference ground truth and resampling).
 
     python3 seed_reach.py DATASET OUTDIR [OUTDIR ...]
 
 Stop 25 ran it in /work/eval on the held-out things set:
     seed_reach.py /work/data/test-things-s7001 sgm-test-things-s7001 c10e14-test-things-s7001
 """
-import glob
 import itertools
 import os
 import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "../../../../shared/tools"))
-sys.path.insert(0, "/work/shared/tools")
-import omni_np as o  # noqa: E402
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "../cascade-10"))
+from error_by_depth import signed_errors  # noqa: E402
 
 REACHES = [2.5, 7.5]
 
 
 def main():
     ds, outs = sys.argv[1], sys.argv[2:]
-    _, _, min_depth = o.load(ds)
     errs = {m: [] for m in outs}
-    for f in range(1, 21):
-        gt = o.gt_reference(ds, f, 160, 640, 45.0)
-        gi, valid, min_inv, step = o.reference_gt_index(gt, min_depth)
+    for _, errors in signed_errors(ds, outs):
         for m in outs:
-            cand = [p for p in glob.glob(os.path.join(m, f"{f:05d}*.tif*"))
-                    if "entropy" not in p and "index" not in p and "conf" not in p]
-            pred = o.upsample(o.read_f32_tiff(sorted(cand, key=len)[0]), 160, 640)
-            pi = (pred.astype(np.float64) - min_inv) / step
-            errs[m].append(np.abs(pi - gi)[valid])
+            errs[m].append(np.abs(errors[m]))
     errs = {m: np.concatenate(e) for m, e in errs.items()}
     for m, e in errs.items():
         cells = " ".join(f"within {r}: {100 * (e <= r).mean():.1f}%" for r in REACHES)
