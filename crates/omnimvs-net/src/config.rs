@@ -102,6 +102,15 @@ pub struct CascadeParams {
     /// sky counts as any pixel.
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub sky_loss_weight: f64,
+    /// Learnt (convex) upsampling of each stage's answer to the next stage's grid (RAFT's
+    /// convex upsampling): every pixel of the finer grid takes a softmax-weighted mean of the
+    /// 3 x 3 coarser pixels around its parent, the weights predicted from the coarser stage's
+    /// hidden features, instead of the bilinear mean, which at a depth edge blends the two
+    /// sides into a value near neither (the next stage then centres its hypotheses out of
+    /// reach of both). The heads start at the bilinear weights, so a trained network grows
+    /// into them (nearly) unchanged. `false` (and left out of the file): bilinear.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub convex_upsampling: bool,
 }
 
 fn is_zero(value: &f64) -> bool {
@@ -137,6 +146,7 @@ impl Default for CascadeParams {
             refine_distribution_weight: 0.0,
             zncc_cue: false,
             sky_loss_weight: 1.0,
+            convex_upsampling: false,
         }
     }
 }
@@ -462,6 +472,20 @@ mod tests {
         light.cascade.sky_loss_weight = -0.5;
         let err = light.validate().unwrap_err().to_string();
         assert!(err.contains("cascade.sky_loss_weight"), "{err}");
+    }
+
+    #[test]
+    fn convex_upsampling_is_off_unless_written() {
+        // Files written before the field existed upsample bilinearly; `false` is left out.
+        let json = serde_json::to_string(&NetConfig::cascade()).unwrap();
+        assert!(!json.contains("convex_upsampling"), "{json}");
+        let read: NetConfig = serde_json::from_str(&json).unwrap();
+        assert!(!read.cascade.convex_upsampling);
+        let mut learnt = NetConfig::cascade();
+        learnt.cascade.convex_upsampling = true;
+        let json = serde_json::to_string(&learnt).unwrap();
+        assert!(json.contains("\"convex_upsampling\":true"), "{json}");
+        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), learnt);
     }
 
     #[test]

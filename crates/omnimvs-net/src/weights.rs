@@ -219,7 +219,8 @@ pub fn load_cascade(path: &Path, device: &Device) -> Result<CascadeNet, NetError
 /// Loads cascade weights into a network of `config`, which may have grown from the
 /// weights' own configuration (the file's JSON): more context pairs at stride 8
 /// (`context_pairs`), gated refinement stages (`stage_gates`), the photometric cue
-/// (`zncc_cue`, [`CascadeNet::with_zncc_cue`]), other loss weights (training only),
+/// (`zncc_cue`, [`CascadeNet::with_zncc_cue`]), learnt upsampling (`convex_upsampling`, heads
+/// that start at the bilinear weights), other loss weights (training only),
 /// everything else equal. The new modules keep their starting values, which leave the
 /// network's answer as it was (or nearly: the gates start at 0.98), so training goes on from
 /// the loaded network.
@@ -245,21 +246,25 @@ pub fn load_cascade_grown(
     shrunk.cascade.context_pairs = saved.cascade.context_pairs;
     shrunk.cascade.stage_gates = saved.cascade.stage_gates;
     shrunk.cascade.zncc_cue = saved.cascade.zncc_cue;
+    shrunk.cascade.convex_upsampling = saved.cascade.convex_upsampling;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
         && (!saved.cascade.stage_gates || config.cascade.stage_gates)
-        && (!saved.cascade.zncc_cue || config.cascade.zncc_cue);
+        && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
+        && (!saved.cascade.convex_upsampling || config.cascade.convex_upsampling);
     if shrunk != saved || !grows {
         return Err(weights_error(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
-             (only `context_pairs` may grow, `stage_gates` and `zncc_cue` switch on and the \
-             loss weights differ)",
+             (only `context_pairs` may grow, `stage_gates`, `zncc_cue` and \
+             `convex_upsampling` switch on and the loss weights differ)",
         ));
     }
     let old_ctx = 2 * saved.cascade.context_pairs;
     let is_new = |p: &str| {
         p.starts_with("mid.gate.")
             || p.starts_with("fine.gate.")
+            || (!saved.cascade.convex_upsampling
+                && (p.starts_with("up_mid.") || p.starts_with("up_fine.")))
             || p.strip_prefix("features.ctx8.")
                 .and_then(|rest| rest.split('.').next())
                 .and_then(|i| i.parse::<usize>().ok())

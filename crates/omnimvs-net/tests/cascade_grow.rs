@@ -199,3 +199,98 @@ fn a_network_grows_into_the_photometric_cue_unchanged_and_learns_it() {
         assert!(norm > 0.0 && norm.is_finite(), "{name}: {norm}");
     }
 }
+
+#[test]
+fn a_network_grows_into_learnt_upsampling_and_only_its_heads_need_to_learn() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let config = micro_config();
+    let mut learnt = config.clone();
+    learnt.cascade.convex_upsampling = true;
+    let device = Device::flex();
+    let small = CascadeNet::new(&config, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("small.safetensors");
+    weights::save_module(&small, &config, &path).unwrap();
+    let big = weights::load_cascade_grown(&path, &learnt, &device).unwrap();
+    assert!(big.up_mid.is_some() && big.up_fine.is_some());
+
+    let geometry = CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap();
+    let inputs = images(&config, &device);
+    let before = small.forward(&inputs, &geometry).unwrap();
+    let after = big.forward(&inputs, &geometry).unwrap();
+    let values = |t: burn::tensor::Tensor<3>| read_values(t, "index").unwrap();
+    // The coarse stage is the same; the heads start near the bilinear resampling (a quarter
+    // row in latitude, under 5 % of the weight elsewhere), so the half stage's centres move
+    // by at most a quarter of the coarse answer's step between neighbouring rows and 5 % of
+    // the largest step between neighbours.
+    let coarse = values(before.stages[0].index.clone());
+    assert_eq!(coarse, values(after.stages[0].index.clone()));
+    let [Some(up_mid), Some(up_fine)] = after.upsampled.clone() else {
+        panic!("a network with learnt upsampling reports its centres");
+    };
+    assert_eq!(up_mid.dims(), [1, 8, 32]);
+    assert_eq!(up_fine.dims(), [1, 16, 64]);
+    let (h, w) = (4, 16);
+    let row_step = (0..(h - 1) * w)
+        .map(|i| (coarse[i + w] - coarse[i]).abs())
+        .fold(0.0f32, f32::max);
+    let any_step = (0..h * w)
+        .map(|i| (coarse[i] - coarse[(i / w) * w + (i + 1) % w]).abs())
+        .fold(row_step, f32::max);
+    let bilinear = omnimvs_sweep::resample_map(
+        &coarse,
+        geometry.samplers[0].grid(),
+        geometry.samplers[1].grid(),
+    );
+    let moved = values(up_mid)
+        .iter()
+        .zip(&bilinear)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(
+        moved <= 0.25 * row_step + 0.05 * 2.0 * any_step + 1e-3,
+        "{moved} against steps of {row_step} (rows), {any_step}"
+    );
+    assert!(before.upsampled.iter().all(Option::is_none));
+    // A file with the heads does not load into the network without them.
+    let big_path = dir.path().join("big.safetensors");
+    weights::save_module(&big, &learnt, &big_path).unwrap();
+    assert!(weights::load_cascade_grown(&big_path, &config, &device).is_err());
+    let again = weights::load_cascade_grown(&big_path, &learnt, &device).unwrap();
+    let again_out = again.forward(&inputs, &geometry).unwrap();
+    assert_eq!(
+        values(after.stages[2].index.clone()),
+        values(again_out.stages[2].index.clone())
+    );
+
+    // The heads get gradients from a loss on the centres they make (their last convolution
+    // first: it starts with zero weights, so the one before it learns once it has moved).
+    let device = Device::flex().autodiff();
+    let net = weights::load_cascade_grown(&path, &learnt, &device).unwrap();
+    let geometry = CascadeGeometry::new(&ds.rig, &learnt, &hyps, &device).unwrap();
+    let out = net.forward(&images(&learnt, &device), &geometry).unwrap();
+    let loss = out
+        .upsampled
+        .into_iter()
+        .flatten()
+        .map(|u| u.sub_scalar(10.0).abs().mean())
+        .reduce(|a, b| a + b)
+        .unwrap();
+    let grads = GradientsParams::from_grads(loss.backward(), &net);
+    for (name, head) in [("up_mid", &net.up_mid), ("up_fine", &net.up_fine)] {
+        let head = head.as_ref().unwrap();
+        let weight = grads
+            .get::<4>(head.out.weight.id)
+            .map(|g| read_values(g, "grad"));
+        let bias = head.out.bias.as_ref().and_then(|b| grads.get::<1>(b.id));
+        let bias = bias.map(|g| read_values(g, "grad"));
+        for grad in [weight, bias] {
+            let grad = grad
+                .unwrap_or_else(|| panic!("no gradient for {name}"))
+                .unwrap();
+            let norm: f32 = grad.iter().map(|g| g.abs()).sum();
+            assert!(norm > 0.0 && norm.is_finite(), "{name}: {norm}");
+        }
+    }
+}

@@ -34,6 +34,18 @@ pub enum Selection {
     Reference,
 }
 
+/// Which of the network's weights a run trains.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TrainParts {
+    /// Every weight.
+    #[default]
+    All,
+    /// The cascade's learnt upsampling heads only (`convex_upsampling`); every other weight
+    /// and every batch-norm statistic stays as loaded.
+    Upsampling,
+}
+
 /// Everything that decides a training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -97,6 +109,13 @@ pub struct TrainConfig {
     /// with sky).
     #[serde(skip_serializing_if = "is_with_sky")]
     pub select_by: Selection,
+    /// The weights the run trains (absent in older runs: all of them).
+    #[serde(skip_serializing_if = "is_all")]
+    pub train_only: TrainParts,
+}
+
+fn is_all(parts: &TrainParts) -> bool {
+    *parts == TrainParts::All
 }
 
 fn is_with_sky(selection: &Selection) -> bool {
@@ -130,6 +149,7 @@ impl Default for TrainConfig {
             photometric: None,
             frozen_norm_stats: false,
             select_by: Selection::WithSky,
+            train_only: TrainParts::All,
         }
     }
 }

@@ -13,7 +13,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::gt::GroundTruth;
 
-use crate::config::{Optimizer, TrainConfig};
+use crate::config::{Optimizer, TrainConfig, TrainParts};
 use crate::error::TrainError;
 use crate::sample::Sample;
 use crate::trainable::Trainable;
@@ -110,6 +110,7 @@ pub struct Learner<M = OmniMvsNet> {
     pub device: Device,
     optimizer: Optimizer,
     optimizer_config: OptimizerSettings,
+    train_only: TrainParts,
 }
 
 /// The settings [`Learner::load_checkpoint`] needs to rebuild the optimiser.
@@ -168,10 +169,12 @@ impl<M: Trainable> Learner<M> {
         config.validate()?;
         let device = device.clone().autodiff();
         device.seed(config.seed);
+        // Training only some weights keeps the others' batch-norm statistics too.
         let net = with_norm_stats(
             M::build(&config.net, config.init.as_deref(), &device)?,
-            config.frozen_norm_stats,
-        );
+            config.frozen_norm_stats || config.train_only != TrainParts::All,
+        )
+        .train_only(config.train_only)?;
         let built = net.config();
         if built.out_height != config.net.out_height
             || built.out_width != config.net.out_width
@@ -199,6 +202,7 @@ impl<M: Trainable> Learner<M> {
             optim: init_optimizer(config.optimizer, settings),
             device,
             optimizer: config.optimizer,
+            train_only: config.train_only,
             optimizer_config: settings,
         })
     }
@@ -309,6 +313,8 @@ impl<M: Trainable> Learner<M> {
                 ),
             ));
         }
+        // Loaded parameters may come back trainable: freeze again what the run keeps.
+        self.net = self.net.clone().train_only(self.train_only)?;
         let optim = dir.join(OPTIM_FILE);
         self.optim = init_optimizer(self.optimizer, self.optimizer_config)
             .load(&optim)

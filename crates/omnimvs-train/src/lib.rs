@@ -30,7 +30,7 @@ pub mod trainable;
 pub mod trainer;
 
 pub use augment::{RotationSet, resample_ground_truth};
-pub use config::{Optimizer, Selection, TrainConfig};
+pub use config::{Optimizer, Selection, TrainConfig, TrainParts};
 pub use error::TrainError;
 pub use learner::{Learner, masked_l1};
 pub use photometric::PhotometricAugment;

@@ -10,6 +10,7 @@ use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Tensor};
 use omnimvs_data::gt::GroundTruth;
 
+use crate::config::TrainParts;
 use crate::error::TrainError;
 use crate::learner::{masked_l1, target_data_with};
 use crate::sample::{Sample, SampleSource};
@@ -75,6 +76,26 @@ pub trait Trainable: Module + Sized {
     /// # Errors
     /// [`TrainError`] when a file cannot be written.
     fn save_weights(&self, path: &Path) -> Result<(), TrainError>;
+
+    /// The network with every weight outside `parts` frozen (no gradient).
+    ///
+    /// # Errors
+    /// [`TrainError::InvalidConfig`] when the network has no such parts.
+    fn train_only(self, parts: TrainParts) -> Result<Self, TrainError> {
+        match parts {
+            TrainParts::All => Ok(self),
+            TrainParts::Upsampling => Err(no_upsampling()),
+        }
+    }
+}
+
+fn no_upsampling() -> TrainError {
+    TrainError::InvalidConfig {
+        field: "train_only",
+        message: "`upsampling` trains the cascade's learnt upsampling heads, which this \
+                  network has not (`convex_upsampling`)"
+            .into(),
+    }
 }
 
 impl Trainable for OmniMvsNet {
@@ -195,8 +216,25 @@ impl Trainable for CascadeNet {
             ),
             None => (sample.stage_gt[1].clone(), sample.gt.clone()),
         };
-        let targets = [&sample.stage_gt[0], &mid, &fine];
         let p = &self.config.cascade;
+        let mut total: Option<Tensor<1>> = None;
+        // The learnt upsampling's centres, each against the truth of the grid it feeds.
+        for ((up, gt), w) in out
+            .upsampled
+            .iter()
+            .zip([&mid, &fine])
+            .zip(&p.loss_weights[1..])
+        {
+            if let Some(up) = up {
+                let (target, mask) = target_tensors(gt, false, p.sky_loss_weight, &device);
+                let loss = masked_l1(up.clone(), target, mask).mul_scalar(*w);
+                total = Some(match total {
+                    Some(t) => t + loss,
+                    None => loss,
+                });
+            }
+        }
+        let targets = [&sample.stage_gt[0], &mid, &fine];
         let spacings = [
             coarse_spacing(p.coarse_spheres, self.config.num_invdepth),
             p.stage_intervals[0],
@@ -207,7 +245,6 @@ impl Trainable for CascadeNet {
             p.refine_distribution_weight,
             p.refine_distribution_weight,
         ];
-        let mut total: Option<Tensor<1>> = None;
         for (((stage, gt), w), (dw, spacing)) in out
             .stages
             .into_iter()
@@ -241,6 +278,22 @@ impl Trainable for CascadeNet {
 
     fn save_weights(&self, path: &Path) -> Result<(), TrainError> {
         Ok(weights::save_module(self, &self.config, path)?)
+    }
+
+    fn train_only(mut self, parts: TrainParts) -> Result<Self, TrainError> {
+        match parts {
+            TrainParts::All => Ok(self),
+            TrainParts::Upsampling => {
+                if self.up_mid.is_none() || self.up_fine.is_none() {
+                    return Err(no_upsampling());
+                }
+                self.features = self.features.no_grad();
+                self.coarse = self.coarse.no_grad();
+                self.mid = self.mid.no_grad();
+                self.fine = self.fine.no_grad();
+                Ok(self)
+            }
+        }
     }
 }
 

@@ -11,7 +11,7 @@ use omnimvs_net::cascade::CascadeGeometry;
 use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::{CascadeNet, NetConfig};
 use omnimvs_sweep::InvDepthHypotheses;
-use omnimvs_train::{Learner, Optimizer, Sample, TrainConfig};
+use omnimvs_train::{Learner, Optimizer, Sample, TrainConfig, TrainParts};
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]
 mod samples;
@@ -100,4 +100,52 @@ fn gradients_reach_every_stage_and_it_overfits_one_frame() {
         last < 0.3 * first,
         "loss {first} -> {last} after {steps} steps: the cascade does not fit one frame"
     );
+}
+
+#[test]
+fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
+    let (rig, hyps) = sunny_rig();
+    let mut config = train_config(5);
+    config.net.cascade.convex_upsampling = true;
+    config.train_only = TrainParts::Upsampling;
+    let device = Device::flex();
+    let mut learner = Learner::<CascadeNet>::for_model(&config, &device).unwrap();
+    let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
+    let sample = micro_sample(&config.net);
+    let weights = |net: &CascadeNet| {
+        let selector = net.up_mid.as_ref().unwrap();
+        [
+            net.features.conv0.conv.weight.val(),
+            net.coarse.out.conv.weight.val(),
+            net.mid.out.conv.weight.val(),
+            net.fine.convs[0].conv.weight.val(),
+            selector.out.weight.val(),
+            net.up_fine.as_ref().unwrap().out.weight.val(),
+        ]
+        .map(|t| read_values(t, "weights").unwrap())
+    };
+    let before = weights(&learner.net);
+    let first = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+    let mut last = first;
+    for _ in 0..5 {
+        last = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+    }
+    let after = weights(&learner.net);
+    for (i, (a, b)) in before.iter().zip(&after).enumerate() {
+        if i < 4 {
+            assert_eq!(a, b, "frozen weights {i} moved");
+        } else {
+            assert_ne!(a, b, "selector weights {i} did not move");
+        }
+    }
+    assert!(last < first, "the centres' loss did not fall: {first} -> {last}");
+
+    // A network without the selectors has nothing to train.
+    let mut plain = train_config(5);
+    plain.train_only = TrainParts::Upsampling;
+    let err = Learner::<CascadeNet>::for_model(&plain, &device)
+        .err()
+        .expect("training only absent selectors is refused")
+        .to_string();
+    assert!(err.contains("train_only") && err.contains("convex_upsampling"), "{err}");
 }

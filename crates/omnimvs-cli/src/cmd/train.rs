@@ -13,8 +13,8 @@ use omnimvs_train::mccnn::{CostTrainConfig, CostTrainer};
 use omnimvs_train::sweepnet::{SweepTrainConfig, SweepTrainer};
 use omnimvs_train::trainer::read_run_config;
 use omnimvs_train::{
-    EpochRecord, Optimizer, PhotometricAugment, Selection, StepInfo, TrainConfig, Trainable,
-    Trainer,
+    EpochRecord, Optimizer, PhotometricAugment, Selection, StepInfo, TrainConfig, TrainParts,
+    Trainable, Trainer,
 };
 
 use crate::args::{BACKEND_HELP, Preset, parse_backend};
@@ -145,6 +145,19 @@ pub struct Args {
     /// below 1, a frame's large sky pulls near objects and edges toward far less.
     #[arg(long, conflicts_with = "resume")]
     pub sky_weight: Option<f64>,
+    /// Cascade: learnt (convex) upsampling of each stage's answer to the next stage's grid
+    /// (`convex_upsampling`; off before `cascade-13`): the finer grid's centres are
+    /// softmax-weighted means of the 3 x 3 coarser pixels around each parent, the weights
+    /// predicted from the stage's hidden features, instead of the bilinear mean that blends
+    /// the two sides of a depth edge. The heads start at the bilinear weights, so --init with
+    /// a network without them goes on from its answer.
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub convex_upsampling: Option<Switch>,
+    /// Which weights the run trains (`train_only`): `all`, or `upsampling`, the cascade's
+    /// learnt upsampling heads alone (every other weight and batch-norm statistic stays as
+    /// --init loaded it; a cheap step, the frozen stages need no backward pass).
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub train_only: Option<PartsArg>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
@@ -345,6 +358,15 @@ pub enum SelectArg {
     Reference,
 }
 
+/// `--train-only`: the weights a run trains.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PartsArg {
+    /// Every weight.
+    All,
+    /// The cascade's learnt upsampling heads.
+    Upsampling,
+}
+
 pub fn run(args: &Args) -> Result<()> {
     let device = args.backend.device()?;
     if args.cost == Some(CostNet::Sweepnet) || args.resume.as_deref().is_some_and(is_sweep_run) {
@@ -398,12 +420,17 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 || args.coarse_distribution.is_some()
                 || args.refine_distribution.is_some()
                 || args.sky_weight.is_some()
+                || args.convex_upsampling.is_some()
             {
                 if net.family != Family::Cascade {
                     bail!(
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
-                         --refine-distribution and --sky-weight are options of --preset cascade"
+                         --refine-distribution, --sky-weight and --convex-upsampling are \
+                         options of --preset cascade"
                     );
+                }
+                if let Some(up) = args.convex_upsampling {
+                    net.cascade.convex_upsampling = up == Switch::On;
                 }
                 if let Some(weight) = args.coarse_distribution {
                     net.cascade.coarse_distribution_weight = weight;
@@ -452,6 +479,10 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 select_by: match args.select_by {
                     Some(SelectArg::Reference) => Selection::Reference,
                     Some(SelectArg::WithSky) | None => Selection::WithSky,
+                },
+                train_only: match args.train_only {
+                    Some(PartsArg::Upsampling) => TrainParts::Upsampling,
+                    Some(PartsArg::All) | None => TrainParts::All,
                 },
                 ..TrainConfig::default()
             };

@@ -11,7 +11,10 @@ use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::Rig;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
-use super::model::{CascadeNet, StageOutput, hypothesis_tensor, read_values};
+use super::model::{
+    CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, hypothesis_tensor, read_values,
+    upsampling_candidates,
+};
 use super::photo::ImagePyramid;
 use super::sampler::{PixelSampler, coarse_indices, hypotheses_around};
 use crate::config::NetConfig;
@@ -287,6 +290,30 @@ impl CascadeGeometry {
             sampler.grid(),
             &cols,
         )?;
+        self.taps_around(stage, center, cols, images)
+    }
+
+    /// The taps of refinement stage `stage` around `center`, an index map (`N` units) already
+    /// on the stage's grid, its columns `cols` only (row-major, `rows x cols.len()`).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] for a map of another size or a window outside the grid.
+    pub fn taps_around(
+        &self,
+        stage: usize,
+        center: Vec<f32>,
+        cols: Range<usize>,
+        images: Option<&ImagePyramid>,
+    ) -> Result<StageTaps, NetError> {
+        let sampler = &self.samplers[stage];
+        let expected = sampler.grid().height * cols.len();
+        if center.len() != expected {
+            return Err(NetError::Shape {
+                what: "centres of a refinement stage's hypotheses".into(),
+                expected: vec![sampler.grid().height, cols.len()],
+                actual: vec![center.len()],
+            });
+        }
         let p = &self.config.cascade;
         let k = p.stage_hypotheses[stage - 1];
         let index = hypotheses_around(
@@ -295,7 +322,31 @@ impl CascadeGeometry {
             p.stage_intervals[stage - 1],
             self.config.num_invdepth,
         );
-        let grids = sampler.grids_window(&index, k, cols.clone())?;
+        let mut taps = self.taps_for(stage, index, k, cols.clone(), images)?;
+        let [h, w] = [sampler.grid().height, cols.len()];
+        taps.center = Some(Tensor::<3>::from_data(
+            TensorData::new(center, [1, h, w]),
+            &self.device,
+        ));
+        Ok(taps)
+    }
+
+    /// The taps of refinement stage `stage` at `k` given inverse-depth indices per pixel
+    /// (`index[j * pixels + pixel]`, `N` units) over its columns `cols`, without a centre:
+    /// the candidates of the learnt upsampling, say.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] for indices of another size or a window outside the grid.
+    pub fn taps_for(
+        &self,
+        stage: usize,
+        index: Vec<f32>,
+        k: usize,
+        cols: Range<usize>,
+        images: Option<&ImagePyramid>,
+    ) -> Result<StageTaps, NetError> {
+        let sampler = &self.samplers[stage];
+        let grids = sampler.grids_window(&index, k, cols)?;
         // Stage 1 reads the stride-4 features, stage 2 the stride-2 ones.
         let feature_size = self.config.cascade_feature_sizes()[2 - stage];
         let mut taps = StageTaps::new(
@@ -305,11 +356,6 @@ impl CascadeGeometry {
             self.host_correlation,
             &self.device,
         )?;
-        let [h, w] = [sampler.grid().height, cols.len()];
-        taps.center = Some(Tensor::<3>::from_data(
-            TensorData::new(center, [1, h, w]),
-            &self.device,
-        ));
         // Stage 1 samples the half-size images, stage 2 the inputs themselves.
         taps.cue = images
             .map(|pyramid| pyramid.zncc_tensor(2 - stage, &grids, &self.device))
@@ -425,6 +471,11 @@ fn logsumexp(scores: Tensor<4>) -> Tensor<3> {
 pub struct CascadeOutput {
     /// Coarse, half- and full-resolution stages.
     pub stages: [StageOutput; 3],
+    /// With learnt upsampling (`convex_upsampling`): the half- and full-resolution stages'
+    /// centres as the heads made them, `[1, H, W]` over the stage's columns (the training
+    /// window's), differentiable in the heads' weights; `None` where the centres were
+    /// upsampled bilinearly.
+    pub upsampled: [Option<Tensor<3>>; 2],
 }
 
 impl CascadeNet {
@@ -476,9 +527,14 @@ impl CascadeNet {
         timed: bool,
         training: bool,
     ) -> Result<(CascadeOutput, CascadeTimings), NetError> {
-        self.forward_centred(images, geometry, window, timed, training, |coarse| {
-            Ok(coarse.to_vec())
-        })
+        self.forward_centred(
+            images,
+            geometry,
+            window,
+            timed,
+            training,
+            None::<fn(&[f32]) -> _>,
+        )
     }
 
     /// [`CascadeNet::forward`] with the refinement stages centred where `centres` says: it
@@ -496,7 +552,7 @@ impl CascadeNet {
         geometry: &CascadeGeometry,
         centres: impl FnOnce(&[f32]) -> Result<Vec<f32>, NetError>,
     ) -> Result<CascadeOutput, NetError> {
-        self.forward_centred(images, geometry, None, false, false, centres)
+        self.forward_centred(images, geometry, None, false, false, Some(centres))
             .map(|(out, _)| out)
     }
 
@@ -560,6 +616,7 @@ impl CascadeNet {
         let fine = self.refine_stage(0, &levels[0], &fine_taps)?;
         Ok(CascadeOutput {
             stages: [coarse, mid, fine],
+            upsampled: [None, None],
         })
     }
 
@@ -613,6 +670,29 @@ impl CascadeNet {
         self.coarse_stage(&levels[2], &geometry.coarse, cue)
     }
 
+    /// The learnt upsampling of `previous`, an index map on the whole grid `from`, to the
+    /// grid of refinement `stage` (1: half, 2: full resolution) over its columns `cols`:
+    /// `[1, H, cols.len()]`, or `None` for a network without it.
+    #[allow(clippy::too_many_arguments)]
+    fn learnt_centres(
+        &self,
+        geometry: &CascadeGeometry,
+        stage: usize,
+        features: &[Tensor<4>],
+        previous: &[f32],
+        from: &EquirectGrid,
+        cols: &Range<usize>,
+        photo: Option<&ImagePyramid>,
+    ) -> Result<Option<Tensor<3>>, NetError> {
+        if self.up_mid.is_none() {
+            return Ok(None);
+        }
+        let candidates = upsampling_candidates(previous, [from.height, from.width], cols);
+        let taps = geometry.taps_for(stage, candidates, UPSAMPLE_TAPS, cols.clone(), photo)?;
+        let prior = bilinear_prior(2 * from.height, cols, &geometry.device);
+        self.select_centres(2 - stage, features, &taps, prior)
+    }
+
     fn forward_centred(
         &self,
         images: &[Tensor<4>],
@@ -620,7 +700,7 @@ impl CascadeNet {
         window: Option<ColumnWindow>,
         timed: bool,
         training: bool,
-        centres: impl FnOnce(&[f32]) -> Result<Vec<f32>, NetError>,
+        centres: Option<impl FnOnce(&[f32]) -> Result<Vec<f32>, NetError>>,
     ) -> Result<(CascadeOutput, CascadeTimings), NetError> {
         let [_, mid_grid, fine_grid] = geometry.samplers.each_ref().map(|s| *s.grid());
         let window = match window {
@@ -652,28 +732,68 @@ impl CascadeNet {
         timings.features = lap(&device);
         let coarse = self.coarse_of(&levels, photo.as_ref(), geometry)?;
         timings.coarse = lap(&device);
-        let coarse_index = centres(&read_values(coarse.index.clone(), "coarse index")?)?;
+        let coarse_values = read_values(coarse.index.clone(), "coarse index")?;
         let mid_cols = window.scaled(2);
-        let mid_taps = geometry.refine_taps(1, &coarse_index, mid_cols.clone(), photo.as_ref())?;
+        // The half stage's centres: what `centres` makes of the coarse answer, else the
+        // learnt upsampling when the network has it, else the bilinear one.
+        let coarse_grid = *geometry.samplers[0].grid();
+        let (coarse_index, up_mid) = match centres {
+            Some(centres) => (centres(&coarse_values)?, None),
+            None => {
+                let up = self.learnt_centres(
+                    geometry,
+                    1,
+                    &levels[1],
+                    &coarse_values,
+                    &coarse_grid,
+                    &mid_cols,
+                    photo.as_ref(),
+                )?;
+                (coarse_values, up)
+            }
+        };
+        let mid_taps = match &up_mid {
+            Some(up) => {
+                let centre = read_values(up.clone(), "upsampled coarse index")?;
+                geometry.taps_around(1, centre, mid_cols.clone(), photo.as_ref())?
+            }
+            None => geometry.refine_taps(1, &coarse_index, mid_cols.clone(), photo.as_ref())?,
+        };
         let mid = self.refine_stage(1, &levels[1], &mid_taps)?;
         timings.mid = lap(&device);
-        // The fine stage's centres: the half-resolution estimate inside the window, the
-        // coarse one carried to the half-resolution grid outside it (only the window's
-        // edges read it).
-        let mut mid_index = resample_map(&coarse_index, geometry.samplers[0].grid(), &mid_grid);
+        // The half-resolution estimate inside the window, the coarse one carried to the
+        // half-resolution grid outside it (only the window's edges read it).
+        let mut mid_index = resample_map(&coarse_index, &coarse_grid, &mid_grid);
         let mid_window = read_values(mid.index.clone(), "half-resolution index")?;
         let w = mid_cols.len();
         for (row, values) in mid_window.chunks_exact(w).enumerate() {
             let at = row * mid_grid.width + mid_cols.start;
             mid_index[at..at + w].copy_from_slice(values);
         }
-        let fine_taps = geometry.refine_taps(2, &mid_index, window.scaled(1), photo.as_ref())?;
+        let fine_cols = window.scaled(1);
+        let up_fine = self.learnt_centres(
+            geometry,
+            2,
+            &levels[0],
+            &mid_index,
+            &mid_grid,
+            &fine_cols,
+            photo.as_ref(),
+        )?;
+        let fine_taps = match &up_fine {
+            Some(up) => {
+                let centre = read_values(up.clone(), "upsampled half-resolution index")?;
+                geometry.taps_around(2, centre, fine_cols, photo.as_ref())?
+            }
+            None => geometry.refine_taps(2, &mid_index, fine_cols, photo.as_ref())?,
+        };
         let fine = self.refine_stage(0, &levels[0], &fine_taps)?;
         timings.fine = lap(&device);
         timings.total = start.elapsed().as_secs_f64();
         Ok((
             CascadeOutput {
                 stages: [coarse, mid, fine],
+                upsampled: [up_mid, up_fine],
             },
             timings,
         ))

@@ -1,0 +1,304 @@
+//! Would a second hypothesis from the coarse stage pay? The trained cascade's coarse
+//! distribution over its spheres, per coarse pixel: how often the truth lies within the half
+//! stage's reach (+-R index units) of (a) the soft argmax (what the network centres on now),
+//! (b) the most probable sphere, (c) either of the two most probable separated modes, (d) any
+//! of three; then the whole network with its half stage also run around the second mode
+//! (`CascadeNet::forward_seeded`, untrained choices) and with an oracle choice between the two
+//! centres. Non-sky pixels of the training ground truth, index units of N.
+//!
+//! `cargo run --release -p omnimvs-train --example cascade_modes -- WEIGHTS DATASET A B [REACH]`
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::PathBuf;
+
+use burn::tensor::Device;
+use omnimvs_net::cascade::model::read_values;
+use omnimvs_net::cascade::{CascadeGeometry, SeedChoice};
+use omnimvs_net::weights::load_cascade;
+use omnimvs_train::SampleSource;
+use omnimvs_train::augment::RotationSet;
+
+#[derive(Default, Clone, Copy)]
+struct Score([f64; 5]);
+
+impl Score {
+    fn add(&mut self, answer: &[f32], truth: &[f32], valid: &[bool]) {
+        for ((&n, &t), &v) in answer.iter().zip(truth).zip(valid) {
+            if !v || t <= 0.0 {
+                continue;
+            }
+            let e = f64::from((n - t).abs());
+            self.0[0] += e;
+            self.0[1] += 1.0;
+            for (k, th) in [1.0, 3.0, 5.0].into_iter().enumerate() {
+                if e > th {
+                    self.0[2 + k] += 1.0;
+                }
+            }
+        }
+    }
+
+    fn line(&self, name: &str) -> String {
+        let [sum, n, a, b, c] = self.0;
+        let pct = |x: f64| 100.0 * x / n.max(1.0);
+        format!(
+            "{name:40} >1 {:5.1}%  >3 {:5.1}%  >5 {:5.1}%  MAE {:.2}",
+            pct(a),
+            pct(b),
+            pct(c),
+            sum / n.max(1.0)
+        )
+    }
+}
+
+/// The `count` most probable modes of one pixel's distribution over `k` spheres: the best
+/// sphere, then the best one at least `gap` spheres from every mode taken so far.
+fn modes(prob: &[f32], hyp: &[f32], gap: usize, count: usize) -> Vec<f32> {
+    let mut taken: Vec<usize> = Vec::new();
+    for _ in 0..count {
+        let best = (0..prob.len())
+            .filter(|&i| taken.iter().all(|&t| i.abs_diff(t) >= gap))
+            .max_by(|&a, &b| prob[a].total_cmp(&prob[b]));
+        match best {
+            Some(b) => taken.push(b),
+            None => break,
+        }
+    }
+    taken.iter().map(|&i| hyp[i]).collect()
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let usage = "usage: cascade_modes WEIGHTS DATASET FIRST LAST [REACH]";
+    let weights = PathBuf::from(args.get(1).expect(usage));
+    let path = PathBuf::from(args.get(2).expect(usage));
+    let first: u32 = args.get(3).expect(usage).parse().unwrap();
+    let last: u32 = args.get(4).expect(usage).parse().unwrap();
+    let reach: f32 = args.get(5).map_or(7.0, |r| r.parse().unwrap());
+    let device = Device::flex();
+    let net = load_cascade(&weights, &device).unwrap();
+    let config = net.config.clone();
+    let source = SampleSource::open(&path, &config, RotationSet::new(1, 0.0, 0)).unwrap();
+    let geometry =
+        CascadeGeometry::new(&source.dataset.rig, &config, &source.hypotheses, &device).unwrap();
+    // Within reach: soft argmax, top mode, top 2, top 3; pixels.
+    let mut within = [0.0f64; 5];
+    let mut mid_within = [0.0f64; 5];
+    let mut fine_within = [0.0f64; 4];
+    let mut learnt_within = [[0.0f64; 2]; 2];
+    let names = [
+        "own coarse answer",
+        "second mode",
+        "nearer of the two (oracle)",
+    ];
+    let mut scores = [Score::default(); 3];
+    let choices = [SeedChoice::Joint, SeedChoice::Peak, SeedChoice::Mass];
+    let mut seeded = [Score::default(); 3];
+    for frame in first..=last {
+        let sample = source.load(0, frame, 0, None).unwrap();
+        let images = sample.image_tensors([config.input_height, config.input_width], &device);
+        let out = net.forward(&images, &geometry).unwrap();
+        let learnt: Vec<Option<Vec<f32>>> = out
+            .upsampled
+            .iter()
+            .map(|u| u.clone().map(|u| read_values(u, "upsampled").unwrap()))
+            .collect();
+        for ((up, gt), (reach, slot)) in learnt
+            .iter()
+            .zip([&sample.stage_gt[1], &sample.gt])
+            .zip([(reach, 0), (2.0, 1)])
+        {
+            if let Some(up) = up {
+                for ((&u, &t), &v) in up.iter().zip(&gt.index).zip(&gt.valid) {
+                    if v && t > 0.0 {
+                        learnt_within[slot][1] += 1.0;
+                        learnt_within[slot][0] += f64::from(u8::from((u - t).abs() <= reach));
+                    }
+                }
+            }
+        }
+        let [coarse, half, _] = out.stages;
+        let half_index = read_values(half.index, "half index").unwrap();
+        let [_, k, h, w] = coarse.prob.dims();
+        let prob = read_values(coarse.prob, "prob").unwrap();
+        let hyp = read_values(coarse.hypotheses, "hypotheses").unwrap();
+        let soft = read_values(coarse.index, "index").unwrap();
+        let truth = &sample.stage_gt[0];
+        let mut second = vec![0.0f32; h * w];
+        for p in 0..h * w {
+            let column = |v: &[f32]| (0..k).map(|s| v[s * h * w + p]).collect::<Vec<f32>>();
+            let (pp, hh) = (column(&prob), column(&hyp));
+            let m = modes(&pp, &hh, 3, 3);
+            second[p] = m.get(1).copied().unwrap_or(m[0]);
+            let t = truth.index[p];
+            if !truth.valid[p] || t <= 0.0 {
+                continue;
+            }
+            let near = |x: f32| (x - t).abs() <= reach;
+            within[4] += 1.0;
+            within[0] += f64::from(u8::from(near(soft[p])));
+            for c in 1..=3 {
+                within[c] += f64::from(u8::from(m.iter().take(c).any(|&x| near(x))));
+            }
+        }
+        // On the half grid: the truth within reach of the bilinear upsampling of the soft
+        // argmax (the half stage's centre now), of any of the 2x2 coarse pixels around, or of
+        // any in the 3x3 around the nearest.
+        let mid_truth = &sample.stage_gt[1];
+        let (mh, mw) = (2 * h, 2 * w);
+        let centre = omnimvs_sweep::resample_map(
+            &soft,
+            geometry.samplers[0].grid(),
+            geometry.samplers[1].grid(),
+        );
+        for r in 0..mh {
+            for c in 0..mw {
+                let p = r * mw + c;
+                let t = mid_truth.index[p];
+                if !mid_truth.valid[p] || t <= 0.0 {
+                    continue;
+                }
+                let near = |x: f32| (x - t).abs() <= reach;
+                let cr = (r as f32 + 0.5) / 2.0 - 0.5;
+                let cc = (c as f32 + 0.5) / 2.0 - 0.5;
+                let at = |rr: i64, ccol: i64| {
+                    let rr = rr.clamp(0, h as i64 - 1) as usize;
+                    let ccol = ccol.rem_euclid(w as i64) as usize;
+                    soft[rr * w + ccol]
+                };
+                let (r0, c0) = (cr.floor() as i64, cc.floor() as i64);
+                let any4 = [(0, 0), (0, 1), (1, 0), (1, 1)]
+                    .iter()
+                    .any(|&(a, b)| near(at(r0 + a, c0 + b)));
+                let (rn, cn) = ((r / 2) as i64, (c / 2) as i64);
+                mid_within[4] += f64::from(u8::from(near(at(rn, cn))));
+                let any9 = (-1..=1).any(|a| (-1..=1).any(|b| near(at(rn + a, cn + b))));
+                mid_within[3] += 1.0;
+                mid_within[0] += f64::from(u8::from(near(centre[p])));
+                mid_within[1] += f64::from(u8::from(any4));
+                mid_within[2] += f64::from(u8::from(any9));
+            }
+        }
+        // The same from the half stage's answer to the full grid (reach +-2).
+        let fine_truth = &sample.gt;
+        let fine_centre = omnimvs_sweep::resample_map(
+            &half_index,
+            geometry.samplers[1].grid(),
+            geometry.samplers[2].grid(),
+        );
+        for r in 0..2 * mh {
+            for c in 0..2 * mw {
+                let p = r * 2 * mw + c;
+                let t = fine_truth.index[p];
+                if !fine_truth.valid[p] || t <= 0.0 {
+                    continue;
+                }
+                let near = |x: f32| (x - t).abs() <= 2.0;
+                let cr = (r as f32 + 0.5) / 2.0 - 0.5;
+                let cc = (c as f32 + 0.5) / 2.0 - 0.5;
+                let at = |rr: i64, ccol: i64| {
+                    let rr = rr.clamp(0, mh as i64 - 1) as usize;
+                    let ccol = ccol.rem_euclid(mw as i64) as usize;
+                    half_index[rr * mw + ccol]
+                };
+                let (r0, c0) = (cr.floor() as i64, cc.floor() as i64);
+                let any4 = [(0, 0), (0, 1), (1, 0), (1, 1)]
+                    .iter()
+                    .any(|&(a, b)| near(at(r0 + a, c0 + b)));
+                fine_within[3] += 1.0;
+                fine_within[0] += f64::from(u8::from(near(fine_centre[p])));
+                fine_within[1] += f64::from(u8::from(near(at((r / 2) as i64, (c / 2) as i64))));
+                fine_within[2] += f64::from(u8::from(any4));
+            }
+        }
+        if std::env::var("MODES_ONLY").is_ok() {
+            println!("frame {frame} done");
+            continue;
+        }
+        for (variant, score) in scores.iter_mut().enumerate() {
+            let out = net
+                .forward_with_centres(&images, &geometry, |own| {
+                    Ok(match variant {
+                        0 => own.to_vec(),
+                        1 => second.clone(),
+                        _ => own
+                            .iter()
+                            .zip(&second)
+                            .zip(&truth.index)
+                            .map(
+                                |((&a, &b), &t)| if (a - t).abs() <= (b - t).abs() { a } else { b },
+                            )
+                            .collect(),
+                    })
+                })
+                .unwrap();
+            let [_, _, fine] = out.stages;
+            let index = read_values(fine.index, "index").unwrap();
+            score.add(&index, &sample.gt.index, &sample.gt.valid);
+        }
+        for (choice, score) in choices.iter().zip(&mut seeded) {
+            let out = net
+                .forward_seeded(&images, &geometry, &second, *choice)
+                .unwrap();
+            let [_, _, fine] = out.stages;
+            let index = read_values(fine.index, "index").unwrap();
+            score.add(&index, &sample.gt.index, &sample.gt.valid);
+        }
+        println!("frame {frame} done");
+    }
+    let n = within[4].max(1.0);
+    println!(
+        "coarse pixels within +-{reach} of the truth ({} pixels):",
+        within[4]
+    );
+    for (name, x) in ["soft argmax", "top mode", "top 2 modes", "top 3 modes"]
+        .iter()
+        .zip(&within)
+    {
+        println!("  {name:20} {:5.1}%", 100.0 * x / n);
+    }
+    let n = mid_within[3].max(1.0);
+    println!(
+        "half-grid pixels within +-{reach} of the truth ({} pixels):",
+        mid_within[3]
+    );
+    for (name, x) in [
+        "bilinear centre",
+        "any of 2x2 coarse",
+        "any of 3x3 coarse",
+        "",
+        "nearest coarse",
+    ]
+    .iter()
+    .zip(&mid_within)
+    {
+        println!("  {name:20} {:5.1}%", 100.0 * x / n);
+    }
+    let n = fine_within[3].max(1.0);
+    println!(
+        "full-grid pixels within +-2 of the truth ({} pixels):",
+        fine_within[3]
+    );
+    for (name, x) in ["bilinear centre", "nearest half", "any of 2x2 half"]
+        .iter()
+        .zip(&fine_within)
+    {
+        println!("  {name:20} {:5.1}%", 100.0 * x / n);
+    }
+    for (name, [hit, n]) in ["half grid (+-reach)", "full grid (+-2)"]
+        .iter()
+        .zip(learnt_within)
+    {
+        if n > 0.0 {
+            println!("learnt upsampling, {name}: {:5.1}%", 100.0 * hit / n);
+        }
+    }
+    println!("final answer, half stage centred on:");
+    for (name, score) in names.iter().zip(&scores) {
+        println!("  {}", score.line(name));
+    }
+    println!("half stage run around the soft argmax and the second mode, then:");
+    for (choice, score) in choices.iter().zip(&seeded) {
+        println!("  {}", score.line(&format!("{choice:?}")));
+    }
+}
