@@ -138,7 +138,10 @@ fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
             assert_ne!(a, b, "selector weights {i} did not move");
         }
     }
-    assert!(last < first, "the centres' loss did not fall: {first} -> {last}");
+    assert!(
+        last < first,
+        "the centres' loss did not fall: {first} -> {last}"
+    );
 
     // A network without the selectors has nothing to train.
     let mut plain = train_config(5);
@@ -147,5 +150,8 @@ fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
         .err()
         .expect("training only absent selectors is refused")
         .to_string();
-    assert!(err.contains("train_only") && err.contains("convex_upsampling"), "{err}");
+    assert!(
+        err.contains("train_only") && err.contains("convex_upsampling"),
+        "{err}"
+    );
 }
