@@ -137,8 +137,8 @@ fn main() {
             let near = |x: f32| (x - t).abs() <= reach;
             within[4] += 1.0;
             within[0] += f64::from(u8::from(near(soft[p])));
-            for c in 1..=3 {
-                within[c] += f64::from(u8::from(m.iter().take(c).any(|&x| near(x))));
+            for (c, count) in within.iter_mut().enumerate().take(4).skip(1) {
+                *count += f64::from(u8::from(m.iter().take(c).any(|&x| near(x))));
             }
         }
         // On the half grid: the truth within reach of the bilinear upsampling of the soft
