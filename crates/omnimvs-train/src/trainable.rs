@@ -217,24 +217,21 @@ impl Trainable for CascadeNet {
             None => (sample.stage_gt[1].clone(), sample.gt.clone()),
         };
         let p = &self.config.cascade;
-        let mut total: Option<Tensor<1>> = None;
+        // Every stage's truth and loss weights as tensors, once.
+        let targets = [&sample.stage_gt[0], &mid, &fine]
+            .map(|gt| target_tensors(gt, false, p.sky_loss_weight, &device));
+        let mut losses = Vec::new();
         // The learnt upsampling's centres, each against the truth of the grid it feeds.
-        for ((up, gt), w) in out
+        for ((up, (target, mask)), w) in out
             .upsampled
             .iter()
-            .zip([&mid, &fine])
+            .zip(&targets[1..])
             .zip(&p.loss_weights[1..])
         {
             if let Some(up) = up {
-                let (target, mask) = target_tensors(gt, false, p.sky_loss_weight, &device);
-                let loss = masked_l1(up.clone(), target, mask).mul_scalar(*w);
-                total = Some(match total {
-                    Some(t) => t + loss,
-                    None => loss,
-                });
+                losses.push(masked_l1(up.clone(), target.clone(), mask.clone()).mul_scalar(*w));
             }
         }
-        let targets = [&sample.stage_gt[0], &mid, &fine];
         let spacings = [
             coarse_spacing(p.coarse_spheres, self.config.num_invdepth),
             p.stage_intervals[0],
@@ -245,25 +242,24 @@ impl Trainable for CascadeNet {
             p.refine_distribution_weight,
             p.refine_distribution_weight,
         ];
-        for (((stage, gt), w), (dw, spacing)) in out
+        for (((stage, (target, mask)), w), (dw, spacing)) in out
             .stages
             .into_iter()
             .zip(targets)
             .zip(p.loss_weights)
             .zip(distribution_weights.into_iter().zip(spacings))
         {
-            let (target, mask) = target_tensors(gt, false, p.sky_loss_weight, &device);
             let mut loss = masked_l1(stage.index, target.clone(), mask.clone()).mul_scalar(w);
             if dw > 0.0 {
                 let ce = distribution_ce(stage.prob, stage.hypotheses, target, mask, spacing / 2.0);
                 loss = loss + ce.mul_scalar(dw);
             }
-            total = Some(match total {
-                Some(t) => t + loss,
-                None => loss,
-            });
+            losses.push(loss);
         }
-        total.ok_or_else(|| no_images(self.config.num_cameras))
+        losses
+            .into_iter()
+            .reduce(|total, loss| total + loss)
+            .ok_or_else(|| no_images(self.config.num_cameras))
     }
 
     fn predict(

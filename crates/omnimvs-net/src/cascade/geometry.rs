@@ -560,7 +560,8 @@ impl CascadeNet {
     /// weights: around the coarse stage's answer and around `seed` (an index map in `N` units
     /// on the coarse grid, another method's answer); `choice` says how the two become the
     /// centres of the full-resolution stage. The result's half-resolution stage is the run
-    /// around the coarse answer when `choice` picks per pixel.
+    /// around the coarse answer when `choice` picks per pixel. Both stages' centres are
+    /// upsampled bilinearly, whether or not the network has learnt upsampling.
     ///
     /// # Errors
     /// See [`CascadeNet::forward`]; a seed of another size.
@@ -670,27 +671,36 @@ impl CascadeNet {
         self.coarse_stage(&levels[2], &geometry.coarse, cue)
     }
 
-    /// The learnt upsampling of `previous`, an index map on the whole grid `from`, to the
-    /// grid of refinement `stage` (1: half, 2: full resolution) over its columns `cols`:
-    /// `[1, H, cols.len()]`, or `None` for a network without it.
+    /// The taps of refinement `stage` (1: half, 2: full resolution) over its columns `cols`,
+    /// centred on the upsampling of `previous`, an index map on the previous stage's whole
+    /// grid: the learnt one when `learnt` and the network has it (its centres are returned
+    /// beside the taps, differentiable in the selector's weights), else the bilinear one.
     #[allow(clippy::too_many_arguments)]
-    fn learnt_centres(
+    fn centred_taps(
         &self,
         geometry: &CascadeGeometry,
         stage: usize,
-        features: &[Tensor<4>],
+        levels: &[Vec<Tensor<4>>; 3],
         previous: &[f32],
-        from: &EquirectGrid,
         cols: &Range<usize>,
         photo: Option<&ImagePyramid>,
-    ) -> Result<Option<Tensor<3>>, NetError> {
-        if self.up_mid.is_none() {
-            return Ok(None);
-        }
+        learnt: bool,
+    ) -> Result<(StageTaps, Option<Tensor<3>>), NetError> {
+        // Stage 1 reads the stride-4 features (level 1), stage 2 the stride-2 ones (level 0).
+        let level = 2 - stage;
+        let Some(selector) = self.selector(level).filter(|_| learnt) else {
+            let taps = geometry.refine_taps(stage, previous, cols.clone(), photo)?;
+            return Ok((taps, None));
+        };
+        let from = geometry.samplers[stage - 1].grid();
         let candidates = upsampling_candidates(previous, [from.height, from.width], cols);
-        let taps = geometry.taps_for(stage, candidates, UPSAMPLE_TAPS, cols.clone(), photo)?;
+        let candidate_taps =
+            geometry.taps_for(stage, candidates, UPSAMPLE_TAPS, cols.clone(), photo)?;
         let prior = bilinear_prior(2 * from.height, cols, &geometry.device);
-        self.select_centres(2 - stage, features, &taps, prior)
+        let up = self.select_centres(level, selector, &levels[level], &candidate_taps, prior)?;
+        let centre = read_values(up.clone(), "upsampled index")?;
+        let taps = geometry.taps_around(stage, centre, cols.clone(), photo)?;
+        Ok((taps, Some(up)))
     }
 
     fn forward_centred(
@@ -737,28 +747,19 @@ impl CascadeNet {
         // The half stage's centres: what `centres` makes of the coarse answer, else the
         // learnt upsampling when the network has it, else the bilinear one.
         let coarse_grid = *geometry.samplers[0].grid();
-        let (coarse_index, up_mid) = match centres {
-            Some(centres) => (centres(&coarse_values)?, None),
-            None => {
-                let up = self.learnt_centres(
-                    geometry,
-                    1,
-                    &levels[1],
-                    &coarse_values,
-                    &coarse_grid,
-                    &mid_cols,
-                    photo.as_ref(),
-                )?;
-                (coarse_values, up)
-            }
+        let (coarse_index, learnt) = match centres {
+            Some(centres) => (centres(&coarse_values)?, false),
+            None => (coarse_values, true),
         };
-        let mid_taps = match &up_mid {
-            Some(up) => {
-                let centre = read_values(up.clone(), "upsampled coarse index")?;
-                geometry.taps_around(1, centre, mid_cols.clone(), photo.as_ref())?
-            }
-            None => geometry.refine_taps(1, &coarse_index, mid_cols.clone(), photo.as_ref())?,
-        };
+        let (mid_taps, up_mid) = self.centred_taps(
+            geometry,
+            1,
+            &levels,
+            &coarse_index,
+            &mid_cols,
+            photo.as_ref(),
+            learnt,
+        )?;
         let mid = self.refine_stage(1, &levels[1], &mid_taps)?;
         timings.mid = lap(&device);
         // The half-resolution estimate inside the window, the coarse one carried to the
@@ -770,23 +771,15 @@ impl CascadeNet {
             let at = row * mid_grid.width + mid_cols.start;
             mid_index[at..at + w].copy_from_slice(values);
         }
-        let fine_cols = window.scaled(1);
-        let up_fine = self.learnt_centres(
+        let (fine_taps, up_fine) = self.centred_taps(
             geometry,
             2,
-            &levels[0],
+            &levels,
             &mid_index,
-            &mid_grid,
-            &fine_cols,
+            &window.scaled(1),
             photo.as_ref(),
+            true,
         )?;
-        let fine_taps = match &up_fine {
-            Some(up) => {
-                let centre = read_values(up.clone(), "upsampled half-resolution index")?;
-                geometry.taps_around(2, centre, fine_cols, photo.as_ref())?
-            }
-            None => geometry.refine_taps(2, &mid_index, fine_cols, photo.as_ref())?,
-        };
         let fine = self.refine_stage(0, &levels[0], &fine_taps)?;
         timings.fine = lap(&device);
         timings.total = start.elapsed().as_secs_f64();

@@ -778,32 +778,34 @@ impl CascadeNet {
     }
 
     /// The learnt upsampling to the grid of refinement `level` (1: half, 0: full resolution)
-    /// over `taps` whose hypotheses are the candidates of every pixel
-    /// ([`upsampling_candidates`]) and `prior` the bilinear logits ([`bilinear_prior`]):
-    /// `[1, H, W]`, differentiable in the selector's weights; `None` for a network without
-    /// learnt upsampling.
+    /// by that grid's `selector` ([`CascadeNet::selector`]) over `taps` whose hypotheses are
+    /// the candidates of every pixel ([`upsampling_candidates`]), with `prior` the bilinear
+    /// logits ([`bilinear_prior`]): `[1, H, W]`, differentiable in the selector's weights.
     ///
     /// # Errors
     /// See [`CascadeNet::correlation`].
     pub fn select_centres(
         &self,
         level: usize,
+        selector: &CandidateSelector,
         features: &[Tensor<4>],
         taps: &StageTaps,
         prior: Tensor<4>,
-    ) -> Result<Option<Tensor<3>>, NetError> {
-        let selector = if level == 1 {
-            self.up_mid.as_ref()
-        } else {
-            self.up_fine.as_ref()
-        };
-        let Some(selector) = selector else {
-            return Ok(None);
-        };
+    ) -> Result<Tensor<3>, NetError> {
         let volume = Self::correlation(features, taps, self.config.cascade.groups[level])?;
         let volume = self.with_cue(volume, taps.cue.clone(), taps)?;
         let logits = selector.forward(fold_volume(volume)) + prior; // [1, 9, H, W]
-        Ok(Some(convex_combination(logits, taps.hypotheses.clone())))
+        Ok(convex_combination(logits, taps.hypotheses.clone()))
+    }
+
+    /// The learnt upsampling's selector for the grid of refinement `level` (1: half, 0: full
+    /// resolution), when the network has one.
+    pub fn selector(&self, level: usize) -> Option<&CandidateSelector> {
+        if level == 1 {
+            self.up_mid.as_ref()
+        } else {
+            self.up_fine.as_ref()
+        }
     }
 
     /// A refinement stage's answer from its `scores` over the hypotheses of `taps`: the soft
