@@ -4,51 +4,72 @@
 //! (b) the most probable sphere, (c) either of the two most probable separated modes, (d) any
 //! of three; then the whole network with its half stage also run around the second mode
 //! (`CascadeNet::forward_seeded`, untrained choices) and with an oracle choice between the two
-//! centres. Non-sky pixels of the training ground truth, index units of N.
+//! centres. Also, on the half and full grids, how often the truth lies within the stage's
+//! reach (+-R, +-2) of its centre: the bilinear upsampling of the previous answer, the parent
+//! pixel's answer, any of the 2x2 or 3x3 previous answers around it, and, for a network with
+//! learnt upsampling (`convex_upsampling`), the centres it made. Non-sky pixels of the
+//! training ground truth, index units of N.
 //!
 //! `cargo run --release -p omnimvs-train --example cascade_modes -- WEIGHTS DATASET A B [REACH]`
+//! (`MODES_ONLY=1` skips the runs around the second mode: the counts only).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::PathBuf;
 
 use burn::tensor::Device;
+use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::{CascadeGeometry, SeedChoice};
 use omnimvs_net::weights::load_cascade;
 use omnimvs_train::SampleSource;
 use omnimvs_train::augment::RotationSet;
 
-#[derive(Default, Clone, Copy)]
-struct Score([f64; 5]);
+#[path = "support/score.rs"]
+mod score;
+use score::Score;
 
-impl Score {
-    fn add(&mut self, answer: &[f32], truth: &[f32], valid: &[bool]) {
-        for ((&n, &t), &v) in answer.iter().zip(truth).zip(valid) {
-            if !v || t <= 0.0 {
+/// Over the scored pixels of `truth` (sky left out), on a grid of twice the rows and columns
+/// of `previous` (`[h, w]`, row-major): how many lie within `reach` of `bilinear` (the
+/// previous map upsampled by `resample_map`), of their parent's value, of any of the 2x2
+/// previous pixels around their centre, and of any of the 3x3 around their parent; and the
+/// number of pixels.
+fn reach_counts(
+    previous: &[f32],
+    [h, w]: [usize; 2],
+    bilinear: &[f32],
+    truth: &GroundTruth,
+    reach: f32,
+) -> [f64; 5] {
+    let mut counts = [0.0f64; 5];
+    let at = |r: i64, c: i64| {
+        let r = r.clamp(0, h as i64 - 1) as usize;
+        previous[r * w + c.rem_euclid(w as i64) as usize]
+    };
+    for r in 0..2 * h {
+        for c in 0..2 * w {
+            let p = r * 2 * w + c;
+            let t = truth.index[p];
+            if !truth.valid[p] || t <= 0.0 {
                 continue;
             }
-            let e = f64::from((n - t).abs());
-            self.0[0] += e;
-            self.0[1] += 1.0;
-            for (k, th) in [1.0, 3.0, 5.0].into_iter().enumerate() {
-                if e > th {
-                    self.0[2 + k] += 1.0;
-                }
+            let near = |x: f32| (x - t).abs() <= reach;
+            let r0 = ((r as f32 + 0.5) / 2.0 - 0.5).floor() as i64;
+            let c0 = ((c as f32 + 0.5) / 2.0 - 0.5).floor() as i64;
+            let any4 = [(0, 0), (0, 1), (1, 0), (1, 1)]
+                .iter()
+                .any(|&(a, b)| near(at(r0 + a, c0 + b)));
+            let (rp, cp) = ((r / 2) as i64, (c / 2) as i64);
+            let any9 = (-1..=1).any(|a| (-1..=1).any(|b| near(at(rp + a, cp + b))));
+            for (count, hit) in
+                counts
+                    .iter_mut()
+                    .zip([near(bilinear[p]), near(at(rp, cp)), any4, any9, true])
+            {
+                *count += f64::from(u8::from(hit));
             }
         }
     }
-
-    fn line(&self, name: &str) -> String {
-        let [sum, n, a, b, c] = self.0;
-        let pct = |x: f64| 100.0 * x / n.max(1.0);
-        format!(
-            "{name:40} >1 {:5.1}%  >3 {:5.1}%  >5 {:5.1}%  MAE {:.2}",
-            pct(a),
-            pct(b),
-            pct(c),
-            sum / n.max(1.0)
-        )
-    }
+    counts
 }
 
 /// The `count` most probable modes of one pixel's distribution over `k` spheres: the best
@@ -83,8 +104,10 @@ fn main() {
         CascadeGeometry::new(&source.dataset.rig, &config, &source.hypotheses, &device).unwrap();
     // Within reach: soft argmax, top mode, top 2, top 3; pixels.
     let mut within = [0.0f64; 5];
+    // Within reach on the half and full grids: bilinear, parent, 2x2, 3x3; pixels.
     let mut mid_within = [0.0f64; 5];
-    let mut fine_within = [0.0f64; 4];
+    let mut fine_within = [0.0f64; 5];
+    let modes_only = std::env::var("MODES_ONLY").is_ok();
     let mut learnt_within = [[0.0f64; 2]; 2];
     let names = [
         "own coarse answer",
@@ -141,77 +164,25 @@ fn main() {
                 *count += f64::from(u8::from(m.iter().take(c).any(|&x| near(x))));
             }
         }
-        // On the half grid: the truth within reach of the bilinear upsampling of the soft
-        // argmax (the half stage's centre now), of any of the 2x2 coarse pixels around, or of
-        // any in the 3x3 around the nearest.
-        let mid_truth = &sample.stage_gt[1];
-        let (mh, mw) = (2 * h, 2 * w);
-        let centre = omnimvs_sweep::resample_map(
-            &soft,
-            geometry.samplers[0].grid(),
-            geometry.samplers[1].grid(),
-        );
-        for r in 0..mh {
-            for c in 0..mw {
-                let p = r * mw + c;
-                let t = mid_truth.index[p];
-                if !mid_truth.valid[p] || t <= 0.0 {
-                    continue;
-                }
-                let near = |x: f32| (x - t).abs() <= reach;
-                let cr = (r as f32 + 0.5) / 2.0 - 0.5;
-                let cc = (c as f32 + 0.5) / 2.0 - 0.5;
-                let at = |rr: i64, ccol: i64| {
-                    let rr = rr.clamp(0, h as i64 - 1) as usize;
-                    let ccol = ccol.rem_euclid(w as i64) as usize;
-                    soft[rr * w + ccol]
-                };
-                let (r0, c0) = (cr.floor() as i64, cc.floor() as i64);
-                let any4 = [(0, 0), (0, 1), (1, 0), (1, 1)]
-                    .iter()
-                    .any(|&(a, b)| near(at(r0 + a, c0 + b)));
-                let (rn, cn) = ((r / 2) as i64, (c / 2) as i64);
-                mid_within[4] += f64::from(u8::from(near(at(rn, cn))));
-                let any9 = (-1..=1).any(|a| (-1..=1).any(|b| near(at(rn + a, cn + b))));
-                mid_within[3] += 1.0;
-                mid_within[0] += f64::from(u8::from(near(centre[p])));
-                mid_within[1] += f64::from(u8::from(any4));
-                mid_within[2] += f64::from(u8::from(any9));
+        // On the half grid from the coarse soft argmax (reach +-R), on the full grid from the
+        // half stage's answer (reach +-2).
+        let grids = geometry.samplers.each_ref().map(|s| *s.grid());
+        for ((previous, [from, to]), (gt, (reach, sums))) in [&soft, &half_index]
+            .into_iter()
+            .zip([[grids[0], grids[1]], [grids[1], grids[2]]])
+            .zip(
+                [&sample.stage_gt[1], &sample.gt]
+                    .into_iter()
+                    .zip([(reach, &mut mid_within), (2.0, &mut fine_within)]),
+            )
+        {
+            let bilinear = omnimvs_sweep::resample_map(previous, &from, &to);
+            let counts = reach_counts(previous, [from.height, from.width], &bilinear, gt, reach);
+            for (sum, count) in sums.iter_mut().zip(counts) {
+                *sum += count;
             }
         }
-        // The same from the half stage's answer to the full grid (reach +-2).
-        let fine_truth = &sample.gt;
-        let fine_centre = omnimvs_sweep::resample_map(
-            &half_index,
-            geometry.samplers[1].grid(),
-            geometry.samplers[2].grid(),
-        );
-        for r in 0..2 * mh {
-            for c in 0..2 * mw {
-                let p = r * 2 * mw + c;
-                let t = fine_truth.index[p];
-                if !fine_truth.valid[p] || t <= 0.0 {
-                    continue;
-                }
-                let near = |x: f32| (x - t).abs() <= 2.0;
-                let cr = (r as f32 + 0.5) / 2.0 - 0.5;
-                let cc = (c as f32 + 0.5) / 2.0 - 0.5;
-                let at = |rr: i64, ccol: i64| {
-                    let rr = rr.clamp(0, mh as i64 - 1) as usize;
-                    let ccol = ccol.rem_euclid(mw as i64) as usize;
-                    half_index[rr * mw + ccol]
-                };
-                let (r0, c0) = (cr.floor() as i64, cc.floor() as i64);
-                let any4 = [(0, 0), (0, 1), (1, 0), (1, 1)]
-                    .iter()
-                    .any(|&(a, b)| near(at(r0 + a, c0 + b)));
-                fine_within[3] += 1.0;
-                fine_within[0] += f64::from(u8::from(near(fine_centre[p])));
-                fine_within[1] += f64::from(u8::from(near(at((r / 2) as i64, (c / 2) as i64))));
-                fine_within[2] += f64::from(u8::from(any4));
-            }
-        }
-        if std::env::var("MODES_ONLY").is_ok() {
+        if modes_only {
             println!("frame {frame} done");
             continue;
         }
@@ -257,33 +228,24 @@ fn main() {
     {
         println!("  {name:20} {:5.1}%", 100.0 * x / n);
     }
-    let n = mid_within[3].max(1.0);
-    println!(
-        "half-grid pixels within +-{reach} of the truth ({} pixels):",
-        mid_within[3]
-    );
-    for (name, x) in [
-        "bilinear centre",
-        "any of 2x2 coarse",
-        "any of 3x3 coarse",
-        "",
-        "nearest coarse",
-    ]
-    .iter()
-    .zip(&mid_within)
-    {
-        println!("  {name:20} {:5.1}%", 100.0 * x / n);
-    }
-    let n = fine_within[3].max(1.0);
-    println!(
-        "full-grid pixels within +-2 of the truth ({} pixels):",
-        fine_within[3]
-    );
-    for (name, x) in ["bilinear centre", "nearest half", "any of 2x2 half"]
-        .iter()
-        .zip(&fine_within)
-    {
-        println!("  {name:20} {:5.1}%", 100.0 * x / n);
+    for (grid, reach, counts, previous) in [
+        ("half", reach, &mid_within, "coarse"),
+        ("full", 2.0, &fine_within, "half"),
+    ] {
+        let n = counts[4].max(1.0);
+        println!(
+            "{grid}-grid pixels within +-{reach} of the truth ({} pixels):",
+            counts[4]
+        );
+        let names = [
+            "bilinear centre".to_string(),
+            format!("nearest {previous}"),
+            format!("any of 2x2 {previous}"),
+            format!("any of 3x3 {previous}"),
+        ];
+        for (name, x) in names.iter().zip(counts) {
+            println!("  {name:20} {:5.1}%", 100.0 * x / n);
+        }
     }
     for (name, [hit, n]) in ["half grid (+-reach)", "full grid (+-2)"]
         .iter()
@@ -292,6 +254,9 @@ fn main() {
         if n > 0.0 {
             println!("learnt upsampling, {name}: {:5.1}%", 100.0 * hit / n);
         }
+    }
+    if modes_only {
+        return;
     }
     println!("final answer, half stage centred on:");
     for (name, score) in names.iter().zip(&scores) {
