@@ -104,11 +104,12 @@ pub struct CascadeParams {
     pub sky_loss_weight: f64,
     /// Learnt (convex) upsampling of each stage's answer to the next stage's grid (RAFT's
     /// convex upsampling): every pixel of the finer grid takes a softmax-weighted mean of the
-    /// 3 x 3 coarser pixels around its parent, the weights predicted from the coarser stage's
-    /// hidden features, instead of the bilinear mean, which at a depth edge blends the two
-    /// sides into a value near neither (the next stage then centres its hypotheses out of
-    /// reach of both). The heads start at the bilinear weights, so a trained network grows
-    /// into them (nearly) unchanged. `false` (and left out of the file): bilinear.
+    /// 3 x 3 coarser pixels around its parent, the weights read from the finer stage's
+    /// matching at each of them ([`crate::cascade::model::CandidateSelector`]), instead of the
+    /// bilinear mean, which at a depth edge blends the two sides into a value near neither
+    /// (the next stage then centres its hypotheses out of reach of both). The selectors start
+    /// near the bilinear weights, so a trained network grows into them nearly unchanged.
+    /// `false` (and left out of the file): bilinear.
     #[serde(default, skip_serializing_if = "is_false")]
     pub convex_upsampling: bool,
 }

@@ -219,8 +219,8 @@ pub fn load_cascade(path: &Path, device: &Device) -> Result<CascadeNet, NetError
 /// Loads cascade weights into a network of `config`, which may have grown from the
 /// weights' own configuration (the file's JSON): more context pairs at stride 8
 /// (`context_pairs`), gated refinement stages (`stage_gates`), the photometric cue
-/// (`zncc_cue`, [`CascadeNet::with_zncc_cue`]), learnt upsampling (`convex_upsampling`, heads
-/// that start at the bilinear weights), other loss weights (training only),
+/// (`zncc_cue`, [`CascadeNet::with_zncc_cue`]), learnt upsampling (`convex_upsampling`,
+/// selectors that start near the bilinear weights), other loss weights (training only),
 /// everything else equal. The new modules keep their starting values, which leave the
 /// network's answer as it was (or nearly: the gates start at 0.98), so training goes on from
 /// the loaded network.

@@ -41,7 +41,7 @@ pub enum TrainParts {
     /// Every weight.
     #[default]
     All,
-    /// The cascade's learnt upsampling heads only (`convex_upsampling`); every other weight
+    /// The cascade's learnt upsampling selectors only (`convex_upsampling`); every other weight
     /// and every batch-norm statistic stays as loaded.
     Upsampling,
 }

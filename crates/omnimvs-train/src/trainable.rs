@@ -92,7 +92,7 @@ pub trait Trainable: Module + Sized {
 fn no_upsampling() -> TrainError {
     TrainError::InvalidConfig {
         field: "train_only",
-        message: "`upsampling` trains the cascade's learnt upsampling heads, which this \
+        message: "`upsampling` trains the cascade's learnt upsampling selectors, which this \
                   network has not (`convex_upsampling`)"
             .into(),
     }

@@ -148,13 +148,13 @@ pub struct Args {
     /// Cascade: learnt (convex) upsampling of each stage's answer to the next stage's grid
     /// (`convex_upsampling`; off before `cascade-13`): the finer grid's centres are
     /// softmax-weighted means of the 3 x 3 coarser pixels around each parent, the weights
-    /// predicted from the stage's hidden features, instead of the bilinear mean that blends
-    /// the two sides of a depth edge. The heads start at the bilinear weights, so --init with
-    /// a network without them goes on from its answer.
+    /// read from the finer features' matching at each of them, instead of the bilinear mean
+    /// that blends the two sides of a depth edge. The selectors start near the bilinear
+    /// weights, so --init with a network without them goes on from near its answer.
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub convex_upsampling: Option<Switch>,
     /// Which weights the run trains (`train_only`): `all`, or `upsampling`, the cascade's
-    /// learnt upsampling heads alone (every other weight and batch-norm statistic stays as
+    /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
     /// --init loaded it; a cheap step, the frozen stages need no backward pass).
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub train_only: Option<PartsArg>,
@@ -363,7 +363,7 @@ pub enum SelectArg {
 pub enum PartsArg {
     /// Every weight.
     All,
-    /// The cascade's learnt upsampling heads.
+    /// The cascade's learnt upsampling selectors.
     Upsampling,
 }
 

@@ -413,7 +413,7 @@ pub fn upsampling_candidates(
     out
 }
 
-/// The logits of the bilinear weights ([`bilinear_logits`]) laid out for a finer grid of
+/// The logits of the bilinear weights (`bilinear_logits`) laid out for a finer grid of
 /// `rows` rows over columns `cols`: `[1, 9, rows, cols.len()]`, each pixel its child's
 /// (row and column parity).
 pub fn bilinear_prior(rows: usize, cols: &std::ops::Range<usize>, device: &Device) -> Tensor<4> {
