@@ -112,6 +112,21 @@ pub struct CascadeParams {
     /// `false` (and left out of the file): bilinear.
     #[serde(default, skip_serializing_if = "is_false")]
     pub convex_upsampling: bool,
+    /// With `convex_upsampling`, whether the full-resolution grid gets it too (`true`, and
+    /// left out of the file: both grids, `cascade-13`) or only the half-resolution one
+    /// (`false`: the full-resolution stage centres on the bilinear upsampling of the half
+    /// stage). The full grid's selector is the dearer one: 9 candidates at each of the
+    /// 102 400 pixels of the paper's grid, where the half grid's has a quarter of them.
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub convex_upsampling_full: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn is_true(value: &bool) -> bool {
+    *value
 }
 
 fn is_zero(value: &f64) -> bool {
@@ -148,6 +163,7 @@ impl Default for CascadeParams {
             zncc_cue: false,
             sky_loss_weight: 1.0,
             convex_upsampling: false,
+            convex_upsampling_full: true,
         }
     }
 }
@@ -486,6 +502,13 @@ mod tests {
         learnt.cascade.convex_upsampling = true;
         let json = serde_json::to_string(&learnt).unwrap();
         assert!(json.contains("\"convex_upsampling\":true"), "{json}");
+        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), learnt);
+        // Both grids unless written (cascade-13's files); the half grid only is written.
+        assert!(!json.contains("convex_upsampling_full"), "{json}");
+        assert!(learnt.cascade.convex_upsampling_full);
+        learnt.cascade.convex_upsampling_full = false;
+        let json = serde_json::to_string(&learnt).unwrap();
+        assert!(json.contains("\"convex_upsampling_full\":false"), "{json}");
         assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), learnt);
     }
 

@@ -130,15 +130,17 @@ pub fn save_with_config<M: Module, C: serde::Serialize>(
 
 /// Applies the safetensors file `path` to `net`, every parameter required.
 pub(crate) fn apply_file<M: Module>(net: M, path: &Path) -> Result<M, NetError> {
-    apply_file_except(net, path, |_| false)
+    apply_file_except(net, path, |_| false, |_| false)
 }
 
 /// [`apply_file`], where the parameters whose paths `may_miss` accepts may be absent from the
-/// file (they keep their values in `net`).
+/// file (they keep their values in `net`) and the file's tensors whose paths `may_leave`
+/// accepts may be left unused (a part of the file's network that `net` does not have).
 fn apply_file_except<M: Module>(
     mut net: M,
     path: &Path,
     may_miss: impl Fn(&str) -> bool,
+    may_leave: impl Fn(&str) -> bool,
 ) -> Result<M, NetError> {
     if !path.exists() {
         return Err(weights_error(path, "no such weight file"));
@@ -148,6 +150,7 @@ fn apply_file_except<M: Module>(
         .load_from(&mut store)
         .map_err(|e| weights_error(path, e.to_string()))?;
     result.missing.retain(|(p, _)| !may_miss(p));
+    result.unused.retain(|p| !may_leave(p));
     check_applied(path, &result)?;
     Ok(net)
 }
@@ -221,7 +224,8 @@ pub fn load_cascade(path: &Path, device: &Device) -> Result<CascadeNet, NetError
 /// (`context_pairs`), gated refinement stages (`stage_gates`), the photometric cue
 /// (`zncc_cue`, [`CascadeNet::with_zncc_cue`]), learnt upsampling (`convex_upsampling`,
 /// selectors that start near the bilinear weights), other loss weights (training only),
-/// everything else equal. The new modules keep their starting values, which leave the
+/// everything else equal. The full grid's selector alone may also be left out of the file's
+/// network (`convex_upsampling_full` off: its tensors are not read). The new modules keep their starting values, which leave the
 /// network's answer as it was (or nearly: the gates start at 0.98), so training goes on from
 /// the loaded network.
 ///
@@ -247,6 +251,7 @@ pub fn load_cascade_grown(
     shrunk.cascade.stage_gates = saved.cascade.stage_gates;
     shrunk.cascade.zncc_cue = saved.cascade.zncc_cue;
     shrunk.cascade.convex_upsampling = saved.cascade.convex_upsampling;
+    shrunk.cascade.convex_upsampling_full = saved.cascade.convex_upsampling_full;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
         && (!saved.cascade.stage_gates || config.cascade.stage_gates)
         && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
@@ -256,15 +261,19 @@ pub fn load_cascade_grown(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
              (only `context_pairs` may grow, `stage_gates`, `zncc_cue` and \
-             `convex_upsampling` switch on and the loss weights differ)",
+             `convex_upsampling` switch on, `convex_upsampling_full` switch either way and \
+             the loss weights differ)",
         ));
     }
+    let has_fine = |c: &NetConfig| c.cascade.convex_upsampling && c.cascade.convex_upsampling_full;
+    // The full grid's selector may be left out (its tensors in the file unused) or new.
+    let (saved_fine, fine) = (has_fine(&saved), has_fine(config));
     let old_ctx = 2 * saved.cascade.context_pairs;
     let is_new = |p: &str| {
         p.starts_with("mid.gate.")
             || p.starts_with("fine.gate.")
-            || (!saved.cascade.convex_upsampling
-                && (p.starts_with("up_mid.") || p.starts_with("up_fine.")))
+            || (!saved.cascade.convex_upsampling && p.starts_with("up_mid."))
+            || (!saved_fine && p.starts_with("up_fine."))
             || p.strip_prefix("features.ctx8.")
                 .and_then(|rest| rest.split('.').next())
                 .and_then(|i| i.parse::<usize>().ok())
@@ -274,7 +283,13 @@ pub fn load_cascade_grown(
     // it, then widen (zero weights for the cue).
     let mut without_cue = config.clone();
     without_cue.cascade.zncc_cue = saved.cascade.zncc_cue;
-    let net = apply_file_except(CascadeNet::new(&without_cue, device)?, path, is_new)?;
+    let dropped = |p: &str| saved_fine && !fine && p.starts_with("up_fine.");
+    let net = apply_file_except(
+        CascadeNet::new(&without_cue, device)?,
+        path,
+        is_new,
+        dropped,
+    )?;
     Ok(if config.cascade.zncc_cue {
         net.with_zncc_cue()
     } else {

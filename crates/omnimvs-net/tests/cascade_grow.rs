@@ -294,3 +294,64 @@ fn a_network_grows_into_learnt_upsampling_and_only_its_heads_need_to_learn() {
         }
     }
 }
+
+/// A network with learnt upsampling on both grids loads without the full grid's selector
+/// (`convex_upsampling_full` off: its tensors left unused): the half grid's centres are
+/// unchanged and the full stage centres on the bilinear upsampling of the half stage, as the
+/// plain network's does. The half-grid file grows back into both, the full selector new.
+#[test]
+fn the_full_grid_selector_can_be_left_out_and_grown_back() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let mut both = micro_config();
+    both.cascade.convex_upsampling = true;
+    let mut half = both.clone();
+    half.cascade.convex_upsampling_full = false;
+    let device = Device::flex();
+    let net = CascadeNet::new(&both, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let both_path = dir.path().join("both.safetensors");
+    weights::save_module(&net, &both, &both_path).unwrap();
+    let dropped = weights::load_cascade_grown(&both_path, &half, &device).unwrap();
+    assert!(dropped.up_mid.is_some() && dropped.up_fine.is_none());
+    assert!(CascadeNet::new(&half, &device).unwrap().up_fine.is_none());
+
+    let geometry = CascadeGeometry::new(&ds.rig, &both, &hyps, &device).unwrap();
+    let inputs = images(&both, &device);
+    let values = |t: burn::tensor::Tensor<3>| read_values(t, "index").unwrap();
+    let full = net.forward(&inputs, &geometry).unwrap();
+    let out = dropped.forward(&inputs, &geometry).unwrap();
+    let [Some(up_mid), None] = out.upsampled.clone() else {
+        panic!("the half grid's centres only");
+    };
+    let [Some(full_mid), Some(_)] = full.upsampled.clone() else {
+        panic!("both grids' centres");
+    };
+    assert_eq!(values(up_mid), values(full_mid));
+    let mid = values(out.stages[1].index.clone());
+    assert_eq!(mid, values(full.stages[1].index.clone()));
+    // The full stage's centres are the bilinear upsampling of the half stage's answer.
+    let fine_taps = geometry.refine_taps(2, &mid, 0..64, None).unwrap();
+    let stride2 = dropped
+        .features
+        .forward(burn::tensor::Tensor::cat(inputs.clone(), 0))[0]
+        .clone();
+    let stride2: Vec<_> = (0..inputs.len())
+        .map(|c| stride2.clone().narrow(0, c, 1))
+        .collect();
+    let bilinear = dropped.refine_stage(0, &stride2, &fine_taps);
+    assert_eq!(
+        values(bilinear.unwrap().index),
+        values(out.stages[2].index.clone())
+    );
+
+    let half_path = dir.path().join("half.safetensors");
+    weights::save_module(&dropped, &half, &half_path).unwrap();
+    assert!(weights::read_config(&weights::config_path(&half_path)).unwrap() == half);
+    let again = weights::load_cascade(&half_path, &device).unwrap();
+    assert!(again.up_fine.is_none());
+    let grown = weights::load_cascade_grown(&half_path, &both, &device).unwrap();
+    assert!(grown.up_fine.is_some());
+    // A file without any selector does not lose what it never had.
+    assert!(weights::load_cascade_grown(&half_path, &micro_config(), &device).is_err());
+}

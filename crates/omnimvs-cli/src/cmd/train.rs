@@ -150,9 +150,12 @@ pub struct Args {
     /// softmax-weighted means of the 3 x 3 coarser pixels around each parent, the weights
     /// read from the finer features' matching at each of them, instead of the bilinear mean
     /// that blends the two sides of a depth edge. The selectors start near the bilinear
-    /// weights, so --init with a network without them goes on from near its answer.
+    /// weights, so --init with a network without them goes on from near its answer. `half`:
+    /// on the half-resolution grid only (`convex_upsampling_full` off; the full grid's
+    /// selector is the dearer one), which also leaves an --init network's full-grid selector
+    /// out.
     #[arg(long, value_enum, conflicts_with = "resume")]
-    pub convex_upsampling: Option<Switch>,
+    pub convex_upsampling: Option<UpsamplingArg>,
     /// Which weights the run trains (`train_only`): `all`, or `upsampling`, the cascade's
     /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
     /// --init loaded it; a cheap step, the frozen stages need no backward pass).
@@ -358,6 +361,17 @@ pub enum SelectArg {
     Reference,
 }
 
+/// `--convex-upsampling`: which grids get learnt upsampling.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum UpsamplingArg {
+    /// Neither: bilinear.
+    Off,
+    /// The half-resolution grid only.
+    Half,
+    /// Both refinement grids.
+    On,
+}
+
 /// `--train-only`: the weights a run trains.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum PartsArg {
@@ -430,7 +444,8 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                     );
                 }
                 if let Some(up) = args.convex_upsampling {
-                    net.cascade.convex_upsampling = up == Switch::On;
+                    net.cascade.convex_upsampling = up != UpsamplingArg::Off;
+                    net.cascade.convex_upsampling_full = up == UpsamplingArg::On;
                 }
                 if let Some(weight) = args.coarse_distribution {
                     net.cascade.coarse_distribution_weight = weight;

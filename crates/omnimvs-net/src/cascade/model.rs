@@ -522,7 +522,7 @@ pub struct CascadeNet {
     /// (`convex_upsampling`), from the matching evidence of the stride-4 features.
     pub up_mid: Option<CandidateSelector>,
     /// Learnt upsampling of the half-resolution answer to the output grid, from that of the
-    /// stride-2 features.
+    /// stride-2 features (`convex_upsampling` and `convex_upsampling_full`).
     pub up_fine: Option<CandidateSelector>,
     /// The sizes the network was built for.
     #[module(skip)]
@@ -573,7 +573,7 @@ impl CascadeNet {
                     device,
                 )
             }),
-            up_fine: p.convex_upsampling.then(|| {
+            up_fine: (p.convex_upsampling && p.convex_upsampling_full).then(|| {
                 CandidateSelector::new(
                     [(p.groups[0] + extra) * UPSAMPLE_TAPS, p.stage_channels[1]],
                     device,
