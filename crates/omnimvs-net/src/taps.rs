@@ -112,6 +112,7 @@ impl Taps {
 /// Bilinear taps of the normalised position `(x, y)` in a `src_height x src_width` source,
 /// computed in `f32` with the same formulas as PyTorch's `grid_sample` (bilinear, zero
 /// padding, `align_corners=True`). Non-finite positions give empty taps.
+#[inline]
 pub fn bilinear_taps(x: f32, y: f32, src_height: usize, src_width: usize) -> Taps {
     let ix = (x + 1.0) / 2.0 * (src_width as f32 - 1.0);
     let iy = (y + 1.0) / 2.0 * (src_height as f32 - 1.0);
@@ -119,23 +120,42 @@ pub fn bilinear_taps(x: f32, y: f32, src_height: usize, src_width: usize) -> Tap
     if !(ix.is_finite() && iy.is_finite()) {
         return taps;
     }
-    let ix_nw = ix.floor();
-    let iy_nw = iy.floor();
+    let ix_nw = floor(ix);
+    let iy_nw = floor(iy);
     let (dx, dy) = (ix - ix_nw, iy - iy_nw);
     let (ex, ey) = (ix_nw + 1.0 - ix, iy_nw + 1.0 - iy);
+    // The corners' columns and rows as integers (the floors are whole numbers, and any
+    // beyond an i32 lies outside the source either way): the same tests as in `f32`.
+    let (x0, y0) = (ix_nw as i64, iy_nw as i64);
+    let (width, height) = (src_width as i64, src_height as i64);
     let corners = [
-        (ix_nw, iy_nw, ex * ey),
-        (ix_nw + 1.0, iy_nw, dx * ey),
-        (ix_nw, iy_nw + 1.0, ex * dy),
-        (ix_nw + 1.0, iy_nw + 1.0, dx * dy),
+        (x0, y0, ex * ey),
+        (x0 + 1, y0, dx * ey),
+        (x0, y0 + 1, ex * dy),
+        (x0 + 1, y0 + 1, dx * dy),
     ];
     for (k, (cx, cy, w)) in corners.into_iter().enumerate() {
-        if cx >= 0.0 && cy >= 0.0 && cx < src_width as f32 && cy < src_height as f32 {
-            taps.index[k] = cy as u32 * src_width as u32 + cx as u32;
+        if (0..width).contains(&cx) && (0..height).contains(&cy) {
+            taps.index[k] = (cy * width + cx) as u32;
             taps.weight[k] = w;
         }
     }
     taps
+}
+
+/// `value.floor()` for a finite `value`, without a call: the default x86-64 target has no
+/// rounding instruction, so `f32::floor` is a library function, and the cascade takes
+/// millions of taps a frame. Truncation toward zero, one less where that rounded up; exact for
+/// every finite value whose floor fits an `i32`. Beyond that both answers lie outside any
+/// image, so the taps they give are the same (empty).
+#[inline]
+fn floor(value: f32) -> f32 {
+    let truncated = value as i32 as f32;
+    if truncated > value {
+        truncated - 1.0
+    } else {
+        truncated
+    }
 }
 
 /// Taps of every sample of `grid` for a `src_height x src_width` source, flat over
@@ -217,6 +237,41 @@ pub fn warp_features(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_inline_floor_is_f32_floor_on_finite_values() {
+        // Integers, halves, values just off an integer, both signs, the ends of f32's exact
+        // integers and beyond.
+        let mut values = vec![
+            0.0f32,
+            1.0,
+            -1.0,
+            0.5,
+            -0.5,
+            1e-7,
+            -1e-7,
+            16_777_216.0,
+            -16_777_217.0,
+        ];
+        for i in -3000..3000 {
+            let v = i as f32 * 0.37;
+            values.extend([
+                v,
+                v.next_up(),
+                v.next_down(),
+                v.round(),
+                v.round().next_down(),
+            ]);
+        }
+        for v in values {
+            assert_eq!(floor(v), v.floor(), "{v}");
+        }
+        // Beyond an i32 the two differ, and both corners lie outside: the same (empty) taps.
+        for x in [3e9f32, -3e9, 1e30, -1e30] {
+            assert!(bilinear_taps(x, 0.0, 768, 800).is_empty(), "{x}");
+            assert!(bilinear_taps(0.0, x, 768, 800).is_empty(), "{x}");
+        }
+    }
 
     #[test]
     fn taps_interpolate_inside_and_drop_outside_neighbours() {

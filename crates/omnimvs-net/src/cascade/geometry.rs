@@ -21,6 +21,7 @@ use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;
 use crate::taps::{SweepGrid, Taps, grid_taps};
+use rayon::prelude::*;
 
 /// One stage's sampling positions on the device: every camera's taps, the hypotheses, and
 /// how many cameras (and camera pairs) see each sample.
@@ -89,23 +90,35 @@ impl StageTaps {
                 actual: vec![index.len()],
             });
         }
+        let camera_taps: Vec<Vec<Taps>> = grids
+            .iter()
+            .map(|grid| grid_taps(grid, feature_size[0], feature_size[1]))
+            .collect();
+        // The share of each sample's taps inside the feature maps, summed over the cameras
+        // in their order, and the sum of its squares (in parallel over the samples).
         let mut count = vec![0f32; samples];
         let mut count_sq = vec![0f32; samples];
-        let mut cameras = Vec::new();
-        let mut host_cameras = Vec::new();
-        for grid in grids {
-            let taps = grid_taps(grid, feature_size[0], feature_size[1]);
-            for ((c, c2), t) in count.iter_mut().zip(&mut count_sq).zip(&taps) {
-                let seen: f32 = t.weight.iter().sum();
-                *c += seen;
-                *c2 += seen * seen;
-            }
-            if host {
-                host_cameras.push(taps);
-            } else {
-                cameras.push(SweepTaps::from_taps(&taps, grid, feature_size, device));
-            }
-        }
+        count
+            .par_iter_mut()
+            .zip(count_sq.par_iter_mut())
+            .enumerate()
+            .for_each(|(s, (c, c2))| {
+                for taps in &camera_taps {
+                    let seen: f32 = taps[s].weight.iter().sum();
+                    *c += seen;
+                    *c2 += seen * seen;
+                }
+            });
+        let (cameras, host_cameras) = if host {
+            (Vec::new(), camera_taps)
+        } else {
+            let cameras = camera_taps
+                .iter()
+                .zip(grids)
+                .map(|(taps, grid)| SweepTaps::from_taps(taps, grid, feature_size, device))
+                .collect();
+            (cameras, Vec::new())
+        };
         let pairs: Vec<f32> = count
             .iter()
             .zip(&count_sq)

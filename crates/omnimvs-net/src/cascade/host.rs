@@ -81,47 +81,20 @@ pub fn correlation(
         return Err(shape_error("groups", vec![channels], vec![groups]));
     }
 
-    let per_group = channels / groups;
-    // [S, G]: one sample per chunk, in parallel.
+    // [S, G]: one sample per chunk, in parallel; the usual channel counts get a kernel of
+    // their own (fixed-size arrays the compiler keeps in vector registers), the same
+    // operations in the same order as the general one.
     let mut grouped = vec![0f32; samples * groups];
-    grouped
-        .par_chunks_mut(groups)
-        .enumerate()
-        .for_each(|(s, out)| {
-            let mut sum = [0f32; MAX_CHANNELS];
-            let mut sum_sq = [0f32; MAX_CHANNELS];
-            let mut first = true;
-            for (table, cam) in tables.iter().zip(&taps.cameras) {
-                let tap = &cam[s];
-                let mut warped = [0f32; MAX_CHANNELS];
-                for (j, (&index, &weight)) in tap.index.iter().zip(&tap.weight).enumerate() {
-                    let row = &table[index as usize * channels..][..channels];
-                    for (v, &f) in warped[..channels].iter_mut().zip(row) {
-                        // The tensor version: the first tap's product, then each next added.
-                        *v = if j == 0 { f * weight } else { *v + f * weight };
-                    }
-                }
-                for ((a, q), &v) in sum.iter_mut().zip(&mut sum_sq).zip(&warped[..channels]) {
-                    if first {
-                        (*a, *q) = (v, v * v);
-                    } else {
-                        *a += v;
-                        *q += v * v;
-                    }
-                }
-                first = false;
-            }
-            let pairs = taps.pair_count[s].max(1e-3);
-            for (g, o) in out.iter_mut().enumerate() {
-                let range = g * per_group..(g + 1) * per_group;
-                let total: f32 = sum[range.clone()]
-                    .iter()
-                    .zip(&sum_sq[range])
-                    .map(|(a, q)| (a * a - q) / 2.0)
-                    .sum();
-                *o = total / per_group as f32 / pairs;
-            }
-        });
+    let kernel = Kernel {
+        tables: &tables,
+        taps,
+        groups,
+    };
+    match channels {
+        8 => kernel.run::<8>(&mut grouped),
+        16 => kernel.run::<16>(&mut grouped),
+        _ => kernel.run::<MAX_CHANNELS>(&mut grouped),
+    }
     // [G + 1, S]: the groups, then the visibility.
     let mut volume = vec![0f32; (groups + 1) * samples];
     for (g, plane) in volume.chunks_exact_mut(samples).take(groups).enumerate() {
@@ -134,6 +107,66 @@ pub fn correlation(
         TensorData::new(volume, [1, groups + 1, k, h, w]),
         device,
     ))
+}
+
+/// The per-sample work of [`correlation`]: channels-last feature tables, one per camera, and
+/// the stage's taps.
+struct Kernel<'a> {
+    tables: &'a [Vec<f32>],
+    taps: &'a HostTaps,
+    groups: usize,
+}
+
+impl Kernel<'_> {
+    /// Group means `[S, G]` into `grouped`: `N` the tables' channels, or [`MAX_CHANNELS`] for
+    /// the general kernel (arrays of that size, of which the tables' channels are used).
+    fn run<const N: usize>(&self, grouped: &mut [f32]) {
+        // A constant for the specialised kernels, so that their loops have a known length.
+        let channels = if N < MAX_CHANNELS {
+            N
+        } else {
+            self.tables[0].len() / (self.taps.feature_size[0] * self.taps.feature_size[1])
+        };
+        let per_group = channels / self.groups;
+        grouped
+            .par_chunks_mut(self.groups)
+            .enumerate()
+            .for_each(|(s, out)| {
+                let mut sum = [0f32; N];
+                let mut sum_sq = [0f32; N];
+                let mut first = true;
+                for (table, cam) in self.tables.iter().zip(&self.taps.cameras) {
+                    let tap = &cam[s];
+                    let mut warped = [0f32; N];
+                    for (j, (&index, &weight)) in tap.index.iter().zip(&tap.weight).enumerate() {
+                        let row = &table[index as usize * channels..][..channels];
+                        for (v, &f) in warped[..channels].iter_mut().zip(row) {
+                            // The tensor version: the first tap's product, then each next added.
+                            *v = if j == 0 { f * weight } else { *v + f * weight };
+                        }
+                    }
+                    for ((a, q), &v) in sum.iter_mut().zip(&mut sum_sq).zip(&warped[..channels]) {
+                        if first {
+                            (*a, *q) = (v, v * v);
+                        } else {
+                            *a += v;
+                            *q += v * v;
+                        }
+                    }
+                    first = false;
+                }
+                let pairs = self.taps.pair_count[s].max(1e-3);
+                for (g, o) in out.iter_mut().enumerate() {
+                    let range = g * per_group..(g + 1) * per_group;
+                    let total: f32 = sum[range.clone()]
+                        .iter()
+                        .zip(&sum_sq[range])
+                        .map(|(a, q)| (a * a - q) / 2.0)
+                        .sum();
+                    *o = total / per_group as f32 / pairs;
+                }
+            });
+    }
 }
 
 /// `[C, P]` (channels first) to `[P, C]`.
