@@ -225,3 +225,51 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
         assert!(stdout.contains("no epoch beat them"), "{stdout}");
     }
 }
+
+#[test]
+fn a_run_that_cannot_start_says_why_and_leaves_no_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let data = synth_dataset(dir.path(), "things", "1..2", "96x100", 11);
+    let missing_init = dir.path().join("no-such-weights.safetensors");
+    let missing_data = dir.path().join("no-such-dataset");
+    for (what, data, extra) in [
+        (
+            "the --init weights",
+            &data,
+            vec!["--init", missing_init.to_str().unwrap()],
+        ),
+        ("the dataset", &missing_data, vec![]),
+    ] {
+        let run = dir.path().join("run");
+        let mut args = vec![
+            "train",
+            "--data",
+            data.to_str().unwrap(),
+            "--preset",
+            "tiny",
+            "--out",
+            run.to_str().unwrap(),
+            "--epochs",
+            "1",
+            "--max-steps",
+            "1",
+        ];
+        args.extend(extra);
+        let o = omnimvs(&args, &cache);
+        assert!(!o.status.success(), "{what}: {}", text(&o.stdout));
+        let stderr = text(&o.stderr);
+        // The path is named (for weights, the configuration read first beside them).
+        let named = if what == "the dataset" {
+            "no-such-dataset"
+        } else {
+            "no-such-weights"
+        };
+        assert!(stderr.contains(named), "{what}: {stderr}");
+        assert!(
+            !run.exists(),
+            "{what}: a failed start left {}",
+            run.display()
+        );
+    }
+}

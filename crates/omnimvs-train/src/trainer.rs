@@ -270,7 +270,6 @@ impl<M: Trainable> Trainer<M> {
                 message: "needs at least one dataset folder".into(),
             });
         }
-        std::fs::create_dir_all(run_dir).map_err(|e| io_error(run_dir, e))?;
         let rotations = RotationSet::new(config.rotations, config.max_rotation_deg, config.seed);
         let sources = config
             .data
@@ -288,6 +287,9 @@ impl<M: Trainable> Trainer<M> {
             });
         }
         let learner = Learner::for_model(&config, device)?;
+        // Only now, when the data and the --init weights have been read: a run that cannot
+        // start leaves no empty folder behind.
+        std::fs::create_dir_all(run_dir).map_err(|e| io_error(run_dir, e))?;
         Ok(Self {
             config,
             run_dir: run_dir.to_path_buf(),
