@@ -233,13 +233,16 @@ fn a_run_that_cannot_start_says_why_and_leaves_no_folder() {
     let data = synth_dataset(dir.path(), "things", "1..2", "96x100", 11);
     let missing_init = dir.path().join("no-such-weights.safetensors");
     let missing_data = dir.path().join("no-such-dataset");
-    for (what, data, extra) in [
+    // What is missing, the data folder given, the extra arguments, and the name the error
+    // must give (for weights, the configuration read first beside them).
+    for (what, data, extra, named) in [
         (
             "the --init weights",
             &data,
             vec!["--init", missing_init.to_str().unwrap()],
+            "no-such-weights",
         ),
-        ("the dataset", &missing_data, vec![]),
+        ("the dataset", &missing_data, vec![], "no-such-dataset"),
     ] {
         let run = dir.path().join("run");
         let mut args = vec![
@@ -259,12 +262,6 @@ fn a_run_that_cannot_start_says_why_and_leaves_no_folder() {
         let o = omnimvs(&args, &cache);
         assert!(!o.status.success(), "{what}: {}", text(&o.stdout));
         let stderr = text(&o.stderr);
-        // The path is named (for weights, the configuration read first beside them).
-        let named = if what == "the dataset" {
-            "no-such-dataset"
-        } else {
-            "no-such-weights"
-        };
         assert!(stderr.contains(named), "{what}: {stderr}");
         assert!(
             !run.exists(),

@@ -88,6 +88,7 @@ pub fn correlation(
     let kernel = Kernel {
         tables: &tables,
         taps,
+        channels,
         groups,
     };
     match channels {
@@ -114,6 +115,8 @@ pub fn correlation(
 struct Kernel<'a> {
     tables: &'a [Vec<f32>],
     taps: &'a HostTaps,
+    /// Channels of every table.
+    channels: usize,
     groups: usize,
 }
 
@@ -122,11 +125,7 @@ impl Kernel<'_> {
     /// the general kernel (arrays of that size, of which the tables' channels are used).
     fn run<const N: usize>(&self, grouped: &mut [f32]) {
         // A constant for the specialised kernels, so that their loops have a known length.
-        let channels = if N < MAX_CHANNELS {
-            N
-        } else {
-            self.tables[0].len() / (self.taps.feature_size[0] * self.taps.feature_size[1])
-        };
+        let channels = if N < MAX_CHANNELS { N } else { self.channels };
         let per_group = channels / self.groups;
         grouped
             .par_chunks_mut(self.groups)
