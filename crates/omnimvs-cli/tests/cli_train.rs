@@ -4,7 +4,7 @@
 //! losses as the run made in one go (even after an attempt whose checkpoint could not be put in
 //! place, which leaves the previous checkpoint as it was), and `infer --weights RUN/model.safetensors` reads the
 //! weights back and scores the validation frame as the trainer's validation did (with sky, and
-//! by the reference's rules). A run started
+//! by the reference's rules). A run records its backend and --resume continues on it. A run started
 //! from those weights (`--init`, with frozen batch-norm statistics) validates them before its
 //! first step and keeps them as best unless an epoch beats them.
 
@@ -86,6 +86,32 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
         "the tiny preset's grid: {config}"
     );
 
+    // The run records its backend, and --resume without --backend continues on it: a run
+    // recorded as started on libtorch is not silently continued on the CPU (this default build
+    // has no libtorch, so it refuses and names the feature), a recorded name that is not a
+    // backend is refused naming the file and the field, and neither attempt touches the run.
+    let backend_file = resumed.join("backend.txt");
+    assert!(stdout.contains("on cpu:"), "{stdout}");
+    assert_eq!(std::fs::read_to_string(&backend_file).unwrap(), "cpu\n");
+    let latest = std::fs::read(resumed.join("latest.json")).unwrap();
+    for (recorded, expected) in [
+        ("libtorch-cuda:0\n", "--features libtorch"),
+        ("gpu-9000\n", "field `backend`"),
+    ] {
+        std::fs::write(&backend_file, recorded).unwrap();
+        let o = omnimvs(&["train", "--resume", resumed.to_str().unwrap()], &cache);
+        let stderr = text(&o.stderr);
+        assert!(!o.status.success(), "{recorded}: {stderr}");
+        assert!(stderr.contains(expected), "{recorded}: {stderr}");
+        assert!(
+            recorded.starts_with("libtorch") || stderr.contains("backend.txt"),
+            "{stderr}"
+        );
+        assert_eq!(std::fs::read(resumed.join("latest.json")).unwrap(), latest);
+        assert_eq!(epochs(&resumed).len(), 1);
+    }
+    std::fs::write(&backend_file, "cpu\n").unwrap();
+
     // A checkpoint that cannot be put in place (a file stands where epoch 2's folder goes)
     // fails the run and leaves epoch 1's checkpoint and the pointer to it as they were.
     let checkpoint = resumed.join("checkpoints/epoch-0001");
@@ -113,9 +139,21 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
     }
     std::fs::remove_file(&blocker).unwrap();
 
-    // Resumed from there (after the failed attempt), the run ends as the straight one below.
-    let stdout = run_ok(&["train", "--resume", resumed.to_str().unwrap()], &cache);
+    // Resumed from there (after the failed attempt), the run ends as the straight one below;
+    // --backend overrides the recorded backend and is recorded in its place.
+    std::fs::write(&backend_file, "libtorch\n").unwrap();
+    let stdout = run_ok(
+        &[
+            "train",
+            "--resume",
+            resumed.to_str().unwrap(),
+            "--backend",
+            "cpu",
+        ],
+        &cache,
+    );
     assert!(stdout.contains("epochs 2..2 of 2"), "{stdout}");
+    assert_eq!(std::fs::read_to_string(&backend_file).unwrap(), "cpu\n");
 
     // The same run in one go.
     let straight = dir.path().join("straight");

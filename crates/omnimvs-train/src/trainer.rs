@@ -11,6 +11,8 @@
 //! RUN_DIR/start.json               validation of the --init weights before the first step
 //! RUN_DIR/latest.json              which checkpoint to resume from
 //! RUN_DIR/checkpoints/epoch-EEEE/  model.bpk, optim.bpk, state.json
+//! RUN_DIR/backend.txt              the compute backend the run last ran on (written by
+//!                                  `omnimvs train`; `--resume` continues on it)
 //! ```
 //!
 //! Every file is written atomically (`omnimvs_camera::fs::write_atomic`: a temporary file, then

@@ -1,14 +1,15 @@
 //! `omnimvs train`: end-to-end training of the network on dataset folders.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use burn::tensor::Device;
 use indicatif::{ProgressBar, ProgressStyle};
+use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::FrameRange;
 use omnimvs_data::metrics::Metrics;
-use omnimvs_net::{CascadeNet, Family, OmniMvsNet};
+use omnimvs_net::{Backend, CascadeNet, Family, OmniMvsNet};
 use omnimvs_train::mccnn::{CostTrainConfig, CostTrainer};
 use omnimvs_train::sweepnet::{SweepTrainConfig, SweepTrainer};
 use omnimvs_train::trainer::read_run_config;
@@ -17,7 +18,7 @@ use omnimvs_train::{
     Trainable, Trainer,
 };
 
-use crate::args::{BACKEND_HELP, Preset, parse_backend};
+use crate::args::{Preset, parse_backend};
 
 /// Train a network (the paper's or the cascade) end to end, resumably.
 ///
@@ -179,8 +180,47 @@ pub struct Args {
     /// Matching-cost training: sample pairs per step.
     #[arg(long, default_value_t = 128)]
     pub batch: usize,
-    #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
-    pub backend: omnimvs_net::Backend,
+    /// Compute backend (see the README): cpu (burn flex), libtorch, libtorch-cuda[:N],
+    /// wgpu[:N], vulkan or wgpu-cpu; all but cpu need a build with the `libtorch` or `wgpu`
+    /// Cargo feature. A new run defaults to cpu; --resume defaults to the backend the run last
+    /// ran on (its `backend.txt`).
+    #[arg(long, value_parser = parse_backend)]
+    pub backend: Option<Backend>,
+}
+
+/// The file of a run folder that names the backend the run last ran on; `--resume` without
+/// `--backend` continues there (a run started on a GPU is not silently continued on the CPU).
+const BACKEND_FILE: &str = "backend.txt";
+
+/// The backend of this invocation: `--backend`, else with --resume the run's recorded one
+/// (runs from before it was recorded: cpu), else cpu.
+fn backend_of(args: &Args) -> Result<Backend> {
+    if let Some(backend) = args.backend {
+        return Ok(backend);
+    }
+    let Some(dir) = &args.resume else {
+        return Ok(Backend::Cpu);
+    };
+    let path = dir.join(BACKEND_FILE);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Backend::Cpu),
+        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+    };
+    text.trim().parse::<Backend>().map_err(|e| {
+        anyhow!(
+            "{}: field `backend`: expected a backend name (cpu, libtorch, libtorch-cuda[:N], \
+             wgpu[:N], vulkan, wgpu-cpu): {e}",
+            path.display()
+        )
+    })
+}
+
+/// Records `backend` as the one the run in `run_dir` last ran on.
+fn record_backend(run_dir: &Path, backend: Backend) -> Result<()> {
+    let path = run_dir.join(BACKEND_FILE);
+    write_atomic(&path, format!("{backend}\n").as_bytes())
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 /// `--cost` values of `train`.
@@ -208,7 +248,7 @@ fn is_sweep_run(dir: &std::path::Path) -> bool {
         .is_some()
 }
 
-fn train_sweepnet(args: &Args, device: &Device) -> Result<()> {
+fn train_sweepnet(args: &Args, backend: Backend, device: &Device) -> Result<()> {
     let mut trainer = match &args.resume {
         Some(dir) => SweepTrainer::resume(dir, args.steps, device)
             .with_context(|| format!("resuming {}", dir.display()))?,
@@ -234,8 +274,9 @@ fn train_sweepnet(args: &Args, device: &Device) -> Result<()> {
                 .with_context(|| format!("creating {}", out.display()))?
         }
     };
+    record_backend(trainer.run_dir(), backend)?;
     outln!(
-        "SweepNet cost: {} steps of {} pixels x {} spheres from step {} into {}",
+        "SweepNet cost on {backend}: {} steps of {} pixels x {} spheres from step {} into {}",
         trainer.config.steps,
         trainer.config.batch,
         trainer.config.grid.2,
@@ -257,7 +298,7 @@ fn train_sweepnet(args: &Args, device: &Device) -> Result<()> {
     Ok(())
 }
 
-fn train_cost(args: &Args, device: &Device) -> Result<()> {
+fn train_cost(args: &Args, backend: Backend, device: &Device) -> Result<()> {
     let mut trainer = match &args.resume {
         Some(dir) => CostTrainer::resume(dir, args.steps, device)
             .with_context(|| format!("resuming {}", dir.display()))?,
@@ -283,8 +324,9 @@ fn train_cost(args: &Args, device: &Device) -> Result<()> {
                 .with_context(|| format!("creating {}", out.display()))?
         }
     };
+    record_backend(trainer.run_dir(), backend)?;
     outln!(
-        "matching-cost network: {} steps of {} pairs from step {} into {}",
+        "matching-cost network on {backend}: {} steps of {} pairs from step {} into {}",
         trainer.config.steps,
         trainer.config.batch,
         trainer.step(),
@@ -382,12 +424,13 @@ pub enum PartsArg {
 }
 
 pub fn run(args: &Args) -> Result<()> {
-    let device = args.backend.device()?;
+    let backend = backend_of(args)?;
+    let device = backend.device()?;
     if args.cost == Some(CostNet::Sweepnet) || args.resume.as_deref().is_some_and(is_sweep_run) {
-        return train_sweepnet(args, &device);
+        return train_sweepnet(args, backend, &device);
     }
     if args.cost.is_some() || args.resume.as_deref().is_some_and(is_cost_run) {
-        return train_cost(args, &device);
+        return train_cost(args, backend, &device);
     }
     let family = match &args.resume {
         Some(dir) => {
@@ -399,12 +442,12 @@ pub fn run(args: &Args) -> Result<()> {
         None => args.preset.config().family,
     };
     match family {
-        Family::OmniMvs => train::<OmniMvsNet>(args, &device),
-        Family::Cascade => train::<CascadeNet>(args, &device),
+        Family::OmniMvs => train::<OmniMvsNet>(args, backend, &device),
+        Family::Cascade => train::<CascadeNet>(args, backend, &device),
     }
 }
 
-fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
+fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result<()> {
     let device = device.clone();
     let mut trainer = match &args.resume {
         Some(dir) => {
@@ -505,13 +548,14 @@ fn train<M: Trainable>(args: &Args, device: &Device) -> Result<()> {
                 .with_context(|| format!("starting a run in {}", out.display()))?
         }
     };
+    record_backend(&trainer.run_dir, backend)?;
     let config = trainer.config.clone();
     let (train, val): (usize, usize) = trainer
         .splits
         .iter()
         .fold((0, 0), |acc, (t, v)| (acc.0 + t.len(), acc.1 + v.len()));
     outln!(
-        "{}: {} training and {} validation frames from {} dataset(s); epochs {}..{} of {}; \
+        "{} on {backend}: {} training and {} validation frames from {} dataset(s); epochs {}..{} of {}; \
          {} rotations up to {} deg; camera permutation {}; photometric augmentation {}{}{}",
         trainer.run_dir.display(),
         train,
