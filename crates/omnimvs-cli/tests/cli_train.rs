@@ -73,7 +73,7 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
 
     // One epoch, then --resume to the end.
     let resumed = dir.path().join("resumed");
-    let stdout = train(&resumed, &["--stop-after", "1"]);
+    let stdout = train(&resumed, &["--stop-after", "1", "--lr", "0.002"]);
     assert!(stdout.contains("epochs 1..2 of 2"), "{stdout}");
     assert_eq!(epochs(&resumed).len(), 1);
     let config = read_json(&resumed.join("train_config.json"));
@@ -84,6 +84,12 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
         ),
         (Some(32), Some(128)),
         "the tiny preset's grid: {config}"
+    );
+    // Without --lr-low the last epochs' rate is a tenth of --lr (never above it).
+    assert_eq!(config["lr"].as_f64(), Some(0.002), "{config}");
+    assert!(
+        (config["lr_low"].as_f64().unwrap() - 0.0002).abs() < 1e-12,
+        "{config}"
     );
 
     // The run records its backend, and --resume without --backend continues on it: a run
@@ -157,7 +163,7 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
 
     // The same run in one go.
     let straight = dir.path().join("straight");
-    train(&straight, &[]);
+    train(&straight, &["--lr", "0.002"]);
     let (a, b) = (epochs(&resumed), epochs(&straight));
     assert_eq!(a.len(), 2);
     assert_eq!(

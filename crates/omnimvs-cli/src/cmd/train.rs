@@ -63,9 +63,10 @@ pub struct Args {
     /// Learning rate of the first epochs.
     #[arg(long, default_value_t = 0.003)]
     pub lr: f64,
-    /// Learning rate of the last epochs.
-    #[arg(long, default_value_t = 0.0003)]
-    pub lr_low: f64,
+    /// Learning rate of the last epochs (default: a tenth of --lr, so 0.0003 after the default
+    /// 0.003 as in the paper; never above --lr unless asked).
+    #[arg(long)]
+    pub lr_low: Option<f64>,
     /// Epochs at --lr-low (default: a third of the epochs).
     #[arg(long)]
     pub low_lr_epochs: Option<usize>,
@@ -516,7 +517,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 val_frames: args.val_frames.map(|f| (f.start, f.end)),
                 epochs: args.epochs.unwrap_or(30),
                 lr: args.lr,
-                lr_low: args.lr_low,
+                lr_low: args.lr_low.unwrap_or(args.lr / 10.0),
                 low_lr_epochs: args.low_lr_epochs,
                 optimizer: match args.optimizer {
                     OptimizerArg::Sgd => Optimizer::Sgd,
