@@ -10,9 +10,8 @@
 
 use std::time::Instant;
 
-use burn::nn::PaddingConfig2d;
-use burn::nn::conv::Conv2dConfig;
 use burn::tensor::{Device, Distribution, Tensor};
+use omnimvs_net::cascade::model::{PanoConv2d, read_values};
 use rayon::prelude::*;
 
 /// Direct 3x3 convolution, stride 1, rows zero-padded, columns circular. `x` is `[ci, h, w]`,
@@ -82,31 +81,14 @@ fn main() {
         (42, 32, 80, 320),
         (32, 32, 80, 320),
     ] {
-        let conv = Conv2dConfig::new([ci, co], [3, 3])
-            .with_padding(PaddingConfig2d::Explicit(1, 0, 1, 0))
-            .init(&device);
+        // The network's own block: circular columns, zero rows, no batch norm or ReLU.
+        let block = PanoConv2d::new([ci, co], 1, false, &device);
         let x = Tensor::<4>::random([1, ci, h, w], Distribution::Normal(0.0, 1.0), &device);
-        let burn_fwd = |x: &Tensor<4>| {
-            let first = x.clone().narrow(3, 0, 1);
-            let last = x.clone().narrow(3, w - 1, 1);
-            conv.forward(Tensor::cat(vec![last, x.clone(), first], 3))
-        };
-        let weight: Vec<f32> = conv
-            .weight
-            .val()
-            .into_data()
-            .try_into_vec_as::<f32>()
-            .unwrap();
-        let bias: Vec<f32> = conv
-            .bias
-            .as_ref()
-            .unwrap()
-            .val()
-            .into_data()
-            .try_into_vec_as::<f32>()
-            .unwrap();
-        let xs: Vec<f32> = x.clone().into_data().try_into_vec_as::<f32>().unwrap();
-        let reference: Vec<f32> = burn_fwd(&x).into_data().try_into_vec_as::<f32>().unwrap();
+        let values = |t: Tensor<4>| read_values(t, "bench").unwrap();
+        let weight = read_values(block.conv.weight.val(), "weight").unwrap();
+        let bias = read_values(block.conv.bias.as_ref().unwrap().val(), "bias").unwrap();
+        let xs = values(x.clone());
+        let reference = values(block.forward(x.clone()));
         let mine = direct(&xs, ci, h, w, &weight, &bias);
         let max_diff = reference
             .iter()
@@ -123,11 +105,10 @@ fn main() {
             best
         };
         let tb = time(&|| {
-            let _ = burn_fwd(&x).into_data();
+            let _ = block.forward(x.clone()).into_data();
         });
         let td = time(&|| {
-            let xs: Vec<f32> = x.clone().into_data().try_into_vec_as::<f32>().unwrap();
-            let y = direct(&xs, ci, h, w, &weight, &bias);
+            let y = direct(&values(x.clone()), ci, h, w, &weight, &bias);
             let _ =
                 Tensor::<4>::from_data(burn::tensor::TensorData::new(y, [1, co, h, w]), &device);
         });

@@ -140,7 +140,9 @@ pub struct PanoConv2d {
 }
 
 impl PanoConv2d {
-    fn new(channels: [usize; 2], stride: usize, bn_relu: bool, device: &Device) -> Self {
+    /// A `channels[0] -> channels[1]` block with random weights and a bias, at `stride`; with
+    /// `bn_relu`, a batch norm and a ReLU after the convolution.
+    pub fn new(channels: [usize; 2], stride: usize, bn_relu: bool, device: &Device) -> Self {
         let conv = Conv2dConfig::new(channels, [3, 3])
             .with_stride([stride, stride])
             .with_padding(PaddingConfig2d::Explicit(1, 0, 1, 0))
