@@ -94,6 +94,21 @@ step() {
     return 0
 }
 
+# Compares the index maps of frames 1-2 in two `infer` outputs (step NAME): largest and mean
+# difference, and the share of pixels that differ by more than 0.5 and 0.01 index.
+compare_maps() {
+    step "$1" 60 "$python" - "$2" "$3" <<'PY'
+import sys, numpy as np, tifffile
+a_dir, b_dir = sys.argv[1], sys.argv[2]
+for f in (1, 2):
+    a = tifffile.imread(f"{a_dir}/{f:05d}_index.tiff").astype(np.float64)
+    b = tifffile.imread(f"{b_dir}/{f:05d}_index.tiff").astype(np.float64)
+    d = np.abs(a - b)
+    print(f"frame {f}: shape {a.shape}, index max diff {d.max():.3e}, mean {d.mean():.3e}, "
+          f"pixels > 0.5: {(d > 0.5).mean() * 100:.4f} %, > 0.01: {(d > 0.01).mean() * 100:.4f} %")
+PY
+}
+
 stamp "env"
 {
     date -u
@@ -132,16 +147,7 @@ if want parity; then
     T=$D/test-things-s7001
     step infer-cpu 120 "$bin" infer "$T" --frames 1..2 --backend cpu --out "$work/infer-cpu"
     step infer-gpu 120 "$bin" infer "$T" --frames 1..2 --backend "$backend" --out "$work/infer-gpu"
-    step parity-compare 60 "$python" - "$work/infer-cpu" "$work/infer-gpu" <<'PY'
-import sys, numpy as np, tifffile
-a_dir, b_dir = sys.argv[1], sys.argv[2]
-for f in (1, 2):
-    a = tifffile.imread(f"{a_dir}/{f:05d}_index.tiff").astype(np.float64)
-    b = tifffile.imread(f"{b_dir}/{f:05d}_index.tiff").astype(np.float64)
-    d = np.abs(a - b)
-    print(f"frame {f}: shape {a.shape}, index max diff {d.max():.3e}, mean {d.mean():.3e}, "
-          f"pixels > 0.5: {(d > 0.5).mean() * 100:.4f} %, > 0.01: {(d > 0.01).mean() * 100:.4f} %")
-PY
+    compare_maps parity-compare "$work/infer-cpu" "$work/infer-gpu"
     step eval-gpu 180 "$bin" eval --data "$T" --frames 1..2 --method net --backend "$backend" --out "$work/eval-gpu"
     step eval-cpu 180 "$bin" eval --data "$T" --frames 1..2 --method net --backend cpu --out "$work/eval-cpu"
 fi
@@ -179,14 +185,7 @@ fi
 if want wgpu && [ -x "$wbin" ]; then
     T=$D/test-things-s7001
     step infer-wgpu 80 "$wbin" infer "$T" --frames 1..2 --backend wgpu --out "$work/infer-wgpu"
-    step parity-compare-wgpu 60 "$python" - "$work/infer-cpu" "$work/infer-wgpu" <<'PY'
-import sys, numpy as np, tifffile
-for f in (1, 2):
-    a = tifffile.imread(f"{sys.argv[1]}/{f:05d}_index.tiff").astype(np.float64)
-    b = tifffile.imread(f"{sys.argv[2]}/{f:05d}_index.tiff").astype(np.float64)
-    d = np.abs(a - b)
-    print(f"frame {f}: index max diff {d.max():.3e}, mean {d.mean():.3e}, pixels > 0.5: {(d > 0.5).mean() * 100:.4f} %")
-PY
+    compare_maps parity-compare-wgpu "$work/infer-cpu" "$work/infer-wgpu"
     step bench-cascade-wgpu 80 "$wbin" bench --config "$root/models/omnimvs-cascade.json" \
         --backend wgpu --repeats 3 --train-steps 3 --json "$logs/bench-cascade-wgpu.json"
 fi
