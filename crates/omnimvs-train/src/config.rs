@@ -44,6 +44,12 @@ pub enum TrainParts {
     /// The cascade's learnt upsampling selectors only (`convex_upsampling`); every other weight
     /// and every batch-norm statistic stays as loaded.
     Upsampling,
+    /// The cascade's coarse stage only: the stride-8 branch of the feature pyramid (after
+    /// the stride-4 features) and the coarse regulariser. Its loss is the coarse stage's
+    /// alone, so a step runs no refinement stage: about twice as many steps in the same
+    /// time. The stride-2 and stride-4 features, the refinement stages and the selectors stay
+    /// as loaded, so the refinement reads the features it was trained on.
+    Coarse,
 }
 
 /// Everything that decides a training run.

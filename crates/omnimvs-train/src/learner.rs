@@ -229,7 +229,8 @@ impl<M: Trainable> Learner<M> {
         order: &[usize],
     ) -> Result<Tensor<1>, TrainError> {
         let images = self.image_tensors(sample);
-        self.net.loss(&images, geometry, order, sample)
+        self.net
+            .loss(&images, geometry, order, sample, self.train_only)
     }
 
     /// One optimiser step on `sample` at learning rate `lr`; returns the loss before the

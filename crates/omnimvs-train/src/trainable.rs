@@ -15,6 +15,7 @@ use crate::error::TrainError;
 use crate::learner::{masked_l1, target_data_with};
 use crate::sample::{Sample, SampleSource};
 use omnimvs_net::cascade::geometry::crop_columns;
+use omnimvs_net::cascade::model::{CascadeFeatures, StageOutput};
 use omnimvs_net::cascade::sampler::coarse_spacing;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet};
 use omnimvs_net::config::NetConfig;
@@ -47,7 +48,8 @@ pub trait Trainable: Module + Sized {
     ) -> Result<Self::Geometry, TrainError>;
 
     /// The training loss of a sample (`images` on the training device, camera `order` at the
-    /// concatenation where the family has one).
+    /// concatenation where the family has one) when the run trains `parts` (a family may
+    /// leave out the terms of frozen parts, and the forward pass they alone need).
     ///
     /// # Errors
     /// [`TrainError`] for inputs that do not fit the network.
@@ -57,6 +59,7 @@ pub trait Trainable: Module + Sized {
         geometry: &Self::Geometry,
         order: &[usize],
         sample: &Sample,
+        parts: TrainParts,
     ) -> Result<Tensor<1>, TrainError>;
 
     /// The inference-mode index map `[1, H, W]` on the output grid, for validation
@@ -85,6 +88,12 @@ pub trait Trainable: Module + Sized {
         match parts {
             TrainParts::All => Ok(self),
             TrainParts::Upsampling => Err(no_upsampling()),
+            TrainParts::Coarse => Err(TrainError::InvalidConfig {
+                field: "train_only",
+                message: "`coarse` trains the cascade's coarse stage; this network is not a \
+                          cascade"
+                    .into(),
+            }),
         }
     }
 }
@@ -139,6 +148,7 @@ impl Trainable for OmniMvsNet {
         geometry: &Self::Geometry,
         order: &[usize],
         sample: &Sample,
+        _parts: TrainParts,
     ) -> Result<Tensor<1>, TrainError> {
         let device = first_device(images, self.config.num_cameras)?;
         let out = self.forward(images, geometry, order)?; // index [1, H, W]
@@ -199,6 +209,7 @@ impl Trainable for CascadeNet {
         geometry: &Self::Geometry,
         _order: &[usize],
         sample: &Sample,
+        parts: TrainParts,
     ) -> Result<Tensor<1>, TrainError> {
         let device = first_device(images, self.config.num_cameras)?;
         if sample.stage_gt.len() != 2 {
@@ -208,6 +219,21 @@ impl Trainable for CascadeNet {
                 actual: vec![sample.stage_gt.len()],
             });
         }
+        let p = &self.config.cascade;
+        if parts == TrainParts::Coarse {
+            // The coarse stage's own terms: nothing after it has a weight that learns.
+            let coarse = self.forward_coarse(images, geometry, true)?;
+            let (target, mask) =
+                target_tensors(&sample.stage_gt[0], false, p.sky_loss_weight, &device);
+            return Ok(stage_loss(
+                coarse,
+                target,
+                mask,
+                p.loss_weights[0],
+                p.coarse_distribution_weight,
+                coarse_spacing(p.coarse_spheres, self.config.num_invdepth),
+            ));
+        }
         let (out, _) = self.forward_window(images, geometry, sample.window, false, true)?;
         let (mid, fine) = match sample.window {
             Some(w) => (
@@ -216,7 +242,6 @@ impl Trainable for CascadeNet {
             ),
             None => (sample.stage_gt[1].clone(), sample.gt.clone()),
         };
-        let p = &self.config.cascade;
         // Every stage's truth and loss weights as tensors, once.
         let targets = [&sample.stage_gt[0], &mid, &fine]
             .map(|gt| target_tensors(gt, false, p.sky_loss_weight, &device));
@@ -249,12 +274,7 @@ impl Trainable for CascadeNet {
             .zip(p.loss_weights)
             .zip(distribution_weights.into_iter().zip(spacings))
         {
-            let mut loss = masked_l1(stage.index, target.clone(), mask.clone()).mul_scalar(w);
-            if dw > 0.0 {
-                let ce = distribution_ce(stage.prob, stage.hypotheses, target, mask, spacing / 2.0);
-                loss = loss + ce.mul_scalar(dw);
-            }
-            losses.push(loss);
+            losses.push(stage_loss(stage, target, mask, w, dw, spacing));
         }
         losses
             .into_iter()
@@ -289,7 +309,44 @@ impl Trainable for CascadeNet {
                 self.fine = self.fine.no_grad();
                 Ok(self)
             }
+            TrainParts::Coarse => {
+                let f = self.features;
+                self.features = CascadeFeatures {
+                    conv0: f.conv0.no_grad(),
+                    conv2: f.conv2.no_grad(),
+                    out2: f.out2.no_grad(),
+                    down4: f.down4.no_grad(),
+                    res4: f.res4.no_grad(),
+                    out4: f.out4.no_grad(),
+                    ..f
+                };
+                self.mid = self.mid.no_grad();
+                self.fine = self.fine.no_grad();
+                self.up_mid = self.up_mid.no_grad();
+                self.up_fine = self.up_fine.no_grad();
+                Ok(self)
+            }
         }
+    }
+}
+
+/// One stage's loss: the L1 of its index against `target` (weighted by `mask`) times
+/// `weight`, plus, when `distribution_weight` is positive, that times the cross-entropy of its
+/// distribution against a Laplacian of half the stage's hypothesis `spacing` around the truth.
+fn stage_loss(
+    stage: StageOutput,
+    target: Tensor<3>,
+    mask: Tensor<3>,
+    weight: f64,
+    distribution_weight: f64,
+    spacing: f64,
+) -> Tensor<1> {
+    let loss = masked_l1(stage.index, target.clone(), mask.clone()).mul_scalar(weight);
+    if distribution_weight > 0.0 {
+        let ce = distribution_ce(stage.prob, stage.hypotheses, target, mask, spacing / 2.0);
+        loss + ce.mul_scalar(distribution_weight)
+    } else {
+        loss
     }
 }
 

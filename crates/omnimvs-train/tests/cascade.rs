@@ -155,3 +155,86 @@ fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
         "{err}"
     );
 }
+
+#[test]
+fn training_only_the_coarse_stage_moves_its_weights_and_nothing_else() {
+    let (rig, hyps) = sunny_rig();
+    let mut config = train_config(7);
+    config.net.cascade.convex_upsampling = true;
+    config.train_only = TrainParts::Coarse;
+    let device = Device::flex();
+    let mut learner = Learner::<CascadeNet>::for_model(&config, &device).unwrap();
+    let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
+    let sample = micro_sample(&config.net);
+    // Frozen first: the stride-2 and stride-4 features, the refinement stages, the
+    // selectors; then the coarse stage's own weights.
+    let weights = |net: &CascadeNet| {
+        [
+            net.features.conv0.conv.weight.val(),
+            net.features.out2.conv.weight.val(),
+            net.features.res4[1].conv.weight.val(),
+            net.features.out4.conv.weight.val(),
+            net.mid.out.conv.weight.val(),
+            net.fine.convs[0].conv.weight.val(),
+            net.up_mid.as_ref().unwrap().out.weight.val(),
+            net.features.down8.conv.weight.val(),
+            net.features.out8.conv.weight.val(),
+            net.coarse.out.conv.weight.val(),
+        ]
+        .map(|t| read_values(t, "weights").unwrap())
+    };
+    let before = weights(&learner.net);
+    let coarse_error = |learner: &Learner<CascadeNet>| {
+        let out = learner
+            .net
+            .forward_coarse(&learner.image_tensors(&sample), &geometry, false)
+            .unwrap();
+        let index = read_values(out.index, "coarse index").unwrap();
+        let gt = &sample.stage_gt[0];
+        let (sum, n) = index
+            .iter()
+            .zip(&gt.index)
+            .zip(&gt.valid)
+            .filter(|(_, v)| **v)
+            .fold((0.0, 0), |(s, n), ((i, t), _)| (s + (i - t).abs(), n + 1));
+        sum / n as f32
+    };
+    let start = coarse_error(&learner);
+    let first = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+    let mut last = first;
+    for _ in 0..15 {
+        last = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+    }
+    let after = weights(&learner.net);
+    for (i, (a, b)) in before.iter().zip(&after).enumerate() {
+        if i < 7 {
+            assert_eq!(a, b, "frozen weights {i} moved");
+        } else {
+            assert_ne!(a, b, "coarse-stage weights {i} did not move");
+        }
+    }
+    assert!(
+        last < first,
+        "the coarse loss did not fall: {first} -> {last}"
+    );
+    let end = coarse_error(&learner);
+    assert!(
+        end < start,
+        "the coarse stage's error did not fall: {start} -> {end}"
+    );
+
+    // The paper's network has no coarse stage to train alone.
+    let mut paper = TrainConfig {
+        net: NetConfig::tiny(),
+        ..TrainConfig::default()
+    };
+    paper.train_only = TrainParts::Coarse;
+    let err = Learner::<omnimvs_net::OmniMvsNet>::for_model(&paper, &device)
+        .err()
+        .expect("training the coarse stage of the paper's network is refused")
+        .to_string();
+    assert!(
+        err.contains("train_only") && err.contains("cascade"),
+        "{err}"
+    );
+}

@@ -7,7 +7,7 @@ use burn::tensor::Device;
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::synthetic::synthetic_grids;
 use omnimvs_net::{Layout, NetConfig};
-use omnimvs_train::{Learner, Sample, TrainConfig};
+use omnimvs_train::{Learner, Sample, TrainConfig, TrainParts};
 
 /// The smallest network the decoder allows: `N = 32`, a `32 x 32` output, two cameras.
 fn micro_config() -> NetConfig {
@@ -205,7 +205,7 @@ fn train_and_inference_losses(frozen: bool) -> Vec<(f32, f32)> {
         let images = learner.image_tensors_on(&sample, &plain);
         let inference = learner
             .inference_net()
-            .loss(&images, &plain_taps, &order, &sample)
+            .loss(&images, &plain_taps, &order, &sample, TrainParts::All)
             .unwrap()
             .into_scalar::<f32>();
         losses.push((train, inference));

@@ -158,9 +158,11 @@ pub struct Args {
     /// out.
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub convex_upsampling: Option<UpsamplingArg>,
-    /// Which weights the run trains (`train_only`): `all`, or `upsampling`, the cascade's
+    /// Which weights the run trains (`train_only`): `all`; `upsampling`, the cascade's
     /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
-    /// --init loaded it; a cheap step, the frozen stages need no backward pass).
+    /// --init loaded it; a cheap step, the frozen stages need no backward pass); or `coarse`,
+    /// the cascade's coarse stage alone (its stride-8 features and regulariser, trained by its
+    /// own loss: a step runs no refinement stage; validation still scores the whole network).
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub train_only: Option<PartsArg>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
@@ -422,6 +424,8 @@ pub enum PartsArg {
     All,
     /// The cascade's learnt upsampling selectors.
     Upsampling,
+    /// The cascade's coarse stage (stride-8 features and coarse regulariser).
+    Coarse,
 }
 
 pub fn run(args: &Args) -> Result<()> {
@@ -541,6 +545,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 },
                 train_only: match args.train_only {
                     Some(PartsArg::Upsampling) => TrainParts::Upsampling,
+                    Some(PartsArg::Coarse) => TrainParts::Coarse,
                     Some(PartsArg::All) | None => TrainParts::All,
                 },
                 ..TrainConfig::default()

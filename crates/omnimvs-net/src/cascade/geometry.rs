@@ -634,6 +634,22 @@ impl CascadeNet {
         })
     }
 
+    /// The coarse stage alone (every camera's features, then the coarse stage and, with
+    /// `zncc_cue`, its photometric cue): what training the coarse stage by itself needs, no
+    /// refinement stage run. `training` pads the batch as [`CascadeNet::forward_window`].
+    ///
+    /// # Errors
+    /// See [`CascadeNet::forward`].
+    pub fn forward_coarse(
+        &self,
+        images: &[Tensor<4>],
+        geometry: &CascadeGeometry,
+        training: bool,
+    ) -> Result<StageOutput, NetError> {
+        let (levels, photo) = self.feature_levels(images, training)?;
+        self.coarse_of(&levels, photo.as_ref(), geometry)
+    }
+
     /// Every camera's feature pyramid (strides 2, 4, 8; one batch through the extractor,
     /// padded when `training`, see [`CascadeNet::forward_window`]) and, when the network has
     /// the photometric cue, the images' own pyramid.
