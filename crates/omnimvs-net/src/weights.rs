@@ -252,6 +252,8 @@ pub fn load_cascade_grown(
     shrunk.cascade.zncc_cue = saved.cascade.zncc_cue;
     shrunk.cascade.convex_upsampling = saved.cascade.convex_upsampling;
     shrunk.cascade.convex_upsampling_full = saved.cascade.convex_upsampling_full;
+    // The refinement stages' hypothesis spacing: no weight depends on it.
+    shrunk.cascade.stage_intervals = saved.cascade.stage_intervals;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
         && (!saved.cascade.stage_gates || config.cascade.stage_gates)
         && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
@@ -261,8 +263,8 @@ pub fn load_cascade_grown(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
              (only `context_pairs` may grow, `stage_gates`, `zncc_cue` and \
-             `convex_upsampling` switch on, `convex_upsampling_full` switch either way and \
-             the loss weights differ)",
+             `convex_upsampling` switch on, `convex_upsampling_full` switch either way, and \
+             the refinement stages' `stage_intervals` and the loss weights differ)",
         ));
     }
     let has_fine = |c: &NetConfig| c.cascade.convex_upsampling && c.cascade.convex_upsampling_full;

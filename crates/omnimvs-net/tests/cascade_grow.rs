@@ -355,3 +355,46 @@ fn the_full_grid_selector_can_be_left_out_and_grown_back() {
     // A file without any selector does not lose what it never had.
     assert!(weights::load_cascade_grown(&half_path, &micro_config(), &device).is_err());
 }
+
+#[test]
+fn weights_load_into_a_network_of_another_refinement_spacing() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let config = micro_config();
+    let device = Device::flex();
+    let net = CascadeNet::new(&config, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("net.safetensors");
+    weights::save_module(&net, &config, &path).unwrap();
+
+    let mut wider = config.clone();
+    wider.cascade.stage_intervals = [3.0, 1.5];
+    let loaded = weights::load_cascade_grown(&path, &wider, &device).unwrap();
+    assert_eq!(loaded.config.cascade.stage_intervals, [3.0, 1.5]);
+    // The same weights...
+    let weight = |n: &CascadeNet| read_values(n.fine.out.conv.weight.val(), "w").unwrap();
+    assert_eq!(weight(&net), weight(&loaded));
+    // ...answer with the new spacing: the same coarse stage, the full stage's hypotheses
+    // 1.5 apart instead of 1.
+    let geometry = CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap();
+    let wide_geometry = CascadeGeometry::new(&ds.rig, &wider, &hyps, &device).unwrap();
+    let inputs = images(&config, &device);
+    let before = net.forward(&inputs, &geometry).unwrap();
+    let after = loaded.forward(&inputs, &wide_geometry).unwrap();
+    let values = |t: burn::tensor::Tensor<4>| read_values(t, "hypotheses").unwrap();
+    assert_eq!(
+        read_values(before.stages[0].index.clone(), "coarse").unwrap(),
+        read_values(after.stages[0].index.clone(), "coarse").unwrap()
+    );
+    let step = |h: &[f32], plane: usize| h[plane] - h[0];
+    let (narrow, wide) = (
+        values(before.stages[2].hypotheses.clone()),
+        values(after.stages[2].hypotheses.clone()),
+    );
+    let plane = narrow.len() / config.cascade.stage_hypotheses[1];
+    let (a, b) = (step(&narrow, plane), step(&wide, plane));
+    assert!(
+        (a - 1.0).abs() < 1e-4 && (b - 1.5).abs() < 1e-4,
+        "hypothesis spacing {a} and {b}"
+    );
+}

@@ -158,6 +158,11 @@ pub struct Args {
     /// out.
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub convex_upsampling: Option<UpsamplingArg>,
+    /// Cascade: spacing of the half- and full-resolution stages' hypotheses around their
+    /// centres, in index units of N, `HALF,FULL` (`stage_intervals`; 2,1 before `cascade-18`).
+    /// No weight depends on it, so --init weights of another spacing load as they are.
+    #[arg(long, value_parser = parse_intervals, conflicts_with = "resume")]
+    pub stage_intervals: Option<[f64; 2]>,
     /// Which weights the run trains (`train_only`): `all`; `upsampling`, the cascade's
     /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
     /// --init loaded it; a cheap step, the frozen stages need no backward pass); or `coarse`,
@@ -428,6 +433,20 @@ pub enum PartsArg {
     Coarse,
 }
 
+/// `--stage-intervals HALF,FULL`: two positive finite spacings.
+fn parse_intervals(text: &str) -> Result<[f64; 2], String> {
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f64>().map_err(|e| format!("{v:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match values[..] {
+        [half, full] if [half, full].iter().all(|v| v.is_finite() && *v > 0.0) => Ok([half, full]),
+        _ => Err(format!(
+            "expected HALF,FULL, two positive index spacings (e.g. 2.5,1.5), got {text:?}"
+        )),
+    }
+}
+
 pub fn run(args: &Args) -> Result<()> {
     let backend = backend_of(args)?;
     let device = backend.device()?;
@@ -483,12 +502,13 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.refine_distribution.is_some()
                 || args.sky_weight.is_some()
                 || args.convex_upsampling.is_some()
+                || args.stage_intervals.is_some()
             {
                 if net.family != Family::Cascade {
                     bail!(
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
-                         --refine-distribution, --sky-weight and --convex-upsampling are \
-                         options of --preset cascade"
+                         --refine-distribution, --sky-weight, --convex-upsampling and \
+                         --stage-intervals are options of --preset cascade"
                     );
                 }
                 if let Some(up) = args.convex_upsampling {
@@ -503,6 +523,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(weight) = args.sky_weight {
                     net.cascade.sky_loss_weight = weight;
+                }
+                if let Some(intervals) = args.stage_intervals {
+                    net.cascade.stage_intervals = intervals;
                 }
                 if let Some(pairs) = args.context_pairs {
                     net.cascade.context_pairs = pairs;
