@@ -225,14 +225,8 @@ impl Trainable for CascadeNet {
             let coarse = self.forward_coarse(images, geometry, true)?;
             let (target, mask) =
                 target_tensors(&sample.stage_gt[0], false, p.sky_loss_weight, &device);
-            return Ok(stage_loss(
-                coarse,
-                target,
-                mask,
-                p.loss_weights[0],
-                p.coarse_distribution_weight,
-                coarse_spacing(p.coarse_spheres, self.config.num_invdepth),
-            ));
+            let [terms, ..] = stage_terms(&self.config);
+            return Ok(stage_loss(coarse, target, mask, terms));
         }
         let (out, _) = self.forward_window(images, geometry, sample.window, false, true)?;
         let (mid, fine) = match sample.window {
@@ -257,24 +251,13 @@ impl Trainable for CascadeNet {
                 losses.push(masked_l1(up.clone(), target.clone(), mask.clone()).mul_scalar(*w));
             }
         }
-        let spacings = [
-            coarse_spacing(p.coarse_spheres, self.config.num_invdepth),
-            p.stage_intervals[0],
-            p.stage_intervals[1],
-        ];
-        let distribution_weights = [
-            p.coarse_distribution_weight,
-            p.refine_distribution_weight,
-            p.refine_distribution_weight,
-        ];
-        for (((stage, (target, mask)), w), (dw, spacing)) in out
+        for ((stage, (target, mask)), terms) in out
             .stages
             .into_iter()
             .zip(targets)
-            .zip(p.loss_weights)
-            .zip(distribution_weights.into_iter().zip(spacings))
+            .zip(stage_terms(&self.config))
         {
-            losses.push(stage_loss(stage, target, mask, w, dw, spacing));
+            losses.push(stage_loss(stage, target, mask, terms));
         }
         losses
             .into_iter()
@@ -330,21 +313,51 @@ impl Trainable for CascadeNet {
     }
 }
 
+/// What one stage's loss weighs: its L1 (`weight`), its distribution's cross-entropy
+/// (`distribution_weight`, none at 0) and the spacing of its hypotheses (`spacing`, `N` units;
+/// the cross-entropy's Laplacian has half of it as its scale).
+#[derive(Clone, Copy, Debug)]
+struct StageTerms {
+    weight: f64,
+    distribution_weight: f64,
+    spacing: f64,
+}
+
+/// The loss terms of the cascade's coarse, half- and full-resolution stages, in that order.
+fn stage_terms(config: &NetConfig) -> [StageTerms; 3] {
+    let p = &config.cascade;
+    let spacings = [
+        coarse_spacing(p.coarse_spheres, config.num_invdepth),
+        p.stage_intervals[0],
+        p.stage_intervals[1],
+    ];
+    let distribution_weights = [
+        p.coarse_distribution_weight,
+        p.refine_distribution_weight,
+        p.refine_distribution_weight,
+    ];
+    std::array::from_fn(|i| StageTerms {
+        weight: p.loss_weights[i],
+        distribution_weight: distribution_weights[i],
+        spacing: spacings[i],
+    })
+}
+
 /// One stage's loss: the L1 of its index against `target` (weighted by `mask`) times
-/// `weight`, plus, when `distribution_weight` is positive, that times the cross-entropy of its
-/// distribution against a Laplacian of half the stage's hypothesis `spacing` around the truth.
+/// `terms.weight`, plus, when `terms.distribution_weight` is positive, that times the
+/// cross-entropy of its distribution against a Laplacian of half `terms.spacing` around the
+/// truth.
 fn stage_loss(
     stage: StageOutput,
     target: Tensor<3>,
     mask: Tensor<3>,
-    weight: f64,
-    distribution_weight: f64,
-    spacing: f64,
+    terms: StageTerms,
 ) -> Tensor<1> {
-    let loss = masked_l1(stage.index, target.clone(), mask.clone()).mul_scalar(weight);
-    if distribution_weight > 0.0 {
-        let ce = distribution_ce(stage.prob, stage.hypotheses, target, mask, spacing / 2.0);
-        loss + ce.mul_scalar(distribution_weight)
+    let loss = masked_l1(stage.index, target.clone(), mask.clone()).mul_scalar(terms.weight);
+    if terms.distribution_weight > 0.0 {
+        let scale = terms.spacing / 2.0;
+        let ce = distribution_ce(stage.prob, stage.hypotheses, target, mask, scale);
+        loss + ce.mul_scalar(terms.distribution_weight)
     } else {
         loss
     }
