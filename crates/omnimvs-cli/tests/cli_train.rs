@@ -346,3 +346,56 @@ fn stage_intervals_are_checked_and_belong_to_the_cascade() {
         assert!(!run.exists(), "{intervals}: a refused run left a folder");
     }
 }
+
+#[test]
+fn coarse_feature_channels_and_cue_oversample_are_checked_and_belong_to_the_cascade() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let run = dir.path().join("run");
+    for (preset, flag, value, expected) in [
+        (
+            "cascade",
+            "--coarse-feature-channels",
+            "20",
+            "8 groups must divide 20",
+        ),
+        ("cascade", "--coarse-feature-channels", "128", "at most 64"),
+        (
+            "cascade",
+            "--coarse-cue-oversample",
+            "3",
+            "cascade.coarse_cue_oversample",
+        ),
+        (
+            "tiny",
+            "--coarse-cue-oversample",
+            "2",
+            "options of --preset cascade",
+        ),
+        (
+            "tiny",
+            "--coarse-feature-channels",
+            "32",
+            "options of --preset cascade",
+        ),
+    ] {
+        let o = omnimvs(
+            &[
+                "train",
+                "--data",
+                dir.path().to_str().unwrap(),
+                "--preset",
+                preset,
+                flag,
+                value,
+                "--out",
+                run.to_str().unwrap(),
+            ],
+            &cache,
+        );
+        assert!(!o.status.success(), "{flag} {value}: {}", text(&o.stdout));
+        let stderr = text(&o.stderr);
+        assert!(stderr.contains(expected), "{flag} {value}: {stderr}");
+        assert!(!run.exists(), "{flag} {value}: a refused run left a folder");
+    }
+}

@@ -119,6 +119,23 @@ pub struct CascadeParams {
     /// 102 400 pixels of the paper's grid, where the half grid's has a quarter of them.
     #[serde(default = "yes", skip_serializing_if = "is_true")]
     pub convex_upsampling_full: bool,
+    /// With `zncc_cue`, the grid the coarse stage's cue is matched on: `1` (and left out of
+    /// the file) the coarse grid itself, reading the quarter-size images; `2` the
+    /// half-resolution grid at the same spheres, reading the half-size images, each coarse
+    /// pixel taking the mean of its 2 x 2 (4x the samples). Fine repetitive texture (the
+    /// stripes of things frames' rooms) is averaged away in the quarter-size images, and the
+    /// coarse stage then misses by more than the refinement can reach where ZNCC+SGM, which
+    /// matches the full-size images, does not.
+    #[serde(default = "one_usize", skip_serializing_if = "is_one_usize")]
+    pub coarse_cue_oversample: usize,
+}
+
+fn one_usize() -> usize {
+    1
+}
+
+fn is_one_usize(value: &usize) -> bool {
+    *value == 1
 }
 
 fn yes() -> bool {
@@ -164,6 +181,7 @@ impl Default for CascadeParams {
             sky_loss_weight: 1.0,
             convex_upsampling: false,
             convex_upsampling_full: true,
+            coarse_cue_oversample: 1,
         }
     }
 }
@@ -373,6 +391,15 @@ impl NetConfig {
                 ));
             }
         }
+        if !matches!(p.coarse_cue_oversample, 1 | 2) {
+            return Err(invalid(
+                "cascade.coarse_cue_oversample",
+                format!(
+                    "{} must be 1 (the coarse grid) or 2 (the half-resolution grid)",
+                    p.coarse_cue_oversample
+                ),
+            ));
+        }
         if p.coarse_spheres < 2 || p.coarse_spheres > self.num_invdepth {
             return Err(invalid(
                 "cascade.coarse_spheres",
@@ -383,6 +410,15 @@ impl NetConfig {
             ));
         }
         for (level, (&ch, &g)) in p.feature_channels.iter().zip(&p.groups).enumerate() {
+            if ch > crate::cascade::host::MAX_CHANNELS {
+                return Err(invalid(
+                    "cascade.feature_channels",
+                    format!(
+                        "level {level}: {ch} channels, at most {} (the host correlation's limit)",
+                        crate::cascade::host::MAX_CHANNELS
+                    ),
+                ));
+            }
             if ch == 0 || g == 0 || ch % g != 0 {
                 return Err(invalid(
                     "cascade.groups",
@@ -510,6 +546,26 @@ mod tests {
         let json = serde_json::to_string(&learnt).unwrap();
         assert!(json.contains("\"convex_upsampling_full\":false"), "{json}");
         assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), learnt);
+    }
+
+    #[test]
+    fn the_coarse_cue_is_matched_on_the_coarse_grid_unless_written() {
+        let json = serde_json::to_string(&NetConfig::cascade()).unwrap();
+        assert!(!json.contains("coarse_cue_oversample"), "{json}");
+        let mut fine = NetConfig::cascade();
+        fine.cascade.coarse_cue_oversample = 2;
+        let json = serde_json::to_string(&fine).unwrap();
+        assert!(json.contains("\"coarse_cue_oversample\":2"), "{json}");
+        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), fine);
+        for bad in [0, 3, 4] {
+            fine.cascade.coarse_cue_oversample = bad;
+            let err = fine.validate().unwrap_err().to_string();
+            assert!(err.contains("cascade.coarse_cue_oversample"), "{err}");
+        }
+        let mut wide = NetConfig::cascade();
+        wide.cascade.feature_channels[2] = 128;
+        let err = wide.validate().unwrap_err().to_string();
+        assert!(err.contains("cascade.feature_channels"), "{err}");
     }
 
     #[test]

@@ -254,7 +254,12 @@ pub fn load_cascade_grown(
     shrunk.cascade.convex_upsampling_full = saved.cascade.convex_upsampling_full;
     // The refinement stages' hypothesis spacing: no weight depends on it.
     shrunk.cascade.stage_intervals = saved.cascade.stage_intervals;
+    // Nor on the grid the coarse cue is matched on.
+    shrunk.cascade.coarse_cue_oversample = saved.cascade.coarse_cue_oversample;
+    // The stride-8 features may widen (CascadeFeatures::widen8).
+    shrunk.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
+        && saved.cascade.feature_channels[2] <= config.cascade.feature_channels[2]
         && (!saved.cascade.stage_gates || config.cascade.stage_gates)
         && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
         && (!saved.cascade.convex_upsampling || config.cascade.convex_upsampling);
@@ -262,9 +267,10 @@ pub fn load_cascade_grown(
         return Err(weights_error(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
-             (only `context_pairs` may grow, `stage_gates`, `zncc_cue` and \
+             (only `context_pairs` and the stride-8 `feature_channels` may grow, `stage_gates`, `zncc_cue` and \
              `convex_upsampling` switch on, `convex_upsampling_full` switch either way, and \
-             the refinement stages' `stage_intervals` and the loss weights differ)",
+             the refinement stages' `stage_intervals`, `coarse_cue_oversample` and the loss \
+             weights differ)",
         ));
     }
     let has_fine = |c: &NetConfig| c.cascade.convex_upsampling && c.cascade.convex_upsampling_full;
@@ -285,6 +291,7 @@ pub fn load_cascade_grown(
     // it, then widen (zero weights for the cue).
     let mut without_cue = config.clone();
     without_cue.cascade.zncc_cue = saved.cascade.zncc_cue;
+    without_cue.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
     let dropped = |p: &str| saved_fine && !fine && p.starts_with("up_fine.");
     let net = apply_file_except(
         CascadeNet::new(&without_cue, device)?,
@@ -292,11 +299,12 @@ pub fn load_cascade_grown(
         is_new,
         dropped,
     )?;
-    Ok(if config.cascade.zncc_cue {
+    let net = if config.cascade.zncc_cue {
         net.with_zncc_cue()
     } else {
         net
-    })
+    };
+    net.with_coarse_feature_channels(config.cascade.feature_channels[2])
 }
 
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes

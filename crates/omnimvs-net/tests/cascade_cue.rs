@@ -145,3 +145,51 @@ fn the_cue_peaks_at_the_truth_on_a_rendered_sphere() {
         .unwrap();
     assert!(taps.cue.is_none());
 }
+
+#[test]
+fn the_coarse_cue_matched_on_the_half_grid_is_the_mean_of_its_blocks_and_peaks_at_the_truth() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let mut config = NetConfig::cascade();
+    config.cascade.zncc_cue = true;
+    let mut fine_config = config.clone();
+    fine_config.cascade.coarse_cue_oversample = 2;
+    let hyps = ds.hypotheses(config.num_invdepth).unwrap();
+    let truth = hyps.index(1.0 / RADIUS_M);
+    let device = Device::flex();
+    let geometry = CascadeGeometry::new(&ds.rig, &fine_config, &hyps, &device).unwrap();
+    let [rows, cols] = [config.input_height, config.input_width];
+    let pyramid = ImagePyramid::new(render(&ds.rig, rows, cols), [rows, cols]).unwrap();
+
+    // The cue has the coarse volume's shape...
+    let cue = geometry.coarse_cue(Some(&pyramid)).unwrap().unwrap();
+    let k = config.cascade.coarse_spheres;
+    let [h, w] = config.cascade_sizes()[0];
+    assert_eq!(cue.dims(), [1, 1, k, h, w]);
+    let cue = read_values(cue, "cue").unwrap();
+    // ...and each value is the mean of the half-size images' cue over its 2 x 2 block of the
+    // half-resolution grid (the grids the geometry keeps for it).
+    let fine = pyramid.zncc(1, &geometry.coarse_grids).unwrap();
+    let (fh, fw) = (2 * h, 2 * w);
+    assert_eq!(fine.len(), k * fh * fw);
+    for (s, r, c) in [(0, 0, 0), (5, 10, 17), (17, 21, 80), (31, h - 1, w - 1)] {
+        let at = |rr: usize, cc: usize| fine[s * fh * fw + rr * fw + cc];
+        let mean = 0.25
+            * (at(2 * r, 2 * c)
+                + at(2 * r, 2 * c + 1)
+                + at(2 * r + 1, 2 * c)
+                + at(2 * r + 1, 2 * c + 1));
+        let got = cue[s * h * w + r * w + c];
+        assert!(
+            (got - mean).abs() < 1e-6,
+            "sphere {s} ({r}, {c}): {got} vs {mean}"
+        );
+    }
+    // It still peaks at the sphere nearest the truth.
+    let spheres = coarse_indices(k, config.num_invdepth);
+    let spacing = spheres[1] - spheres[0];
+    let share = share_at_truth(&cue, &|j, _| spheres[j], k, truth, spacing / 2.0);
+    assert!(
+        share > 0.9,
+        "best sphere nearest the truth at {share:.3} of the pixels"
+    );
+}

@@ -398,3 +398,102 @@ fn weights_load_into_a_network_of_another_refinement_spacing() {
         "hypothesis spacing {a} and {b}"
     );
 }
+
+#[test]
+fn the_stride_8_features_widen_keeping_the_coarse_answer_and_the_new_channels_learn() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let config = micro_config(); // stride 8: 8 channels in 4 groups of 2
+    let device = Device::flex();
+    let net = CascadeNet::new(&config, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("net.safetensors");
+    weights::save_module(&net, &config, &path).unwrap();
+
+    let mut wide = config.clone();
+    wide.cascade.feature_channels[2] = 16; // 4 groups of 4
+    let loaded = weights::load_cascade_grown(&path, &wide, &device).unwrap();
+    assert_eq!(loaded.config.cascade.feature_channels, [4, 4, 16]);
+    assert_eq!(loaded.features.out8.conv.weight.dims(), [16, 16, 1, 1]);
+
+    // Every old channel is in its group, scaled by sqrt(4 / 2); the other strides are untouched.
+    let inputs = images(&config, &device);
+    let [f2, _, f8] = net.features.forward(inputs[0].clone());
+    let [g2, _, g8] = loaded.features.forward(inputs[0].clone());
+    let (f8, g8) = (
+        read_values(f8, "f8").unwrap(),
+        read_values(g8, "g8").unwrap(),
+    );
+    assert_eq!(
+        read_values(f2, "f2").unwrap(),
+        read_values(g2, "g2").unwrap()
+    );
+    let plane = f8.len() / 8;
+    for g in 0..4 {
+        for j in 0..2 {
+            let (old, new) = (g * 2 + j, g * 4 + j);
+            for p in 0..plane {
+                let (a, b) = (f8[old * plane + p] * 2f32.sqrt(), g8[new * plane + p]);
+                assert!(
+                    (a - b).abs() <= 1e-4 * (1.0 + a.abs()),
+                    "channel {old} -> {new}: {a} {b}"
+                );
+            }
+        }
+    }
+    // So the coarse answer moves only by the new channels' small products.
+    let geometry = CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap();
+    let before = net.forward(&inputs, &geometry).unwrap();
+    let after = loaded.forward(&inputs, &geometry).unwrap();
+    let coarse = |out: &omnimvs_net::cascade::CascadeOutput| {
+        read_values(out.stages[0].index.clone(), "coarse").unwrap()
+    };
+    let moved = coarse(&before)
+        .iter()
+        .zip(coarse(&after))
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(moved < 0.05, "the coarse answer moved by {moved}");
+    // Narrowing, or a width the groups do not divide, is refused.
+    let wide_path = dir.path().join("wide.safetensors");
+    weights::save_module(&loaded, &wide, &wide_path).unwrap();
+    assert!(weights::load_cascade_grown(&wide_path, &config, &device).is_err());
+    let mut odd = config.clone();
+    odd.cascade.feature_channels[2] = 10;
+    assert!(weights::load_cascade_grown(&path, &odd, &device).is_err());
+
+    // The new channels get gradients from the coarse stage: the new trunk rows and the
+    // projection's new rows.
+    let device = Device::flex().autodiff();
+    let learner = weights::load_cascade_grown(&path, &wide, &device).unwrap();
+    let geometry = CascadeGeometry::new(&ds.rig, &wide, &hyps, &device).unwrap();
+    let out = learner.forward(&images(&wide, &device), &geometry).unwrap();
+    let loss = out.stages[0].index.clone().sub_scalar(10.0).abs().mean();
+    let grads = GradientsParams::from_grads(loss.backward(), &learner);
+    let rows = |id, from: usize| {
+        let grad = read_values(grads.get::<4>(id).expect("a gradient"), "grad").unwrap();
+        let per_row = grad.len() / 16;
+        grad[from * per_row..].iter().map(|g| g.abs()).sum::<f32>()
+    };
+    let down8 = rows(learner.features.down8.conv.weight.id, 8);
+    assert!(
+        down8 > 0.0 && down8.is_finite(),
+        "down8's new rows: {down8}"
+    );
+    let out8 = learner.features.out8.conv.weight.id;
+    let grad = read_values(grads.get::<4>(out8).unwrap(), "grad").unwrap();
+    // Rows 2, 3 of every group of 4 are new.
+    let new_rows: f32 = (0..4)
+        .flat_map(|g| [g * 4 + 2, g * 4 + 3])
+        .map(|row| {
+            grad[row * 16..(row + 1) * 16]
+                .iter()
+                .map(|g| g.abs())
+                .sum::<f32>()
+        })
+        .sum();
+    assert!(
+        new_rows > 0.0 && new_rows.is_finite(),
+        "out8's new rows: {new_rows}"
+    );
+}

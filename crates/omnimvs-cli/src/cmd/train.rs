@@ -123,6 +123,17 @@ pub struct Args {
     /// with a network without them goes on from its answer.
     #[arg(long, conflicts_with = "resume")]
     pub context_pairs: Option<usize>,
+    /// Cascade: channels of the stride-8 features that the coarse stage correlates
+    /// (`feature_channels[2]`, 16 until `cascade-21`); a multiple of the coarse stage's 8
+    /// groups, at most 64. --init weights of a narrower network widen into it answering as
+    /// before (up to a perturbation of about 1 % of the coarse correlation).
+    #[arg(long, conflicts_with = "resume")]
+    pub coarse_feature_channels: Option<usize>,
+    /// Cascade with the photometric cue: the grid the coarse stage's cue is matched on, 1 the
+    /// coarse grid (quarter-size images), 2 the half-resolution grid (half-size images, 2 x 2
+    /// means; `coarse_cue_oversample`, from `cascade-22`). No weight depends on it.
+    #[arg(long, conflicts_with = "resume")]
+    pub coarse_cue_oversample: Option<usize>,
     /// Cascade: refinement stages gated between their answer and their centre
     /// (`stage_gates`; off in the first cascades). Taken with --init like --context-pairs.
     #[arg(long, value_enum, conflicts_with = "resume")]
@@ -503,12 +514,15 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.sky_weight.is_some()
                 || args.convex_upsampling.is_some()
                 || args.stage_intervals.is_some()
+                || args.coarse_feature_channels.is_some()
+                || args.coarse_cue_oversample.is_some()
             {
                 if net.family != Family::Cascade {
                     bail!(
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
-                         --refine-distribution, --sky-weight, --convex-upsampling and \
-                         --stage-intervals are options of --preset cascade"
+                         --refine-distribution, --sky-weight, --convex-upsampling, \
+                         --stage-intervals, --coarse-feature-channels and \
+                         --coarse-cue-oversample are options of --preset cascade"
                     );
                 }
                 if let Some(up) = args.convex_upsampling {
@@ -526,6 +540,12 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(intervals) = args.stage_intervals {
                     net.cascade.stage_intervals = intervals;
+                }
+                if let Some(factor) = args.coarse_cue_oversample {
+                    net.cascade.coarse_cue_oversample = factor;
+                }
+                if let Some(channels) = args.coarse_feature_channels {
+                    net.cascade.feature_channels[2] = channels;
                 }
                 if let Some(pairs) = args.context_pairs {
                     net.cascade.context_pairs = pairs;

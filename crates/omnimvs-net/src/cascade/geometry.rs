@@ -186,8 +186,10 @@ pub struct CascadeGeometry {
     /// Whether the stages correlate on the host (inference on a CPU backend, no gradient:
     /// [`CascadeGeometry::with_host_correlation`]) or through device tensors (training, GPUs).
     pub host_correlation: bool,
-    /// The coarse stage's sample positions, one grid per camera, kept for the photometric
-    /// cue when the network has one (`zncc_cue`); empty otherwise.
+    /// The photometric cue's sample positions for the coarse stage, one grid per camera,
+    /// when the network has the cue (`zncc_cue`; empty otherwise): the coarse stage's own
+    /// samples, or with `coarse_cue_oversample` 2 those of the half-resolution grid at the
+    /// same spheres.
     pub coarse_grids: Vec<SweepGrid>,
 }
 
@@ -249,6 +251,15 @@ impl CascadeGeometry {
             host_correlation,
             device,
         )?;
+        let cue_grids = match (
+            config.cascade.zncc_cue,
+            config.cascade.coarse_cue_oversample,
+        ) {
+            (false, _) => Vec::new(),
+            (true, 1) => coarse_grids,
+            // The half-resolution grid's samples at the coarse spheres.
+            (true, _) => samplers[1].sphere_grids(&spheres)?,
+        };
         Ok(Self {
             coarse,
             samplers,
@@ -256,11 +267,7 @@ impl CascadeGeometry {
             config: config.clone(),
             device: device.clone(),
             host_correlation,
-            coarse_grids: if config.cascade.zncc_cue {
-                coarse_grids
-            } else {
-                Vec::new()
-            },
+            coarse_grids: cue_grids,
         })
     }
 
@@ -270,9 +277,41 @@ impl CascadeGeometry {
     /// # Errors
     /// [`NetError::Shape`] when the images are not one per camera of the rig.
     pub fn coarse_cue(&self, images: Option<&ImagePyramid>) -> Result<Option<Tensor<5>>, NetError> {
-        images
-            .map(|pyramid| pyramid.zncc_tensor(2, &self.coarse_grids, &self.device))
-            .transpose()
+        let Some(pyramid) = images else {
+            return Ok(None);
+        };
+        let factor = self.config.cascade.coarse_cue_oversample;
+        if factor == 1 {
+            return pyramid
+                .zncc_tensor(2, &self.coarse_grids, &self.device)
+                .map(Some);
+        }
+        // Matched on the finer grid (images of the matching level), then each coarse pixel
+        // the mean of its factor x factor block.
+        let level = 2 - factor.trailing_zeros() as usize;
+        let fine = pyramid.zncc(level, &self.coarse_grids)?;
+        let Some(first) = self.coarse_grids.first() else {
+            return Ok(None);
+        };
+        let (k, h, w) = (first.num_spheres, first.height, first.width);
+        let (ch, cw) = (h / factor, w / factor);
+        let scale = 1.0 / (factor * factor) as f32;
+        let mut coarse = vec![0f32; k * ch * cw];
+        for (plane, out) in fine
+            .chunks_exact(h * w)
+            .zip(coarse.chunks_exact_mut(ch * cw))
+        {
+            for (r, row) in plane.chunks_exact(w).enumerate() {
+                let dst = &mut out[(r / factor) * cw..(r / factor + 1) * cw];
+                for (c, value) in row.iter().enumerate() {
+                    dst[c / factor] += value * scale;
+                }
+            }
+        }
+        Ok(Some(Tensor::from_data(
+            TensorData::new(coarse, [1, 1, k, ch, cw]),
+            &self.device,
+        )))
     }
 
     /// The taps of refinement stage `stage` (1: half, 2: full resolution) around `previous`,
