@@ -16,8 +16,11 @@
 #   OMNIMVS_WGPU    omnimvs built with --features wgpu [./dist/omnimvs-wgpu]; skipped if missing
 #   BACKEND         the GPU backend of the libtorch binary [libtorch-cuda:0]
 #   TRAIN_FRAMES    training frames generated per set [40]; TRAIN_SECONDS: the training run's
-#                   limit [180]; TRAIN_LR [0.00001]; TRAIN_WINDOW: --column-window [none: the
-#                   whole panorama]
+#                   limit [180]; TRAIN_LR [0.00001]; TRAIN_LR_LOW: the rate of the last
+#                   --low-lr-epochs [TRAIN_LR / 10]; TRAIN_WINDOW: --column-window [none: the
+#                   whole panorama]; TRAIN_INIT: the weights it starts from [the bundled
+#                   cascade]; TRAIN_EXTRA: more options of `omnimvs train`, space-separated
+#                   (e.g. "--train-only coarse --coarse-feature-channels 32")
 #   STEPS_PER_EPOCH [100]; VAL_FRAMES: validation frames of the two standard sets [481..488]
 #   WORK            scratch folder for data and runs [/tmp/omnimvs-gpu]
 #   PYTHON          [python3]
@@ -165,12 +168,17 @@ if want train; then
     sets=$(ls -d "$D"/*-s1?? | paste -sd, -)
     window=()
     [ -n "${TRAIN_WINDOW:-}" ] && window=(--column-window "$TRAIN_WINDOW")
+    lr="${TRAIN_LR:-0.00001}"
+    lr_low="${TRAIN_LR_LOW:-$(awk -v r="$lr" 'BEGIN { print r / 10 }')}"
+    read -r -a extra <<<"${TRAIN_EXTRA:-}"
     step train-cascade "${TRAIN_SECONDS:-180}" "$bin" train --preset cascade --context-pairs 2 \
         --stage-gates on --zncc-cue on --coarse-distribution 2 --refine-distribution 1 \
-        --sky-weight 0.1 --convex-upsampling half --init "$root/models/omnimvs-cascade.safetensors" \
-        --frozen-norm-stats on --select-by reference --optimizer adam --lr "${TRAIN_LR:-0.00001}" \
+        --sky-weight 0.1 --convex-upsampling half \
+        --init "${TRAIN_INIT:-$root/models/omnimvs-cascade.safetensors}" \
+        --frozen-norm-stats on --select-by reference --optimizer adam --lr "$lr" \
+        --lr-low "$lr_low" --low-lr-epochs 3 \
         --epochs 100 --max-steps "${STEPS_PER_EPOCH:-100}" --data "$sets" --val-frames "$val" \
-        --max-val-frames 16 \
+        --max-val-frames 16 "${extra[@]}" \
         --seed 29 --photometric on "${window[@]}" --backend "$backend" --out "$work/run"
     cat "$work/run/metrics.jsonl" 2>/dev/null | tail -n 20
 fi
