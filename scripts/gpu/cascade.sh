@@ -22,6 +22,8 @@
 #                   cascade]; TRAIN_EXTRA: more options of `omnimvs train`, space-separated
 #                   (e.g. "--train-only coarse --coarse-feature-channels 32")
 #   STEPS_PER_EPOCH [100]; VAL_FRAMES: validation frames of the two standard sets [481..488]
+#   LOADER_THREADS  threads preparing the training samples [8] (one left the GPU idle two
+#                   thirds of the time in stop 30)
 #   WORK            scratch folder for data and runs [/tmp/omnimvs-gpu]
 #   PYTHON          [python3]
 #   DEADLINE        seconds from the start after which no step starts, and to which the last
@@ -178,7 +180,7 @@ if want train; then
         --frozen-norm-stats on --select-by reference --optimizer adam --lr "$lr" \
         --lr-low "$lr_low" --low-lr-epochs 3 \
         --epochs 100 --max-steps "${STEPS_PER_EPOCH:-100}" --data "$sets" --val-frames "$val" \
-        --max-val-frames 16 "${extra[@]}" \
+        --max-val-frames 16 --loader-threads "${LOADER_THREADS:-8}" "${extra[@]}" \
         --seed 29 --photometric on "${window[@]}" --backend "$backend" --out "$work/run"
     cat "$work/run/metrics.jsonl" 2>/dev/null | tail -n 20
 fi

@@ -146,7 +146,8 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
     std::fs::remove_file(&blocker).unwrap();
 
     // Resumed from there (after the failed attempt), the run ends as the straight one below;
-    // --backend overrides the recorded backend and is recorded in its place.
+    // --backend overrides the recorded backend and is recorded in its place, and so does
+    // --loader-threads.
     std::fs::write(&backend_file, "libtorch\n").unwrap();
     let stdout = run_ok(
         &[
@@ -155,15 +156,20 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
             resumed.to_str().unwrap(),
             "--backend",
             "cpu",
+            "--loader-threads",
+            "2",
         ],
         &cache,
     );
     assert!(stdout.contains("epochs 2..2 of 2"), "{stdout}");
     assert_eq!(std::fs::read_to_string(&backend_file).unwrap(), "cpu\n");
+    let config = read_json(&resumed.join("train_config.json"));
+    assert_eq!(config["loader_threads"].as_u64(), Some(2), "{config}");
 
-    // The same run in one go.
+    // The same run in one go, its samples prepared by three threads: the same samples in
+    // the same order.
     let straight = dir.path().join("straight");
-    train(&straight, &["--lr", "0.002"]);
+    train(&straight, &["--lr", "0.002", "--loader-threads", "3"]);
     let (a, b) = (epochs(&resumed), epochs(&straight));
     assert_eq!(a.len(), 2);
     assert_eq!(

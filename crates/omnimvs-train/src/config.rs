@@ -94,8 +94,12 @@ pub struct TrainConfig {
     pub max_steps_per_epoch: Option<usize>,
     /// Validation frames per epoch at most (`None`: all of them).
     pub max_val_frames: Option<usize>,
-    /// Samples prepared ahead by the loader thread.
+    /// Samples prepared ahead by the loader threads.
     pub prefetch: usize,
+    /// Threads preparing the samples (absent in older runs: 1). The samples and their order
+    /// do not depend on it; a GPU's steps outrun one thread.
+    #[serde(default = "one_thread", skip_serializing_if = "is_one_thread")]
+    pub loader_threads: usize,
     /// Weights the run started from (`--init`, fine-tuning), if any.
     pub init: Option<PathBuf>,
     /// Columns (of the output grid) of the window of longitudes the cascade's refinement
@@ -118,6 +122,14 @@ pub struct TrainConfig {
     /// The weights the run trains (absent in older runs: all of them).
     #[serde(skip_serializing_if = "is_all")]
     pub train_only: TrainParts,
+}
+
+fn one_thread() -> usize {
+    1
+}
+
+fn is_one_thread(threads: &usize) -> bool {
+    *threads == 1
 }
 
 fn is_all(parts: &TrainParts) -> bool {
@@ -150,6 +162,7 @@ impl Default for TrainConfig {
             max_steps_per_epoch: None,
             max_val_frames: None,
             prefetch: 4,
+            loader_threads: 1,
             init: None,
             column_window: None,
             photometric: None,
@@ -193,6 +206,12 @@ impl TrainConfig {
             return Err(invalid(
                 "momentum",
                 format!("must be in [0, 1), got {}", self.momentum),
+            ));
+        }
+        if self.loader_threads == 0 || self.loader_threads > 64 {
+            return Err(invalid(
+                "loader_threads",
+                format!("must be 1 to 64, got {}", self.loader_threads),
             ));
         }
         if self.rotations == 0 {

@@ -1,4 +1,4 @@
-//! The loader thread: reads and prepares the samples of an epoch in order while the main
+//! The loader threads: read and prepare the samples of an epoch in order while the main
 //! thread runs the training steps, `prefetch` samples ahead.
 
 use std::sync::Arc;
@@ -26,46 +26,76 @@ pub struct PlanItem {
     pub photometric_seed: u64,
 }
 
-/// A running loader; dropping the receiver stops the thread after its current sample.
+/// A running loader; dropping it stops its threads after their current samples.
 pub struct Loader {
-    /// Prepared samples in plan order, with the plan item they belong to.
-    pub samples: Receiver<(PlanItem, Result<Sample, TrainError>)>,
-    handle: Option<JoinHandle<()>>,
+    /// One channel per thread; item `i` of the plan comes from channel `i % threads`.
+    channels: Vec<Receiver<(PlanItem, Result<Sample, TrainError>)>>,
+    /// Items received so far (which channel is next).
+    received: usize,
+    handles: Vec<JoinHandle<()>>,
 }
 
 impl Loader {
-    /// Starts a thread that loads `plan` from `sources`, applying `photometric` (with each
-    /// item's seed) when given.
+    /// Starts `threads` threads (at least 1) that load `plan` from `sources`, applying
+    /// `photometric` (with each item's seed) when given; thread `t` prepares items `t`,
+    /// `t + threads`, ... up to `prefetch / threads` (at least 1) ahead, so the samples come
+    /// out in plan order and each is what one thread would have made of it (a sample depends
+    /// on its item alone). More than one thread is for a GPU, whose steps outrun one thread
+    /// decoding four full-size images per step.
     pub fn spawn(
         sources: Arc<Vec<SampleSource>>,
         plan: Vec<PlanItem>,
         prefetch: usize,
+        threads: usize,
         photometric: Option<PhotometricAugment>,
     ) -> Self {
-        let (tx, rx) = sync_channel(prefetch.max(1));
-        let handle = std::thread::spawn(move || {
-            for item in plan {
-                let augment = photometric.as_ref().map(|p| (p, item.photometric_seed));
-                let sample =
-                    sources[item.source].load(item.source, item.frame, item.rotation, augment);
-                if tx.send((item, sample)).is_err() {
-                    break;
+        let threads = threads.max(1);
+        let depth = prefetch.div_ceil(threads).max(1);
+        let plan = Arc::new(plan);
+        let mut channels = Vec::with_capacity(threads);
+        let mut handles = Vec::with_capacity(threads);
+        for thread in 0..threads {
+            let (tx, rx) = sync_channel(depth);
+            let (sources, plan, photometric) =
+                (Arc::clone(&sources), Arc::clone(&plan), photometric.clone());
+            handles.push(std::thread::spawn(move || {
+                for item in plan.iter().skip(thread).step_by(threads) {
+                    let augment = photometric.as_ref().map(|p| (p, item.photometric_seed));
+                    let sample =
+                        sources[item.source].load(item.source, item.frame, item.rotation, augment);
+                    if tx.send((*item, sample)).is_err() {
+                        break;
+                    }
                 }
-            }
-        });
-        Self {
-            samples: rx,
-            handle: Some(handle),
+            }));
+            channels.push(rx);
         }
+        Self {
+            channels,
+            received: 0,
+            handles,
+        }
+    }
+
+}
+
+/// The samples in plan order; `None` after the last one (or when its thread ended).
+impl Iterator for Loader {
+    type Item = (PlanItem, Result<Sample, TrainError>);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let channel = &self.channels[self.received % self.channels.len()];
+        let next = channel.recv().ok()?;
+        self.received += 1;
+        Some(next)
     }
 }
 
 impl Drop for Loader {
     fn drop(&mut self) {
-        // Unblock a sender waiting on a full channel, then wait for the thread.
-        let (_, rx) = sync_channel(1);
-        drop(std::mem::replace(&mut self.samples, rx));
-        if let Some(handle) = self.handle.take() {
+        // Unblock the senders waiting on full channels, then wait for the threads.
+        self.channels.clear();
+        for handle in self.handles.drain(..) {
             let _ = handle.join();
         }
     }

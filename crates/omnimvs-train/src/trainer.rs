@@ -356,6 +356,20 @@ impl<M: Trainable> Trainer<M> {
         Ok(g)
     }
 
+    /// Sets the number of loader threads from now on (a resumed run may move to a machine
+    /// with more cores) and records it in `train_config.json`; the samples do not change.
+    ///
+    /// # Errors
+    /// [`TrainError`] for 0 threads or a file that cannot be written.
+    pub fn set_loader_threads(&mut self, threads: usize) -> Result<(), TrainError> {
+        let mut config = self.config.clone();
+        config.loader_threads = threads;
+        config.validate()?;
+        write_json(&self.run_dir.join("train_config.json"), &config)?;
+        self.config = config;
+        Ok(())
+    }
+
     /// Sets the training window of longitudes from now on (a resumed run may take one it
     /// did not have) and records it in `train_config.json`.
     ///
@@ -445,10 +459,11 @@ impl<M: Trainable> Trainer<M> {
         let lr = self.config.lr_at(epoch);
         let plan = self.plan(epoch);
         let steps = plan.len();
-        let loader = Loader::spawn(
+        let mut loader = Loader::spawn(
             Arc::clone(&self.sources),
             plan,
             self.config.prefetch,
+            self.config.loader_threads,
             self.config.photometric.clone(),
         );
         let cams = self.config.net.num_cameras;
@@ -456,7 +471,7 @@ impl<M: Trainable> Trainer<M> {
         let start = Instant::now();
         for step in 0..steps {
             let waited = Instant::now();
-            let Ok((item, sample)) = loader.samples.recv() else {
+            let Some((item, sample)) = loader.next() else {
                 break;
             };
             wait += waited.elapsed().as_secs_f64();

@@ -134,6 +134,11 @@ pub struct Args {
     /// means; `coarse_cue_oversample`, from `cascade-22`). No weight depends on it.
     #[arg(long, conflicts_with = "resume")]
     pub coarse_cue_oversample: Option<usize>,
+    /// Threads preparing the training samples (decoding the images, augmenting; 1 by
+    /// default). The samples and their order do not depend on it: more is for a GPU, whose
+    /// steps outrun one thread. Also taken by --resume.
+    #[arg(long)]
+    pub loader_threads: Option<usize>,
     /// Cascade: refinement stages gated between their answer and their centre
     /// (`stage_gates`; off in the first cascades). Taken with --init like --context-pairs.
     #[arg(long, value_enum, conflicts_with = "resume")]
@@ -491,6 +496,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
             if args.column_window.is_some() {
                 trainer.set_column_window(args.column_window)?;
             }
+            if let Some(threads) = args.loader_threads {
+                trainer.set_loader_threads(threads)?;
+            }
             match args.photometric {
                 // Keep the ranges of a run that has them.
                 Some(Switch::On) if trainer.config.photometric.is_none() => {
@@ -577,6 +585,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 permute_cameras: !args.no_permute,
                 max_steps_per_epoch: args.max_steps,
                 max_val_frames: args.max_val_frames,
+                loader_threads: args.loader_threads.unwrap_or(1),
                 init: args.init.clone(),
                 column_window: args.column_window,
                 photometric: (args.photometric == Some(Switch::On))
