@@ -373,6 +373,18 @@ fn coarse_feature_channels_and_cue_oversample_are_checked_and_belong_to_the_casc
             "cascade.coarse_cue_oversample",
         ),
         (
+            "cascade",
+            "--coarse-cue-depths",
+            "2",
+            "cascade.coarse_cue_depths",
+        ),
+        (
+            "tiny",
+            "--coarse-cue-depths",
+            "3",
+            "options of --preset cascade",
+        ),
+        (
             "tiny",
             "--coarse-cue-oversample",
             "2",

@@ -256,6 +256,7 @@ pub fn load_cascade_grown(
     shrunk.cascade.stage_intervals = saved.cascade.stage_intervals;
     // Nor on the grid the coarse cue is matched on.
     shrunk.cascade.coarse_cue_oversample = saved.cascade.coarse_cue_oversample;
+    shrunk.cascade.coarse_cue_depths = saved.cascade.coarse_cue_depths;
     // The stride-8 features may widen (CascadeFeatures::widen8).
     shrunk.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
@@ -269,8 +270,8 @@ pub fn load_cascade_grown(
             "the network of these weights is neither the one asked for nor a part of it \
              (only `context_pairs` and the stride-8 `feature_channels` may grow, `stage_gates`, `zncc_cue` and \
              `convex_upsampling` switch on, `convex_upsampling_full` switch either way, and \
-             the refinement stages' `stage_intervals`, `coarse_cue_oversample` and the loss \
-             weights differ)",
+             the refinement stages' `stage_intervals`, `coarse_cue_oversample`, `coarse_cue_depths` and \
+             the loss weights differ)",
         ));
     }
     let has_fine = |c: &NetConfig| c.cascade.convex_upsampling && c.cascade.convex_upsampling_full;

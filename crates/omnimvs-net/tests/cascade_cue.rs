@@ -10,6 +10,7 @@ use nalgebra::Vector3;
 use omnimvs_camera::{Pixel, Rig};
 use omnimvs_data::Dataset;
 use omnimvs_net::NetConfig;
+use omnimvs_net::cascade::geometry::coarse_cue_spheres;
 use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::photo::ImagePyramid;
 use omnimvs_net::cascade::sampler::coarse_indices;
@@ -187,6 +188,52 @@ fn the_coarse_cue_matched_on_the_half_grid_is_the_mean_of_its_blocks_and_peaks_a
     // It still peaks at the sphere nearest the truth.
     let spheres = coarse_indices(k, config.num_invdepth);
     let spacing = spheres[1] - spheres[0];
+    let share = share_at_truth(&cue, &|j, _| spheres[j], k, truth, spacing / 2.0);
+    assert!(
+        share > 0.9,
+        "best sphere nearest the truth at {share:.3} of the pixels"
+    );
+}
+
+#[test]
+fn the_coarse_cue_at_several_depths_per_sphere_takes_the_best_and_peaks_at_the_truth() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let mut config = NetConfig::cascade();
+    config.cascade.zncc_cue = true;
+    config.cascade.coarse_cue_oversample = 2;
+    let mut deep = config.clone();
+    deep.cascade.coarse_cue_depths = 3;
+    let hyps = ds.hypotheses(config.num_invdepth).unwrap();
+    let truth = hyps.index(1.0 / RADIUS_M);
+    let device = Device::flex();
+    let one = CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap();
+    let three = CascadeGeometry::new(&ds.rig, &deep, &hyps, &device).unwrap();
+    let [rows, cols] = [config.input_height, config.input_width];
+    let pyramid = ImagePyramid::new(render(&ds.rig, rows, cols), [rows, cols]).unwrap();
+
+    // The depths: the spheres, then each a third of the spacing nearer and farther, clamped
+    // to the range.
+    let k = config.cascade.coarse_spheres;
+    let spheres = coarse_indices(k, config.num_invdepth);
+    let spacing = spheres[1] - spheres[0];
+    let depths = coarse_cue_spheres(&spheres, 3, config.num_invdepth);
+    assert_eq!(depths.len(), 3 * k);
+    assert_eq!(&depths[..k], &spheres[..]);
+    assert!((depths[k + 5] - (spheres[5] - spacing / 3.0)).abs() < 1e-9);
+    assert!((depths[2 * k + 5] - (spheres[5] + spacing / 3.0)).abs() < 1e-9);
+    assert_eq!(depths[k], 0.0);
+    assert_eq!(depths[3 * k - 1], (config.num_invdepth - 1) as f64);
+    assert_eq!(three.coarse_grids[0].num_spheres, 3 * k);
+
+    // Each sphere's value is the best of its three depths, the first of which is the
+    // one-depth cue.
+    let [h, w] = config.cascade_sizes()[0];
+    let cue_one = read_values(one.coarse_cue(Some(&pyramid)).unwrap().unwrap(), "cue").unwrap();
+    let cue = three.coarse_cue(Some(&pyramid)).unwrap().unwrap();
+    assert_eq!(cue.dims(), [1, 1, k, h, w]);
+    let cue = read_values(cue, "cue").unwrap();
+    assert!(cue.iter().zip(&cue_one).all(|(a, b)| a >= b));
+    assert!(cue.iter().zip(&cue_one).any(|(a, b)| a > b));
     let share = share_at_truth(&cue, &|j, _| spheres[j], k, truth, spacing / 2.0);
     assert!(
         share > 0.9,

@@ -76,7 +76,6 @@ impl Loader {
             handles,
         }
     }
-
 }
 
 /// The samples in plan order; `None` after the last one (or when its thread ended).

@@ -134,6 +134,11 @@ pub struct Args {
     /// means; `coarse_cue_oversample`, from `cascade-22`). No weight depends on it.
     #[arg(long, conflicts_with = "resume")]
     pub coarse_cue_oversample: Option<usize>,
+    /// Cascade with the photometric cue: inverse depths the coarse cue is matched at per
+    /// coarse sphere (1, 3 or 5, evenly tiling its interval; the sphere takes the best;
+    /// `coarse_cue_depths`, from `cascade-23`). No weight depends on it.
+    #[arg(long, conflicts_with = "resume")]
+    pub coarse_cue_depths: Option<usize>,
     /// Threads preparing the training samples (decoding the images, augmenting; 1 by
     /// default). The samples and their order do not depend on it: more is for a GPU, whose
     /// steps outrun one thread. Also taken by --resume.
@@ -524,13 +529,15 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.stage_intervals.is_some()
                 || args.coarse_feature_channels.is_some()
                 || args.coarse_cue_oversample.is_some()
+                || args.coarse_cue_depths.is_some()
             {
                 if net.family != Family::Cascade {
                     bail!(
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                          --refine-distribution, --sky-weight, --convex-upsampling, \
-                         --stage-intervals, --coarse-feature-channels and \
-                         --coarse-cue-oversample are options of --preset cascade"
+                         --stage-intervals, --coarse-feature-channels, \
+                         --coarse-cue-oversample and --coarse-cue-depths are options of \
+                         --preset cascade"
                     );
                 }
                 if let Some(up) = args.convex_upsampling {
@@ -551,6 +558,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(factor) = args.coarse_cue_oversample {
                     net.cascade.coarse_cue_oversample = factor;
+                }
+                if let Some(depths) = args.coarse_cue_depths {
+                    net.cascade.coarse_cue_depths = depths;
                 }
                 if let Some(channels) = args.coarse_feature_channels {
                     net.cascade.feature_channels[2] = channels;

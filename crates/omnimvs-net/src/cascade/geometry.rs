@@ -251,14 +251,14 @@ impl CascadeGeometry {
             host_correlation,
             device,
         )?;
-        let cue_grids = match (
-            config.cascade.zncc_cue,
-            config.cascade.coarse_cue_oversample,
-        ) {
-            (false, _) => Vec::new(),
-            (true, 1) => coarse_grids,
-            // The half-resolution grid's samples at the coarse spheres.
-            (true, _) => samplers[1].sphere_grids(&spheres)?,
+        let p = &config.cascade;
+        let cue_spheres = coarse_cue_spheres(&spheres, p.coarse_cue_depths, config.num_invdepth);
+        let cue_grids = match (p.zncc_cue, p.coarse_cue_oversample, p.coarse_cue_depths) {
+            (false, _, _) => Vec::new(),
+            (true, 1, 1) => coarse_grids,
+            (true, 1, _) => samplers[0].sphere_grids(&cue_spheres)?,
+            // The half-resolution grid's samples at the coarse spheres (or around them).
+            (true, _, _) => samplers[1].sphere_grids(&cue_spheres)?,
         };
         Ok(Self {
             coarse,
@@ -280,32 +280,42 @@ impl CascadeGeometry {
         let Some(pyramid) = images else {
             return Ok(None);
         };
-        let factor = self.config.cascade.coarse_cue_oversample;
-        if factor == 1 {
+        let p = &self.config.cascade;
+        let (factor, depths) = (p.coarse_cue_oversample, p.coarse_cue_depths);
+        if (factor, depths) == (1, 1) {
             return pyramid
                 .zncc_tensor(2, &self.coarse_grids, &self.device)
                 .map(Some);
         }
-        // Matched on the finer grid (images of the matching level), then each coarse pixel
-        // the mean of its factor x factor block.
-        let level = 2 - factor.trailing_zeros() as usize;
-        let fine = pyramid.zncc(level, &self.coarse_grids)?;
         let Some(first) = self.coarse_grids.first() else {
             return Ok(None);
         };
-        let (k, h, w) = (first.num_spheres, first.height, first.width);
+        // Matched on the finer grid (images of the matching level), each coarse pixel the
+        // mean of its factor x factor block; then each sphere the best of its depths.
+        let level = 2 - factor.trailing_zeros() as usize;
+        let fine = pyramid.zncc(level, &self.coarse_grids)?;
+        let (planes, h, w) = (first.num_spheres, first.height, first.width);
         let (ch, cw) = (h / factor, w / factor);
         let scale = 1.0 / (factor * factor) as f32;
-        let mut coarse = vec![0f32; k * ch * cw];
+        let mut pooled = vec![0f32; planes * ch * cw];
         for (plane, out) in fine
             .chunks_exact(h * w)
-            .zip(coarse.chunks_exact_mut(ch * cw))
+            .zip(pooled.chunks_exact_mut(ch * cw))
         {
             for (r, row) in plane.chunks_exact(w).enumerate() {
                 let dst = &mut out[(r / factor) * cw..(r / factor + 1) * cw];
                 for (c, value) in row.iter().enumerate() {
                     dst[c / factor] += value * scale;
                 }
+            }
+        }
+        let k = planes / depths;
+        let plane = ch * cw;
+        let mut coarse = pooled[..k * plane].to_vec();
+        for d in 1..depths {
+            let other = &pooled[d * k * plane..(d + 1) * k * plane];
+            for (best, value) in coarse.iter_mut().zip(other) {
+                *best = best.max(*value);
             }
         }
         Ok(Some(Tensor::from_data(
@@ -479,6 +489,26 @@ pub fn crop_columns(
         .chunks_exact(grid.width)
         .flat_map(|row| row[cols.clone()].iter().copied())
         .collect())
+}
+
+/// The inverse depths (index units) the coarse cue is matched at: with `depths` 1 the coarse
+/// spheres; otherwise `depths` blocks of them, block `d` every sphere offset by a multiple of
+/// `spacing / depths` within `0..=N-1` (offsets 0, -1, +1, -2, +2 times that, so the first
+/// `K` planes are the spheres themselves).
+pub fn coarse_cue_spheres(spheres: &[f64], depths: usize, num_invdepth: usize) -> Vec<f64> {
+    if depths <= 1 || spheres.len() < 2 {
+        return spheres.to_vec();
+    }
+    let spacing = spheres[1] - spheres[0];
+    let half = (depths - 1) / 2;
+    let last = (num_invdepth - 1) as f64;
+    let offsets = std::iter::once(0.0).chain((1..=half).flat_map(|j| {
+        let o = j as f64 * spacing / depths as f64;
+        [-o, o]
+    }));
+    offsets
+        .flat_map(|o| spheres.iter().map(move |&n| (n + o).clamp(0.0, last)))
+        .collect()
 }
 
 /// Smallest batch of images the feature pyramid trains on (see
