@@ -2,6 +2,8 @@
 //! Uses the published rig of `sunny_single` from `../shared/data/omnimvs-samples`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+use std::sync::Mutex;
+
 use burn::optim::GradientsParams;
 use burn::tensor::Device;
 use omnimvs_camera::Rig;
@@ -52,6 +54,22 @@ fn micro_sample(config: &NetConfig) -> Sample {
     }
 }
 
+/// Seeding the device's generator and drawing the initial weights, one test at a time: the
+/// tests of this file run in parallel threads of one process and share the generator, so
+/// without this a test's weights would depend on how its draws interleave with the others'
+/// (one CI run drew weights whose stride-8 branch did not move in 16 steps).
+fn seeded<T>(init: impl FnOnce() -> T) -> T {
+    static INIT: Mutex<()> = Mutex::new(());
+    let _guard = INIT
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    init()
+}
+
+fn seeded_learner(config: &TrainConfig, device: &Device) -> Learner<CascadeNet> {
+    seeded(|| Learner::<CascadeNet>::for_model(config, device).unwrap())
+}
+
 fn train_config(seed: u64) -> TrainConfig {
     TrainConfig {
         net: micro_config(),
@@ -66,7 +84,7 @@ fn gradients_reach_every_stage_and_it_overfits_one_frame() {
     let (rig, hyps) = sunny_rig();
     let config = train_config(3);
     let device = Device::flex();
-    let mut learner = Learner::<CascadeNet>::for_model(&config, &device).unwrap();
+    let mut learner = seeded_learner(&config, &device);
     let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
     let sample = micro_sample(&config.net);
 
@@ -109,7 +127,7 @@ fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
     config.net.cascade.convex_upsampling = true;
     config.train_only = TrainParts::Upsampling;
     let device = Device::flex();
-    let mut learner = Learner::<CascadeNet>::for_model(&config, &device).unwrap();
+    let mut learner = seeded_learner(&config, &device);
     let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
     let sample = micro_sample(&config.net);
     let weights = |net: &CascadeNet| {
@@ -146,7 +164,7 @@ fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
     // A network without the selectors has nothing to train.
     let mut plain = train_config(5);
     plain.train_only = TrainParts::Upsampling;
-    let err = Learner::<CascadeNet>::for_model(&plain, &device)
+    let err = seeded(|| Learner::<CascadeNet>::for_model(&plain, &device))
         .err()
         .expect("training only absent selectors is refused")
         .to_string();
@@ -163,7 +181,7 @@ fn training_only_the_coarse_stage_moves_its_weights_and_nothing_else() {
     config.net.cascade.convex_upsampling = true;
     config.train_only = TrainParts::Coarse;
     let device = Device::flex();
-    let mut learner = Learner::<CascadeNet>::for_model(&config, &device).unwrap();
+    let mut learner = seeded_learner(&config, &device);
     let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
     let sample = micro_sample(&config.net);
     // Frozen first: the stride-2 and stride-4 features, the refinement stages, the
