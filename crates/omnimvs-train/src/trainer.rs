@@ -356,18 +356,25 @@ impl<M: Trainable> Trainer<M> {
         Ok(g)
     }
 
+    /// Changes the run's configuration from now on: the changed copy is validated and
+    /// written to `train_config.json` before it replaces the current one, so a change the
+    /// run cannot use, or cannot record, leaves both as they were.
+    fn update_config(&mut self, change: impl FnOnce(&mut TrainConfig)) -> Result<(), TrainError> {
+        let mut config = self.config.clone();
+        change(&mut config);
+        config.validate()?;
+        write_json(&self.run_dir.join("train_config.json"), &config)?;
+        self.config = config;
+        Ok(())
+    }
+
     /// Sets the number of loader threads from now on (a resumed run may move to a machine
     /// with more cores) and records it in `train_config.json`; the samples do not change.
     ///
     /// # Errors
     /// [`TrainError`] for 0 threads or a file that cannot be written.
     pub fn set_loader_threads(&mut self, threads: usize) -> Result<(), TrainError> {
-        let mut config = self.config.clone();
-        config.loader_threads = threads;
-        config.validate()?;
-        write_json(&self.run_dir.join("train_config.json"), &config)?;
-        self.config = config;
-        Ok(())
+        self.update_config(|config| config.loader_threads = threads)
     }
 
     /// Sets the training window of longitudes from now on (a resumed run may take one it
@@ -376,12 +383,7 @@ impl<M: Trainable> Trainer<M> {
     /// # Errors
     /// [`TrainError`] for a window the run cannot use or a file that cannot be written.
     pub fn set_column_window(&mut self, width: Option<usize>) -> Result<(), TrainError> {
-        let mut config = self.config.clone();
-        config.column_window = width;
-        config.validate()?;
-        write_json(&self.run_dir.join("train_config.json"), &config)?;
-        self.config = config;
-        Ok(())
+        self.update_config(|config| config.column_window = width)
     }
 
     /// Sets the photometric augmentation from now on (a resumed run may start or stop it) and
@@ -393,12 +395,7 @@ impl<M: Trainable> Trainer<M> {
         &mut self,
         photometric: Option<PhotometricAugment>,
     ) -> Result<(), TrainError> {
-        let mut config = self.config.clone();
-        config.photometric = photometric;
-        config.validate()?;
-        write_json(&self.run_dir.join("train_config.json"), &config)?;
-        self.config = config;
-        Ok(())
+        self.update_config(|config| config.photometric = photometric)
     }
 
     /// Trains until `config.epochs`, validating and checkpointing after every epoch.
