@@ -321,44 +321,33 @@ fn a_run_that_cannot_start_says_why_and_leaves_no_folder() {
     }
 }
 
+/// The cascade's network options of a new run: values the network cannot take, and the
+/// options given to another preset, are refused before any folder is made.
 #[test]
-fn stage_intervals_are_checked_and_belong_to_the_cascade() {
-    let dir = tempfile::tempdir().unwrap();
-    let cache = dir.path().join("cache");
-    let run = dir.path().join("run");
-    for (preset, intervals, expected) in [
-        ("cascade", "0,1", "two positive index spacings"),
-        ("cascade", "2.5", "two positive index spacings"),
-        ("cascade", "a,1", "stage-intervals"),
-        ("tiny", "2.5,1.5", "options of --preset cascade"),
-    ] {
-        let o = omnimvs(
-            &[
-                "train",
-                "--data",
-                dir.path().to_str().unwrap(),
-                "--preset",
-                preset,
-                "--stage-intervals",
-                intervals,
-                "--out",
-                run.to_str().unwrap(),
-            ],
-            &cache,
-        );
-        assert!(!o.status.success(), "{intervals}: {}", text(&o.stdout));
-        let stderr = text(&o.stderr);
-        assert!(stderr.contains(expected), "{intervals}: {stderr}");
-        assert!(!run.exists(), "{intervals}: a refused run left a folder");
-    }
-}
-
-#[test]
-fn coarse_feature_channels_and_cue_oversample_are_checked_and_belong_to_the_cascade() {
+fn cascade_options_are_checked_and_belong_to_the_cascade() {
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let run = dir.path().join("run");
     for (preset, flag, value, expected) in [
+        (
+            "cascade",
+            "--stage-intervals",
+            "0,1",
+            "two positive index spacings",
+        ),
+        (
+            "cascade",
+            "--stage-intervals",
+            "2.5",
+            "two positive index spacings",
+        ),
+        ("cascade", "--stage-intervals", "a,1", "stage-intervals"),
+        (
+            "tiny",
+            "--stage-intervals",
+            "2.5,1.5",
+            "options of --preset cascade",
+        ),
         (
             "cascade",
             "--coarse-feature-channels",
