@@ -268,10 +268,11 @@ pub fn load_cascade_grown(
         return Err(weights_error(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
-             (only `context_pairs` and the stride-8 `feature_channels` may grow, `stage_gates`, `zncc_cue` and \
-             `convex_upsampling` switch on, `convex_upsampling_full` switch either way, and \
-             the refinement stages' `stage_intervals`, `coarse_cue_oversample`, `coarse_cue_depths` and \
-             the loss weights differ)",
+             (only `context_pairs` and the stride-8 `feature_channels` may grow, \
+             `stage_gates`, `zncc_cue` and `convex_upsampling` switch on, \
+             `convex_upsampling_full` switch either way, and the refinement stages' \
+             `stage_intervals`, `coarse_cue_oversample`, `coarse_cue_depths` and the loss \
+             weights differ)",
         ));
     }
     let has_fine = |c: &NetConfig| c.cascade.convex_upsampling && c.cascade.convex_upsampling_full;

@@ -282,18 +282,13 @@ impl CascadeGeometry {
         };
         let p = &self.config.cascade;
         let (factor, depths) = (p.coarse_cue_oversample, p.coarse_cue_depths);
-        if (factor, depths) == (1, 1) {
-            return pyramid
-                .zncc_tensor(2, &self.coarse_grids, &self.device)
-                .map(Some);
-        }
-        let Some(first) = self.coarse_grids.first() else {
-            return Ok(None);
-        };
-        // Matched on the finer grid (images of the matching level), each coarse pixel the
-        // mean of its factor x factor block; then each sphere the best of its depths.
+        // Matched on its grid (images of the matching level: the quarter-size ones for the
+        // coarse grid itself), each coarse pixel the mean of its factor x factor block (itself
+        // for factor 1); then each sphere the best of its depths. `zncc` refuses an empty set
+        // of grids, so there is a first one after it.
         let level = 2 - factor.trailing_zeros() as usize;
         let fine = pyramid.zncc(level, &self.coarse_grids)?;
+        let first = &self.coarse_grids[0];
         let (planes, h, w) = (first.num_spheres, first.height, first.width);
         let (ch, cw) = (h / factor, w / factor);
         let scale = 1.0 / (factor * factor) as f32;
