@@ -385,6 +385,19 @@ fn cascade_options_are_checked_and_belong_to_the_cascade() {
             "32",
             "options of --preset cascade",
         ),
+        // The aggregated cue aggregates the photometric cue, off in the preset.
+        (
+            "cascade",
+            "--coarse-cue-sgm",
+            "on",
+            "cascade.coarse_cue_sgm",
+        ),
+        (
+            "tiny",
+            "--coarse-cue-sgm",
+            "on",
+            "options of --preset cascade",
+        ),
     ] {
         let o = omnimvs(
             &[

@@ -240,3 +240,69 @@ fn the_coarse_cue_at_several_depths_per_sphere_takes_the_best_and_peaks_at_the_t
         "best sphere nearest the truth at {share:.3} of the pixels"
     );
 }
+
+#[test]
+fn the_aggregated_coarse_cue_keeps_the_zncc_one_and_finds_the_truth_through_noise() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let mut config = NetConfig::cascade();
+    config.cascade.zncc_cue = true;
+    config.cascade.coarse_cue_oversample = 2;
+    config.cascade.coarse_cue_depths = 3;
+    let mut sgm = config.clone();
+    sgm.cascade.coarse_cue_sgm = true;
+    let hyps = ds.hypotheses(config.num_invdepth).unwrap();
+    let truth = hyps.index(1.0 / RADIUS_M);
+    let device = Device::flex();
+    let plain = CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap();
+    let both = CascadeGeometry::new(&ds.rig, &sgm, &hyps, &device).unwrap();
+    let [rows, cols] = [config.input_height, config.input_width];
+    let k = config.cascade.coarse_spheres;
+    let [h, w] = config.cascade_sizes()[0];
+    let spheres = coarse_indices(k, config.num_invdepth);
+    let spacing = spheres[1] - spheres[0];
+    let images = render(&ds.rig, rows, cols);
+    // Strong pixel noise (a hash, not a generator: the same images every run), which leaves
+    // the raw cue's best sphere wrong at many pixels.
+    let noisy: Vec<Vec<f32>> = images
+        .iter()
+        .enumerate()
+        .map(|(cam, image)| {
+            image
+                .iter()
+                .enumerate()
+                .map(|(i, v)| {
+                    let hash = (i as u64 ^ (cam as u64) << 40).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+                    v + 6.0 * ((hash >> 40) as f32 / (1u64 << 24) as f32 - 0.5)
+                })
+                .collect()
+        })
+        .collect();
+    let mut shares = Vec::new();
+    for images in [images, noisy] {
+        let pyramid = ImagePyramid::new(images, [rows, cols]).unwrap();
+        let cue_plain = read_values(plain.coarse_cue(Some(&pyramid)).unwrap().unwrap(), "cue");
+        let cue = both.coarse_cue(Some(&pyramid)).unwrap().unwrap();
+        // Two channels: the ZNCC cue as before, then the aggregated one.
+        assert_eq!(cue.dims(), [1, 2, k, h, w]);
+        let cue = read_values(cue, "cue").unwrap();
+        let (zncc, aggregated) = cue.split_at(k * h * w);
+        assert_eq!(zncc, &cue_plain.unwrap()[..]);
+        // In [-1, 1], 1 at every pixel's best sphere.
+        assert!(aggregated.iter().all(|v| (-1.0..=1.0).contains(v)));
+        for pixel in [0, 17 * w + 33, h * w - 1] {
+            let best = (0..k)
+                .map(|s| aggregated[s * h * w + pixel])
+                .fold(f32::MIN, f32::max);
+            assert_eq!(best, 1.0);
+        }
+        let near = |cue: &[f32]| share_at_truth(cue, &|j, _| spheres[j], k, truth, spacing / 2.0);
+        shares.push((near(zncc), near(aggregated)));
+    }
+    let [(clean_zncc, clean_sgm), (noisy_zncc, noisy_sgm)] = shares[..] else {
+        unreachable!()
+    };
+    assert!(clean_zncc > 0.9 && clean_sgm > 0.9, "{shares:?}");
+    // Through the noise the paths find the sphere where the raw cue often does not.
+    assert!(noisy_zncc < 0.8, "{shares:?}");
+    assert!(noisy_sgm > noisy_zncc + 0.1, "{shares:?}");
+}

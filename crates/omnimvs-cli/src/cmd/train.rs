@@ -139,6 +139,11 @@ pub struct Args {
     /// `coarse_cue_depths`, from `cascade-23`). No weight depends on it.
     #[arg(long, conflicts_with = "resume")]
     pub coarse_cue_depths: Option<usize>,
+    /// Cascade with the photometric cue: a second coarse cue channel, the cue aggregated by
+    /// semi-global matching over the coarse grid (`coarse_cue_sgm`, from `cascade-24`).
+    /// --init weights without it grow into it answering as before (zero weights for it).
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub coarse_cue_sgm: Option<Switch>,
     /// Threads preparing the training samples (decoding the images, augmenting; 1 by
     /// default). The samples and their order do not depend on it: more is for a GPU, whose
     /// steps outrun one thread. Also taken by --resume.
@@ -530,14 +535,15 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.coarse_feature_channels.is_some()
                 || args.coarse_cue_oversample.is_some()
                 || args.coarse_cue_depths.is_some()
+                || args.coarse_cue_sgm.is_some()
             {
                 if net.family != Family::Cascade {
                     bail!(
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                          --refine-distribution, --sky-weight, --convex-upsampling, \
                          --stage-intervals, --coarse-feature-channels, \
-                         --coarse-cue-oversample and --coarse-cue-depths are options of \
-                         --preset cascade"
+                         --coarse-cue-oversample, --coarse-cue-depths and --coarse-cue-sgm \
+                         are options of --preset cascade"
                     );
                 }
                 if let Some(up) = args.convex_upsampling {
@@ -561,6 +567,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(depths) = args.coarse_cue_depths {
                     net.cascade.coarse_cue_depths = depths;
+                }
+                if let Some(sgm) = args.coarse_cue_sgm {
+                    net.cascade.coarse_cue_sgm = sgm == Switch::On;
                 }
                 if let Some(channels) = args.coarse_feature_channels {
                     net.cascade.feature_channels[2] = channels;

@@ -15,7 +15,7 @@ use super::model::{
     CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, hypothesis_tensor, read_values,
     upsampling_candidates,
 };
-use super::photo::ImagePyramid;
+use super::photo::{ImagePyramid, aggregated_cue};
 use super::sampler::{PixelSampler, coarse_indices, hypotheses_around};
 use crate::config::NetConfig;
 use crate::error::NetError;
@@ -191,6 +191,9 @@ pub struct CascadeGeometry {
     /// samples, or with `coarse_cue_oversample` 2 those of the half-resolution grid at the
     /// same spheres.
     pub coarse_grids: Vec<SweepGrid>,
+    /// The inverse depth (index units) of each plane of `coarse_grids`
+    /// ([`coarse_cue_spheres`]), which the aggregated cue (`coarse_cue_sgm`) orders them by.
+    pub coarse_cue_depths: Vec<f64>,
 }
 
 impl CascadeGeometry {
@@ -268,11 +271,13 @@ impl CascadeGeometry {
             device: device.clone(),
             host_correlation,
             coarse_grids: cue_grids,
+            coarse_cue_depths: cue_spheres,
         })
     }
 
-    /// The photometric cue of the coarse stage for one frame's `images`; `None` when the
-    /// network has none.
+    /// The photometric cue of the coarse stage for one frame's `images`, `[1, C, K, H, W]`
+    /// with `C` 1, or 2 with the aggregated cue (`coarse_cue_sgm`,
+    /// [`super::photo::aggregated_cue`]) after the ZNCC one; `None` when the network has none.
     ///
     /// # Errors
     /// [`NetError::Shape`] when the images are not one per camera of the rig.
@@ -313,8 +318,18 @@ impl CascadeGeometry {
                 *best = best.max(*value);
             }
         }
+        let mut channels = 1;
+        if p.coarse_cue_sgm {
+            coarse.extend(aggregated_cue(
+                &pooled,
+                &self.coarse_cue_depths,
+                k,
+                [ch, cw],
+            )?);
+            channels = 2;
+        }
         Ok(Some(Tensor::from_data(
-            TensorData::new(coarse, [1, 1, k, ch, cw]),
+            TensorData::new(coarse, [1, channels, k, ch, cw]),
             &self.device,
         )))
     }

@@ -718,7 +718,7 @@ impl CascadeNet {
         Ok(Self {
             features: CascadeFeatures::new(p.feature_channels, p.context_pairs, device),
             coarse: CoarseRegularizer::new(
-                (p.groups[2] + extra) * p.coarse_spheres,
+                (p.groups[2] + extra + usize::from(p.coarse_cue_sgm)) * p.coarse_spheres,
                 p.coarse_spheres,
                 p.coarse_channels,
                 device,
@@ -800,6 +800,32 @@ impl CascadeNet {
         }
         self.config.cascade.zncc_cue = true;
         self
+    }
+
+    /// The network with the coarse stage's aggregated cue switched on (`coarse_cue_sgm`; the
+    /// network must have `zncc_cue`): the coarse stage's first convolution gets one input
+    /// channel per sphere, after the existing ones, with zero weights, so that it answers
+    /// exactly as before until training moves them. A network that has it is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when the network has no `zncc_cue`.
+    pub fn with_coarse_cue_sgm(mut self) -> Result<Self, NetError> {
+        if self.config.cascade.coarse_cue_sgm {
+            return Ok(self);
+        }
+        let mut config = self.config.clone();
+        config.cascade.coarse_cue_sgm = true;
+        config.validate()?;
+        let first = &mut self.coarse.c0[0];
+        let weight = first.conv.weight.val(); // [C_out, C_in, 3, 3]
+        let [c_out, _, kh, kw] = weight.dims();
+        let zeros = Tensor::zeros(
+            [c_out, config.cascade.coarse_spheres, kh, kw],
+            &weight.device(),
+        );
+        first.conv.weight = Param::from_tensor(Tensor::cat(vec![weight, zeros], 1).detach());
+        self.config = config;
+        Ok(self)
     }
 
     /// The network with its stride-8 features widened to `c8` channels (see
@@ -910,28 +936,38 @@ impl CascadeNet {
         }
     }
 
-    /// A stage's volume `[1, G + 1, K, H, W]` with the photometric cue `[1, 1, K, H, W]`
-    /// appended when the network has it (`[1, G + 2, K, H, W]`), as it is otherwise.
+    /// A stage's volume `[1, G + 1, K, H, W]` with the photometric cue `[1, C, K, H, W]`
+    /// appended when the network has it (`[1, G + 1 + C, K, H, W]`), as it is otherwise; `C`
+    /// is `channels` (2 for a coarse stage with `coarse_cue_sgm`, else 1).
     ///
     /// # Errors
-    /// [`NetError::Shape`] when the network has the cue and it is missing.
+    /// [`NetError::Shape`] when the network has the cue and it is missing or of another shape.
     fn with_cue(
         &self,
         volume: Tensor<5>,
         cue: Option<Tensor<5>>,
         taps: &StageTaps,
+        channels: usize,
     ) -> Result<Tensor<5>, NetError> {
         if !self.config.cascade.zncc_cue {
             return Ok(volume);
         }
-        let Some(cue) = cue else {
-            return Err(NetError::Shape {
+        let expected = [
+            1,
+            channels,
+            taps.num_hypotheses(),
+            taps.height(),
+            taps.width(),
+        ];
+        let actual = cue.as_ref().map_or(vec![0], |c| c.dims().to_vec());
+        match cue {
+            Some(cue) if cue.dims() == expected => Ok(Tensor::cat(vec![volume, cue], 1)),
+            _ => Err(NetError::Shape {
                 what: "photometric cue of a stage (the network has `zncc_cue`)".into(),
-                expected: vec![1, 1, taps.num_hypotheses(), taps.height(), taps.width()],
-                actual: vec![0],
-            });
-        };
-        Ok(Tensor::cat(vec![volume, cue], 1))
+                expected: expected.to_vec(),
+                actual,
+            }),
+        }
     }
 
     /// Coarse stage from the stride-8 features of every camera and, with `zncc_cue`, the
@@ -946,7 +982,8 @@ impl CascadeNet {
         cue: Option<Tensor<5>>,
     ) -> Result<StageOutput, NetError> {
         let volume = Self::correlation(features, taps, self.config.cascade.groups[2])?;
-        let volume = self.with_cue(volume, cue, taps)?;
+        let channels = 1 + usize::from(self.config.cascade.coarse_cue_sgm);
+        let volume = self.with_cue(volume, cue, taps, channels)?;
         let scores = self.coarse.forward(fold_volume(volume)); // [B, K, H, W]
         Ok(Self::soft_argmax(scores, taps.hypotheses.clone()))
     }
@@ -982,7 +1019,7 @@ impl CascadeNet {
         prior: Tensor<4>,
     ) -> Result<Tensor<3>, NetError> {
         let volume = Self::correlation(features, taps, self.config.cascade.groups[level])?;
-        let volume = self.with_cue(volume, taps.cue.clone(), taps)?;
+        let volume = self.with_cue(volume, taps.cue.clone(), taps, 1)?;
         let logits = selector.forward(fold_volume(volume)) + prior; // [1, 9, H, W]
         Ok(convex_combination(logits, taps.hypotheses.clone()))
     }
@@ -1035,7 +1072,7 @@ impl CascadeNet {
     ) -> Result<(Tensor<4>, Option<Tensor<3>>), NetError> {
         let groups = self.config.cascade.groups[level];
         let volume = Self::correlation(features, taps, groups)?;
-        let volume = self.with_cue(volume, taps.cue.clone(), taps)?;
+        let volume = self.with_cue(volume, taps.cue.clone(), taps, 1)?;
         let regularizer = if level == 1 { &self.mid } else { &self.fine };
         Ok(regularizer.forward(fold_volume(volume))) // [B, K, H, W]
     }

@@ -18,7 +18,8 @@
 //! map is smooth.
 
 use burn::tensor::{Device, Tensor, TensorData};
-use omnimvs_stereo::{ZNCC_VARIANCE_EPS, camera_pairs};
+use omnimvs_stereo::params::{COST_SCALE, Directions};
+use omnimvs_stereo::{CostVolume, SgmParams, ZNCC_VARIANCE_EPS, aggregate, camera_pairs};
 use rayon::prelude::*;
 
 use super::model::read_values;
@@ -180,6 +181,78 @@ impl ImagePyramid {
     }
 }
 
+/// Penalty of the coarse cue's aggregation (`coarse_cue_sgm`) for a change of one depth
+/// between neighbours, in cost units `(1 - zncc) / 2`. With [`COARSE_SGM_P2`], the best of
+/// the settings tried on things validation frames (`models/training/cascade-24/sgm_cue.py`).
+pub const COARSE_SGM_P1: f32 = 0.05;
+
+/// Penalty of the coarse cue's aggregation for larger changes (see [`COARSE_SGM_P1`]).
+pub const COARSE_SGM_P2: f32 = 1.0;
+
+/// The coarse stage's aggregated cue (`coarse_cue_sgm`) from its ZNCC cue `cue`: `planes`
+/// maps of `h x w` values in `[-1, 1]`, plane `j` matched at inverse depth `depths[j]` (index
+/// units, any order, repeats allowed), plane `j` belonging to sphere `j % spheres`.
+///
+/// The costs `(1 - zncc) / 2` of all planes in the order of their depths are aggregated along
+/// 8 paths by semi-global matching (columns wrap around: longitude is a ring); at every
+/// pixel each sphere gets the lowest mean path cost of its planes above the pixel's best,
+/// `e`, as `1 - 2 min(e, 1)`: 1 for the best sphere, -1 for one a whole unit of cost
+/// worse. `spheres * h * w` values, sphere-major.
+///
+/// # Errors
+/// [`NetError::Shape`] when the sizes disagree; [`NetError::Stereo`] when the aggregation
+/// refuses the volume (fewer than 2 planes).
+pub fn aggregated_cue(
+    cue: &[f32],
+    depths: &[f64],
+    spheres: usize,
+    [h, w]: [usize; 2],
+) -> Result<Vec<f32>, NetError> {
+    let planes = depths.len();
+    let plane = h * w;
+    if spheres == 0 || !planes.is_multiple_of(spheres) || cue.len() != planes * plane {
+        return Err(NetError::Shape {
+            what: "photometric cue to aggregate".into(),
+            expected: vec![planes, h, w],
+            actual: vec![cue.len(), spheres],
+        });
+    }
+    let mut order: Vec<usize> = (0..planes).collect();
+    order.sort_by(|&a, &b| depths[a].total_cmp(&depths[b]));
+    let mut data = vec![0u16; plane * planes];
+    for (pixel, costs) in data.chunks_exact_mut(planes).enumerate() {
+        for (cost, &j) in costs.iter_mut().zip(&order) {
+            let zncc = cue[j * plane + pixel].clamp(-1.0, 1.0);
+            *cost = ((1.0 - zncc) * 0.5 * COST_SCALE + 0.5) as u16;
+        }
+    }
+    let volume = CostVolume {
+        height: h,
+        width: w,
+        ndepth: planes,
+        data,
+    };
+    let params = SgmParams {
+        p1: COARSE_SGM_P1,
+        p2: COARSE_SGM_P2,
+        directions: Directions::Eight,
+        ..SgmParams::default()
+    };
+    let (summed, _) = aggregate(&volume, &params)?;
+    let unit = 1.0 / (Directions::Eight.count() as f32 * COST_SCALE);
+    let mut out = vec![-1f32; spheres * plane];
+    for (pixel, sums) in summed.data.chunks_exact(planes).enumerate() {
+        let best = sums.iter().copied().min().unwrap_or(0);
+        for (&sum, &j) in sums.iter().zip(&order) {
+            let excess = f32::from(sum - best) * unit;
+            let value = 1.0 - 2.0 * excess.min(1.0);
+            let dst = &mut out[(j % spheres) * plane + pixel];
+            *dst = dst.max(value);
+        }
+    }
+    Ok(out)
+}
+
 /// A `rows x cols` image halved by 2x2 box averages (a last odd row or column is dropped).
 fn halve(image: &[f32], rows: usize, cols: usize) -> Vec<f32> {
     let (hr, hc) = (rows / 2, cols / 2);
@@ -200,7 +273,8 @@ fn halve(image: &[f32], rows: usize, cols: usize) -> Vec<f32> {
 ///
 /// A sample whose four neighbours all lie inside the image (nearly all of them) is read
 /// directly, with the weights and the sum in the order of [`bilinear_taps`] (the same value
-/// to the bit); the others go through the taps.
+/// to the bit); one a whole pixel or more outside is missing at once; the others, on the
+/// border, go through the taps.
 fn sample_plane(coords: &[f32], image: &[f32], rows: usize, cols: usize) -> (Vec<f32>, Vec<f32>) {
     let (w, h) = (cols as f32 - 1.0, rows as f32 - 1.0);
     coords
@@ -221,6 +295,12 @@ fn sample_plane(coords: &[f32], image: &[f32], rows: usize, cols: usize) -> (Vec
                     + ex * dy * image[i + cols]
                     + dx * dy * image[i + cols + 1];
                 return (value, 0.0);
+            }
+            // A whole pixel or more outside (or NaN): no neighbour inside, missing, as the
+            // taps would find (most of a camera's unseen samples; only the border band
+            // needs them).
+            if !(ix > -1.0 && iy > -1.0 && ix < w + 1.0 && iy < h + 1.0) {
+                return (0.0, 1.0);
             }
             let taps = bilinear_taps(xy[0], xy[1], rows, cols);
             let seen: f32 = taps.weight.iter().sum();
@@ -436,6 +516,38 @@ mod tests {
         assert_eq!(out[2 * w + 3], 0.0);
         assert_eq!(out[w + 4], 0.0);
         assert!(out[5 * w + 7] > 0.99);
+    }
+
+    #[test]
+    fn the_aggregated_cue_fills_a_weak_pixel_from_its_neighbours_and_checks_sizes() {
+        // 3 spheres of 2 depths each (depths in no order), a 4 x 8 grid: every pixel matches
+        // best at depth 4.0 (plane 4, sphere 1) but one, whose own best is depth 0.0 (sphere 0)
+        // by a little; the paths outvote it.
+        let (h, w) = (4, 8);
+        let depths = [0.0, 4.0, 8.0, 1.0, 5.0, 9.0];
+        let plane = h * w;
+        let mut cue = vec![-0.5f32; depths.len() * plane];
+        let odd = 2 * w + 3;
+        for pixel in 0..plane {
+            cue[4 * plane + pixel] = if pixel == odd { 0.3 } else { 0.9 };
+        }
+        cue[odd] = 0.4;
+        let out = aggregated_cue(&cue, &depths, 3, [h, w]).unwrap();
+        assert_eq!(out.len(), 3 * plane);
+        for pixel in 0..plane {
+            let values: Vec<f32> = (0..3).map(|s| out[s * plane + pixel]).collect();
+            assert_eq!(values[1], 1.0, "pixel {pixel}: {values:?}");
+            assert!(
+                values[0] < 1.0 && values[2] < 1.0,
+                "pixel {pixel}: {values:?}"
+            );
+            assert!(values.iter().all(|v| (-1.0..=1.0).contains(v)));
+        }
+        // The raw cue's best at the odd pixel was sphere 0.
+        assert!(cue[odd] > cue[4 * plane + odd]);
+        assert!(aggregated_cue(&cue, &depths, 4, [h, w]).is_err());
+        assert!(aggregated_cue(&cue[1..], &depths, 3, [h, w]).is_err());
+        assert!(aggregated_cue(&cue, &depths, 0, [h, w]).is_err());
     }
 
     #[test]
