@@ -118,6 +118,28 @@ fn train_resumes_exactly_and_infer_reads_the_weights() {
     }
     std::fs::write(&backend_file, "cpu\n").unwrap();
 
+    // A number of epochs the run cannot take is refused before it is written: the run's
+    // configuration stays as it was.
+    let config_text = std::fs::read_to_string(resumed.join("train_config.json")).unwrap();
+    let o = omnimvs(
+        &[
+            "train",
+            "--resume",
+            resumed.to_str().unwrap(),
+            "--epochs",
+            "0",
+        ],
+        &cache,
+    );
+    let stderr = text(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert!(stderr.contains("epochs"), "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(resumed.join("train_config.json")).unwrap(),
+        config_text
+    );
+    assert_eq!(epochs(&resumed).len(), 1);
+
     // A checkpoint that cannot be put in place (a file stands where epoch 2's folder goes)
     // fails the run and leaves epoch 1's checkpoint and the pointer to it as they were.
     let checkpoint = resumed.join("checkpoints/epoch-0001");

@@ -247,13 +247,13 @@ impl<M: Trainable> Trainer<M> {
         epochs: Option<usize>,
         device: &Device,
     ) -> Result<Self, TrainError> {
-        let config_path = run_dir.join("train_config.json");
-        let mut config: TrainConfig = read_json(&config_path)?;
-        if let Some(epochs) = epochs {
-            config.epochs = epochs;
-            write_json(&config_path, &config)?;
-        }
+        let config: TrainConfig = read_json(&run_dir.join("train_config.json"))?;
         let mut trainer = Self::build(config, run_dir, device)?;
+        // A new number of epochs is checked before it is written: a refused one leaves the
+        // run's configuration as it was.
+        if let Some(epochs) = epochs {
+            trainer.update_config(|config| config.epochs = epochs)?;
+        }
         let latest_path = run_dir.join("latest.json");
         if latest_path.exists() {
             let latest: Latest = read_json(&latest_path)?;
