@@ -150,6 +150,17 @@ pub struct CascadeParams {
     /// switched on from weights without it).
     #[serde(default, skip_serializing_if = "is_false")]
     pub coarse_cue_sgm: bool,
+    /// With `zncc_cue` and `coarse_cue_oversample: 2`, a second cue channel for the
+    /// half-resolution stage (`true`; `false`, and left out of the file: none): the coarse
+    /// cue's planes on the half-resolution grid, before their 2 x 2 means, aggregated by
+    /// semi-global matching over that grid ([`crate::cascade::photo::AggregatedCue`],
+    /// [`crate::cascade::photo::MID_SGM_P1`], [`crate::cascade::photo::MID_SGM_P2`]) and read
+    /// at each pixel's hypotheses, linearly between planes. On things validation frames the
+    /// aggregated half-grid cue alone is off by more than 3 at 6.6 % of far open pixels, the
+    /// network (`cascade-25`'s start) at 21.1 % (`models/training/cascade-25/half_study.py`).
+    /// The half stage's first convolution grows by one channel per hypothesis.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub mid_cue_sgm: bool,
 }
 
 fn one_usize() -> usize {
@@ -206,6 +217,7 @@ impl Default for CascadeParams {
             coarse_cue_oversample: 1,
             coarse_cue_depths: 1,
             coarse_cue_sgm: false,
+            mid_cue_sgm: false,
         }
     }
 }
@@ -436,6 +448,14 @@ impl NetConfig {
                 "needs `zncc_cue` (it aggregates that cue)".into(),
             ));
         }
+        if p.mid_cue_sgm && !(p.zncc_cue && p.coarse_cue_oversample == 2) {
+            return Err(invalid(
+                "cascade.mid_cue_sgm",
+                "needs `zncc_cue` with `coarse_cue_oversample: 2` (it aggregates the coarse \
+                 cue's planes on the half-resolution grid)"
+                    .into(),
+            ));
+        }
         if p.coarse_spheres < 2 || p.coarse_spheres > self.num_invdepth {
             return Err(invalid(
                 "cascade.coarse_spheres",
@@ -617,6 +637,17 @@ mod tests {
         deep.validate().unwrap();
         let json = serde_json::to_string(&deep).unwrap();
         assert!(json.contains("\"coarse_cue_sgm\":true"), "{json}");
+        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
+        // The half stage's aggregated cue: off unless written, and only over the coarse cue's
+        // planes on the half grid.
+        assert!(!json.contains("mid_cue_sgm"), "{json}");
+        deep.cascade.mid_cue_sgm = true;
+        let err = deep.validate().unwrap_err().to_string();
+        assert!(err.contains("cascade.mid_cue_sgm"), "{err}");
+        deep.cascade.coarse_cue_oversample = 2;
+        deep.validate().unwrap();
+        let json = serde_json::to_string(&deep).unwrap();
+        assert!(json.contains("\"mid_cue_sgm\":true"), "{json}");
         assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
         let mut wide = NetConfig::cascade();
         wide.cascade.feature_channels[2] = 128;

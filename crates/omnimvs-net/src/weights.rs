@@ -251,6 +251,7 @@ pub fn load_cascade_grown(
     shrunk.cascade.stage_gates = saved.cascade.stage_gates;
     shrunk.cascade.zncc_cue = saved.cascade.zncc_cue;
     shrunk.cascade.coarse_cue_sgm = saved.cascade.coarse_cue_sgm;
+    shrunk.cascade.mid_cue_sgm = saved.cascade.mid_cue_sgm;
     shrunk.cascade.convex_upsampling = saved.cascade.convex_upsampling;
     shrunk.cascade.convex_upsampling_full = saved.cascade.convex_upsampling_full;
     // The refinement stages' hypothesis spacing: no weight depends on it.
@@ -265,13 +266,15 @@ pub fn load_cascade_grown(
         && (!saved.cascade.stage_gates || config.cascade.stage_gates)
         && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
         && (!saved.cascade.coarse_cue_sgm || config.cascade.coarse_cue_sgm)
+        && (!saved.cascade.mid_cue_sgm || config.cascade.mid_cue_sgm)
         && (!saved.cascade.convex_upsampling || config.cascade.convex_upsampling);
     if shrunk != saved || !grows {
         return Err(weights_error(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
              (only `context_pairs` and the stride-8 `feature_channels` may grow, \
-             `stage_gates`, `zncc_cue`, `coarse_cue_sgm` and `convex_upsampling` switch on, \
+             `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm` and \
+             `convex_upsampling` switch on, \
              `convex_upsampling_full` switch either way, and the refinement stages' \
              `stage_intervals`, `coarse_cue_oversample`, `coarse_cue_depths` and the loss \
              weights differ)",
@@ -296,6 +299,7 @@ pub fn load_cascade_grown(
     let mut without_cue = config.clone();
     without_cue.cascade.zncc_cue = saved.cascade.zncc_cue;
     without_cue.cascade.coarse_cue_sgm = saved.cascade.coarse_cue_sgm;
+    without_cue.cascade.mid_cue_sgm = saved.cascade.mid_cue_sgm;
     without_cue.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
     let dropped = |p: &str| saved_fine && !fine && p.starts_with("up_fine.");
     let net = apply_file_except(
@@ -311,6 +315,11 @@ pub fn load_cascade_grown(
     };
     let net = if config.cascade.coarse_cue_sgm {
         net.with_coarse_cue_sgm()?
+    } else {
+        net
+    };
+    let net = if config.cascade.mid_cue_sgm {
+        net.with_mid_cue_sgm()?
     } else {
         net
     };

@@ -583,3 +583,100 @@ fn a_network_with_the_cue_grows_into_the_aggregated_cue_unchanged_and_learns_it(
         .sum();
     assert!(norm > 0.0 && norm.is_finite(), "{norm}");
 }
+
+#[test]
+fn a_network_grows_into_the_half_stage_aggregated_cue_unchanged_and_learns_it() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let mut cued = micro_config();
+    cued.cascade.zncc_cue = true;
+    cued.cascade.coarse_cue_oversample = 2;
+    let mut aggregated = cued.clone();
+    aggregated.cascade.mid_cue_sgm = true;
+    let device = Device::flex();
+    let small = CascadeNet::new(&cued, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cued.safetensors");
+    weights::save_module(&small, &cued, &path).unwrap();
+    let big = weights::load_cascade_grown(&path, &aggregated, &device).unwrap();
+    assert!(big.config.cascade.mid_cue_sgm);
+    // Only the half stage's first convolution reads more: one channel per hypothesis.
+    let inputs = |net: &CascadeNet| {
+        [
+            net.coarse.c0[0].conv.weight.dims()[1],
+            net.mid.convs[0].conv.weight.dims()[1],
+            net.fine.convs[0].conv.weight.dims()[1],
+        ]
+    };
+    let [c, m, f] = inputs(&small);
+    let k = cued.cascade.stage_hypotheses[0];
+    assert_eq!(inputs(&big), [c, m + k, f]);
+    assert_eq!(
+        inputs(&CascadeNet::new(&aggregated, &device).unwrap()),
+        inputs(&big)
+    );
+
+    let tensors = images(&cued, &device);
+    let plain = CascadeGeometry::new(&ds.rig, &cued, &hyps, &device).unwrap();
+    let with_sgm = CascadeGeometry::new(&ds.rig, &aggregated, &hyps, &device).unwrap();
+    let before = small.forward(&tensors, &plain).unwrap();
+    let after = big.forward(&tensors, &with_sgm).unwrap();
+    for s in 0..3 {
+        let a = read_values(before.stages[s].index.clone(), "index").unwrap();
+        let b = read_values(after.stages[s].index.clone(), "index").unwrap();
+        let diff = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f32, f32::max);
+        assert!(diff < 1e-4, "stage {s} moved by {diff}");
+    }
+    // The half stage's taps carry two cue channels, the second in [-1, 1]; the full
+    // stage's one.
+    let pyramid = ImagePyramid::from_inputs(&tensors).unwrap();
+    let [h, w] = aggregated.cascade_sizes()[1];
+    let centre = vec![12.0f32; h * w];
+    let taps = with_sgm
+        .taps_around(1, centre.clone(), 0..w, Some(&pyramid))
+        .unwrap();
+    let cue = taps.cue.unwrap();
+    assert_eq!(cue.dims(), [1, 2, k, h, w]);
+    let cue = read_values(cue, "cue").unwrap();
+    assert!(cue[k * h * w..].iter().all(|z| (-1.0..=1.0).contains(z)));
+    assert!(cue[k * h * w..].iter().any(|&z| z < 0.99), "{cue:?}");
+    let plain_taps = plain.taps_around(1, centre, 0..w, Some(&pyramid)).unwrap();
+    assert_eq!(plain_taps.cue.unwrap().dims(), [1, 1, k, h, w]);
+    // A network with it needs it, and its file does not load into one without.
+    assert!(big.forward(&tensors, &plain).is_err());
+    let big_path = dir.path().join("big.safetensors");
+    weights::save_module(&big, &aggregated, &big_path).unwrap();
+    assert!(weights::load_cascade_grown(&big_path, &cued, &device).is_err());
+    let err = CascadeNet::new(&micro_config(), &device)
+        .unwrap()
+        .with_mid_cue_sgm()
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("mid_cue_sgm"), "{err}");
+
+    // Its weights, zero at the start, get gradients.
+    let device = Device::flex().autodiff();
+    let net = weights::load_cascade_grown(&path, &aggregated, &device).unwrap();
+    let geometry = CascadeGeometry::new(&ds.rig, &aggregated, &hyps, &device).unwrap();
+    let out = net
+        .forward(&images(&aggregated, &device), &geometry)
+        .unwrap();
+    let grads = GradientsParams::from_grads(pull_to_ten(out).backward(), &net);
+    let conv = &net.mid.convs[0];
+    let [c_out, c_in, kh, kw] = conv.conv.weight.dims();
+    let grad = grads
+        .get::<4>(conv.conv.weight.id)
+        .expect("a gradient for the half stage's first convolution")
+        .narrow(1, c_in - k, k);
+    assert_eq!(grad.dims(), [c_out, k, kh, kw]);
+    let norm: f32 = read_values(grad, "grad")
+        .unwrap()
+        .iter()
+        .map(|g| g.abs())
+        .sum();
+    assert!(norm > 0.0 && norm.is_finite(), "{norm}");
+}

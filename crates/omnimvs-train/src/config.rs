@@ -50,6 +50,11 @@ pub enum TrainParts {
     /// time. The stride-2 and stride-4 features, the refinement stages and the selectors stay
     /// as loaded, so the refinement reads the features it was trained on.
     Coarse,
+    /// The cascade's half-resolution stage only (its regulariser); every other weight and
+    /// every batch-norm statistic stays as loaded. Its loss is the whole network's, of which
+    /// only the half stage's terms reach it (each stage's hypotheses are built from the
+    /// previous answer without a gradient).
+    Mid,
 }
 
 /// Everything that decides a training run.

@@ -88,10 +88,10 @@ pub trait Trainable: Module + Sized {
         match parts {
             TrainParts::All => Ok(self),
             TrainParts::Upsampling => Err(no_upsampling()),
-            TrainParts::Coarse => Err(TrainError::InvalidConfig {
+            TrainParts::Coarse | TrainParts::Mid => Err(TrainError::InvalidConfig {
                 field: "train_only",
-                message: "`coarse` trains the cascade's coarse stage; this network is not a \
-                          cascade"
+                message: "`coarse` and `mid` train a stage of the cascade; this network is not \
+                          a cascade"
                     .into(),
             }),
         }
@@ -304,6 +304,14 @@ impl Trainable for CascadeNet {
                     ..f
                 };
                 self.mid = self.mid.no_grad();
+                self.fine = self.fine.no_grad();
+                self.up_mid = self.up_mid.no_grad();
+                self.up_fine = self.up_fine.no_grad();
+                Ok(self)
+            }
+            TrainParts::Mid => {
+                self.features = self.features.no_grad();
+                self.coarse = self.coarse.no_grad();
                 self.fine = self.fine.no_grad();
                 self.up_mid = self.up_mid.no_grad();
                 self.up_fine = self.up_fine.no_grad();

@@ -256,3 +256,64 @@ fn training_only_the_coarse_stage_moves_its_weights_and_nothing_else() {
         "{err}"
     );
 }
+
+#[test]
+fn training_only_the_half_stage_moves_its_weights_and_nothing_else() {
+    let (rig, hyps) = sunny_rig();
+    let mut config = train_config(11);
+    config.net.cascade.convex_upsampling = true;
+    config.net.cascade.zncc_cue = true;
+    config.net.cascade.coarse_cue_oversample = 2;
+    config.net.cascade.mid_cue_sgm = true;
+    config.train_only = TrainParts::Mid;
+    let device = Device::flex();
+    let mut learner = seeded_learner(&config, &device);
+    let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
+    let sample = micro_sample(&config.net);
+    // Frozen first: the features, the coarse stage, the full-resolution stage, the
+    // selectors; then the half stage's own weights (its first convolution reads the
+    // aggregated cue too).
+    let weights = |net: &CascadeNet| {
+        [
+            net.features.conv0.conv.weight.val(),
+            net.features.out4.conv.weight.val(),
+            net.features.out8.conv.weight.val(),
+            net.coarse.out.conv.weight.val(),
+            net.fine.convs[0].conv.weight.val(),
+            net.up_mid.as_ref().unwrap().out.weight.val(),
+            net.mid.convs[0].conv.weight.val(),
+            net.mid.out.conv.weight.val(),
+        ]
+        .map(|t| read_values(t, "weights").unwrap())
+    };
+    let before = weights(&learner.net);
+    let first = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+    let mut last = first;
+    for _ in 0..10 {
+        last = learner.step(&sample, &geometry, &[], 0.01).unwrap();
+    }
+    let after = weights(&learner.net);
+    for (i, (a, b)) in before.iter().zip(&after).enumerate() {
+        if i < 6 {
+            assert_eq!(a, b, "frozen weights {i} moved");
+        } else {
+            assert_ne!(a, b, "half-stage weights {i} did not move");
+        }
+    }
+    assert!(last < first, "the loss did not fall: {first} -> {last}");
+
+    // The paper's network has no half stage to train alone.
+    let mut paper = TrainConfig {
+        net: NetConfig::tiny(),
+        ..TrainConfig::default()
+    };
+    paper.train_only = TrainParts::Mid;
+    let err = Learner::<omnimvs_net::OmniMvsNet>::for_model(&paper, &device)
+        .err()
+        .expect("training the half stage of the paper's network is refused")
+        .to_string();
+    assert!(
+        err.contains("train_only") && err.contains("cascade"),
+        "{err}"
+    );
+}

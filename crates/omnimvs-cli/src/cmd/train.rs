@@ -144,6 +144,13 @@ pub struct Args {
     /// --init weights without it grow into it answering as before (zero weights for it).
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub coarse_cue_sgm: Option<Switch>,
+    /// Cascade with the photometric cue matched on the half grid (`--coarse-cue-oversample
+    /// 2`): a second cue channel for the half-resolution stage, the coarse cue's half-grid
+    /// planes aggregated by semi-global matching and read at each pixel's hypotheses
+    /// (`mid_cue_sgm`, from `cascade-27`). --init weights without it grow into it answering as
+    /// before (zero weights for it).
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub mid_cue_sgm: Option<Switch>,
     /// Threads preparing the training samples (decoding the images, augmenting; 1 by
     /// default). The samples and their order do not depend on it: more is for a GPU, whose
     /// steps outrun one thread. Also taken by --resume.
@@ -193,7 +200,8 @@ pub struct Args {
     /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
     /// --init loaded it; a cheap step, the frozen stages need no backward pass); or `coarse`,
     /// the cascade's coarse stage alone (its stride-8 features and regulariser, trained by its
-    /// own loss: a step runs no refinement stage; validation still scores the whole network).
+    /// own loss: a step runs no refinement stage; validation still scores the whole network);
+    /// or `mid`, the half-resolution stage's regulariser alone (the whole network runs).
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub train_only: Option<PartsArg>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
@@ -457,6 +465,8 @@ pub enum PartsArg {
     Upsampling,
     /// The cascade's coarse stage (stride-8 features and coarse regulariser).
     Coarse,
+    /// The cascade's half-resolution stage (its regulariser).
+    Mid,
 }
 
 /// `--stage-intervals HALF,FULL`: two positive finite spacings.
@@ -536,14 +546,15 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.coarse_cue_oversample.is_some()
                 || args.coarse_cue_depths.is_some()
                 || args.coarse_cue_sgm.is_some()
+                || args.mid_cue_sgm.is_some()
             {
                 if net.family != Family::Cascade {
                     bail!(
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                          --refine-distribution, --sky-weight, --convex-upsampling, \
                          --stage-intervals, --coarse-feature-channels, \
-                         --coarse-cue-oversample, --coarse-cue-depths and --coarse-cue-sgm \
-                         are options of --preset cascade"
+                         --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
+                         --mid-cue-sgm are options of --preset cascade"
                     );
                 }
                 if let Some(up) = args.convex_upsampling {
@@ -570,6 +581,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(sgm) = args.coarse_cue_sgm {
                     net.cascade.coarse_cue_sgm = sgm == Switch::On;
+                }
+                if let Some(sgm) = args.mid_cue_sgm {
+                    net.cascade.mid_cue_sgm = sgm == Switch::On;
                 }
                 if let Some(channels) = args.coarse_feature_channels {
                     net.cascade.feature_channels[2] = channels;
@@ -617,6 +631,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 train_only: match args.train_only {
                     Some(PartsArg::Upsampling) => TrainParts::Upsampling,
                     Some(PartsArg::Coarse) => TrainParts::Coarse,
+                    Some(PartsArg::Mid) => TrainParts::Mid,
                     Some(PartsArg::All) | None => TrainParts::All,
                 },
                 ..TrainConfig::default()

@@ -15,7 +15,7 @@ use super::model::{
     CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, hypothesis_tensor, read_values,
     upsampling_candidates,
 };
-use super::photo::{ImagePyramid, aggregated_cue};
+use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
 use super::sampler::{PixelSampler, coarse_indices, hypotheses_around};
 use crate::config::NetConfig;
 use crate::error::NetError;
@@ -295,6 +295,15 @@ impl CascadeGeometry {
         let fine = pyramid.zncc(level, &self.coarse_grids)?;
         let first = &self.coarse_grids[0];
         let (planes, h, w) = (first.num_spheres, first.height, first.width);
+        if p.mid_cue_sgm {
+            // The same planes serve the half-resolution stage (`mid_cue_sgm` needs factor 2).
+            pyramid.mid_aggregate_or(AggregatedCue::new(
+                &fine,
+                &self.coarse_cue_depths,
+                [h, w],
+                [MID_SGM_P1, MID_SGM_P2],
+            )?);
+        }
         let (ch, cw) = (h / factor, w / factor);
         let scale = 1.0 / (factor * factor) as f32;
         let mut pooled = vec![0f32; planes * ch * cw];
@@ -394,13 +403,74 @@ impl CascadeGeometry {
             p.stage_intervals[stage - 1],
             self.config.num_invdepth,
         );
+        let mid_cue = match images {
+            Some(pyramid) if stage == 1 && p.mid_cue_sgm => {
+                Some(self.mid_cue(pyramid, &index, k, &cols)?)
+            }
+            _ => None,
+        };
         let mut taps = self.taps_for(stage, index, k, cols.clone(), images)?;
         let [h, w] = [sampler.grid().height, cols.len()];
+        if let Some(values) = mid_cue
+            && let Some(cue) = taps.cue.take()
+        {
+            let aggregated =
+                Tensor::from_data(TensorData::new(values, [1, 1, k, h, w]), &self.device);
+            taps.cue = Some(Tensor::cat(vec![cue, aggregated], 1));
+        }
         taps.center = Some(Tensor::<3>::from_data(
             TensorData::new(center, [1, h, w]),
             &self.device,
         ));
         Ok(taps)
+    }
+
+    /// The half-resolution stage's aggregated cue (`mid_cue_sgm`) at its `k` hypotheses per
+    /// pixel (`index[j * pixels + pixel]`, `N` units) over its columns `cols`: `k x rows x
+    /// cols.len()` values, read from the frame's [`AggregatedCue`] of the half grid (made here
+    /// from the coarse cue's planes if the coarse stage has not made it).
+    ///
+    /// # Errors
+    /// [`NetError`] from the cue's matching or aggregation.
+    fn mid_cue(
+        &self,
+        pyramid: &ImagePyramid,
+        index: &[f32],
+        k: usize,
+        cols: &Range<usize>,
+    ) -> Result<Vec<f32>, NetError> {
+        let grid = self.samplers[1].grid();
+        let [rows, width] = [grid.height, grid.width];
+        let aggregated = match pyramid.mid_aggregate() {
+            Some(done) => done,
+            None => {
+                let fine = pyramid.zncc(1, &self.coarse_grids)?;
+                pyramid.mid_aggregate_or(AggregatedCue::new(
+                    &fine,
+                    &self.coarse_cue_depths,
+                    [rows, width],
+                    [MID_SGM_P1, MID_SGM_P2],
+                )?)
+            }
+        };
+        let span = cols.len();
+        let pixels = rows * span;
+        if index.len() != k * pixels {
+            return Err(NetError::Shape {
+                what: "hypotheses of the half-resolution stage".into(),
+                expected: vec![k, rows, span],
+                actual: vec![index.len()],
+            });
+        }
+        Ok(index
+            .iter()
+            .enumerate()
+            .map(|(i, &n)| {
+                let pixel = i % pixels;
+                let (r, c) = (pixel / span, pixel % span);
+                aggregated.at(r * width + cols.start + c, f64::from(n))
+            })
+            .collect())
     }
 
     /// The taps of refinement stage `stage` at `k` given inverse-depth indices per pixel

@@ -724,7 +724,7 @@ impl CascadeNet {
                 device,
             ),
             mid: StageRegularizer::new(
-                (p.groups[1] + extra) * p.stage_hypotheses[0],
+                (p.groups[1] + extra + usize::from(p.mid_cue_sgm)) * p.stage_hypotheses[0],
                 p.stage_channels[0],
                 p.stage_hypotheses[0],
                 p.stage_gates,
@@ -823,6 +823,31 @@ impl CascadeNet {
             [c_out, config.cascade.coarse_spheres, kh, kw],
             &weight.device(),
         );
+        first.conv.weight = Param::from_tensor(Tensor::cat(vec![weight, zeros], 1).detach());
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with the half-resolution stage's aggregated cue switched on
+    /// (`mid_cue_sgm`; the network must have `zncc_cue` with `coarse_cue_oversample: 2`): the
+    /// stage's first convolution gets one input channel per hypothesis, after the existing
+    /// ones, with zero weights, so that it answers exactly as before until training moves
+    /// them. A network that has it is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when the network cannot have it.
+    pub fn with_mid_cue_sgm(mut self) -> Result<Self, NetError> {
+        if self.config.cascade.mid_cue_sgm {
+            return Ok(self);
+        }
+        let mut config = self.config.clone();
+        config.cascade.mid_cue_sgm = true;
+        config.validate()?;
+        let first = &mut self.mid.convs[0];
+        let weight = first.conv.weight.val(); // [C_out, C_in, 3, 3]
+        let [c_out, _, kh, kw] = weight.dims();
+        let k = config.cascade.stage_hypotheses[0];
+        let zeros = Tensor::zeros([c_out, k, kh, kw], &weight.device());
         first.conv.weight = Param::from_tensor(Tensor::cat(vec![weight, zeros], 1).detach());
         self.config = config;
         Ok(self)
@@ -1072,7 +1097,9 @@ impl CascadeNet {
     ) -> Result<(Tensor<4>, Option<Tensor<3>>), NetError> {
         let groups = self.config.cascade.groups[level];
         let volume = Self::correlation(features, taps, groups)?;
-        let volume = self.with_cue(volume, taps.cue.clone(), taps, 1)?;
+        // The half-resolution stage's cue has the aggregated channel too with `mid_cue_sgm`.
+        let channels = 1 + usize::from(level == 1 && self.config.cascade.mid_cue_sgm);
+        let volume = self.with_cue(volume, taps.cue.clone(), taps, channels)?;
         let regularizer = if level == 1 { &self.mid } else { &self.fine };
         Ok(regularizer.forward(fold_volume(volume))) // [B, K, H, W]
     }

@@ -17,6 +17,8 @@
 //! slot (the same offset from their own centres), which are the same depth where the centre
 //! map is smooth.
 
+use std::sync::OnceLock;
+
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_stereo::params::{COST_SCALE, Directions};
 use omnimvs_stereo::{CostVolume, SgmParams, ZNCC_VARIANCE_EPS, aggregate, camera_pairs};
@@ -42,6 +44,9 @@ pub struct ImagePyramid {
     levels: [Vec<Vec<f32>>; 3],
     /// `[rows, cols]` of each level.
     sizes: [[usize; 2]; 3],
+    /// The half-resolution stage's aggregated cue of this frame (`mid_cue_sgm`), made once
+    /// from the coarse cue's half-grid planes ([`ImagePyramid::mid_aggregate_or`]).
+    mid_aggregate: OnceLock<AggregatedCue>,
 }
 
 impl ImagePyramid {
@@ -68,6 +73,7 @@ impl ImagePyramid {
         Ok(Self {
             levels: [images, half, quarter],
             sizes: [[rows, cols], [hr, hc], [hr / 2, hc / 2]],
+            mid_aggregate: OnceLock::new(),
         })
     }
 
@@ -110,6 +116,16 @@ impl ImagePyramid {
     /// `[rows, cols]` of `level`.
     pub fn size(&self, level: usize) -> [usize; 2] {
         self.sizes[level]
+    }
+
+    /// The frame's half-resolution aggregated cue when it has been made.
+    pub fn mid_aggregate(&self) -> Option<&AggregatedCue> {
+        self.mid_aggregate.get()
+    }
+
+    /// The frame's half-resolution aggregated cue: the one made before, or `made` kept.
+    pub fn mid_aggregate_or(&self, made: AggregatedCue) -> &AggregatedCue {
+        self.mid_aggregate.get_or_init(|| made)
     }
 
     /// The cue at the samples of `grids` (one per camera, `K` planes of `rows x cols`
@@ -189,15 +205,128 @@ pub const COARSE_SGM_P1: f32 = 0.05;
 /// Penalty of the coarse cue's aggregation for larger changes (see [`COARSE_SGM_P1`]).
 pub const COARSE_SGM_P2: f32 = 1.0;
 
+/// Penalty of the half-resolution stage's aggregated cue (`mid_cue_sgm`) for a change of one
+/// depth between neighbours (ZNCC+SGM's own default), in cost units; with
+/// [`MID_SGM_P2`] the better of the two settings tried on the half grid
+/// (`models/training/cascade-25/half_study.py`).
+pub const MID_SGM_P1: f32 = 0.1;
+
+/// Penalty of the half-resolution stage's aggregated cue for larger changes (see
+/// [`MID_SGM_P1`]).
+pub const MID_SGM_P2: f32 = 2.0;
+
+/// A photometric cue aggregated by semi-global matching ([`AggregatedCue::new`]): for every
+/// pixel of an `h x w` grid and every plane in the order of its inverse depth, `1 - 2 min(e,
+/// 1)` with `e` the plane's mean path cost above the pixel's best (1 at the best plane).
+#[derive(Clone, Debug)]
+pub struct AggregatedCue {
+    /// The planes' inverse depths (index units), ascending.
+    pub depths: Vec<f64>,
+    /// For each plane in that order, its index in the cue it was made from.
+    pub order: Vec<usize>,
+    /// `values[pixel * planes + plane]`, in `[-1, 1]`.
+    pub values: Vec<f32>,
+    /// `[h, w]` of the grid.
+    pub size: [usize; 2],
+}
+
+impl AggregatedCue {
+    /// The aggregation of `cue`: `depths.len()` maps of `h x w` values in `[-1, 1]`, plane
+    /// `j` matched at inverse depth `depths[j]` (index units, any order, repeats allowed).
+    /// The costs `(1 - zncc) / 2` of all planes in the order of their depths are aggregated
+    /// along 8 paths by semi-global matching with penalties `p1`, `p2` (columns wrap around:
+    /// longitude is a ring).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when the sizes disagree; [`NetError::Stereo`] when the aggregation
+    /// refuses the volume (fewer than 2 planes) or the penalties.
+    pub fn new(
+        cue: &[f32],
+        depths: &[f64],
+        [h, w]: [usize; 2],
+        [p1, p2]: [f32; 2],
+    ) -> Result<Self, NetError> {
+        let planes = depths.len();
+        let plane = h * w;
+        if cue.len() != planes * plane {
+            return Err(NetError::Shape {
+                what: "photometric cue to aggregate".into(),
+                expected: vec![planes, h, w],
+                actual: vec![cue.len()],
+            });
+        }
+        let mut order: Vec<usize> = (0..planes).collect();
+        order.sort_by(|&a, &b| depths[a].total_cmp(&depths[b]));
+        let mut data = vec![0u16; plane * planes];
+        for (pixel, costs) in data.chunks_exact_mut(planes).enumerate() {
+            for (cost, &j) in costs.iter_mut().zip(&order) {
+                let zncc = cue[j * plane + pixel].clamp(-1.0, 1.0);
+                *cost = ((1.0 - zncc) * 0.5 * COST_SCALE + 0.5) as u16;
+            }
+        }
+        let volume = CostVolume {
+            height: h,
+            width: w,
+            ndepth: planes,
+            data,
+        };
+        let params = SgmParams {
+            p1,
+            p2,
+            directions: Directions::Eight,
+            ..SgmParams::default()
+        };
+        let (summed, _) = aggregate(&volume, &params)?;
+        let unit = 1.0 / (Directions::Eight.count() as f32 * COST_SCALE);
+        let mut values = vec![0f32; plane * planes];
+        for (sums, out) in summed
+            .data
+            .chunks_exact(planes)
+            .zip(values.chunks_exact_mut(planes))
+        {
+            let best = sums.iter().copied().min().unwrap_or(0);
+            for (&sum, value) in sums.iter().zip(out) {
+                let excess = f32::from(sum - best) * unit;
+                *value = 1.0 - 2.0 * excess.min(1.0);
+            }
+        }
+        Ok(Self {
+            depths: order.iter().map(|&j| depths[j]).collect(),
+            order,
+            values,
+            size: [h, w],
+        })
+    }
+
+    /// The value at `pixel` for inverse depth `index` (index units), linear between the two
+    /// planes around it (the first or last plane beyond them).
+    pub fn at(&self, pixel: usize, index: f64) -> f32 {
+        let planes = self.depths.len();
+        let row = &self.values[pixel * planes..(pixel + 1) * planes];
+        let above = self.depths.partition_point(|&d| d < index);
+        if above == 0 {
+            return row[0];
+        }
+        if above == planes {
+            return row[planes - 1];
+        }
+        let (d0, d1) = (self.depths[above - 1], self.depths[above]);
+        let t = if d1 > d0 {
+            (index - d0) / (d1 - d0)
+        } else {
+            0.0
+        };
+        row[above - 1] + (t as f32) * (row[above] - row[above - 1])
+    }
+}
+
 /// The coarse stage's aggregated cue (`coarse_cue_sgm`) from its ZNCC cue `cue`: `planes`
 /// maps of `h x w` values in `[-1, 1]`, plane `j` matched at inverse depth `depths[j]` (index
 /// units, any order, repeats allowed), plane `j` belonging to sphere `j % spheres`.
 ///
-/// The costs `(1 - zncc) / 2` of all planes in the order of their depths are aggregated along
-/// 8 paths by semi-global matching (columns wrap around: longitude is a ring); at every
-/// pixel each sphere gets the lowest mean path cost of its planes above the pixel's best,
-/// `e`, as `1 - 2 min(e, 1)`: 1 for the best sphere, -1 for one a whole unit of cost
-/// worse. `spheres * h * w` values, sphere-major.
+/// The cue aggregated with [`COARSE_SGM_P1`], [`COARSE_SGM_P2`] ([`AggregatedCue::new`]);
+/// each sphere takes the highest value of its planes: 1 for the best sphere, -1 for one a
+/// whole unit of mean path cost worse. `spheres * h * w` values, sphere-major.
 ///
 /// # Errors
 /// [`NetError::Shape`] when the sizes disagree; [`NetError::Stereo`] when the aggregation
@@ -217,35 +346,10 @@ pub fn aggregated_cue(
             actual: vec![cue.len(), spheres],
         });
     }
-    let mut order: Vec<usize> = (0..planes).collect();
-    order.sort_by(|&a, &b| depths[a].total_cmp(&depths[b]));
-    let mut data = vec![0u16; plane * planes];
-    for (pixel, costs) in data.chunks_exact_mut(planes).enumerate() {
-        for (cost, &j) in costs.iter_mut().zip(&order) {
-            let zncc = cue[j * plane + pixel].clamp(-1.0, 1.0);
-            *cost = ((1.0 - zncc) * 0.5 * COST_SCALE + 0.5) as u16;
-        }
-    }
-    let volume = CostVolume {
-        height: h,
-        width: w,
-        ndepth: planes,
-        data,
-    };
-    let params = SgmParams {
-        p1: COARSE_SGM_P1,
-        p2: COARSE_SGM_P2,
-        directions: Directions::Eight,
-        ..SgmParams::default()
-    };
-    let (summed, _) = aggregate(&volume, &params)?;
-    let unit = 1.0 / (Directions::Eight.count() as f32 * COST_SCALE);
+    let aggregated = AggregatedCue::new(cue, depths, [h, w], [COARSE_SGM_P1, COARSE_SGM_P2])?;
     let mut out = vec![-1f32; spheres * plane];
-    for (pixel, sums) in summed.data.chunks_exact(planes).enumerate() {
-        let best = sums.iter().copied().min().unwrap_or(0);
-        for (&sum, &j) in sums.iter().zip(&order) {
-            let excess = f32::from(sum - best) * unit;
-            let value = 1.0 - 2.0 * excess.min(1.0);
+    for (pixel, values) in aggregated.values.chunks_exact(planes).enumerate() {
+        for (&value, &j) in values.iter().zip(&aggregated.order) {
             let dst = &mut out[(j % spheres) * plane + pixel];
             *dst = dst.max(value);
         }
@@ -548,6 +652,34 @@ mod tests {
         assert!(aggregated_cue(&cue, &depths, 4, [h, w]).is_err());
         assert!(aggregated_cue(&cue[1..], &depths, 3, [h, w]).is_err());
         assert!(aggregated_cue(&cue, &depths, 0, [h, w]).is_err());
+    }
+
+    #[test]
+    fn the_aggregated_cue_is_read_linearly_between_its_planes() {
+        // Two pixels, three planes at depths 2, 0, 4 (stored in that order): at each pixel the
+        // planes in depth order, ascending, and between them a linear reading.
+        let (h, w) = (1, 2);
+        let depths = [2.0, 0.0, 4.0];
+        // Pixel 0 best at depth 2, pixel 1 best at depth 4, clearly.
+        let cue = vec![0.9, -0.5, -0.5, -0.5, -0.5, 0.9];
+        let aggregated = AggregatedCue::new(&cue, &depths, [h, w], [0.0, 0.0]).unwrap();
+        assert_eq!(aggregated.depths, vec![0.0, 2.0, 4.0]);
+        assert_eq!(aggregated.order, vec![1, 0, 2]);
+        // No penalties: each pixel its own cost; the best plane reads 1, the others 1 - 2e with
+        // e = 0.7 (the cost difference), so -0.4.
+        let expect = |p: usize, d: f64| -> f32 {
+            let row = &aggregated.values[p * 3..p * 3 + 3];
+            assert_eq!(row.iter().copied().fold(f32::MIN, f32::max), 1.0);
+            aggregated.at(p, d)
+        };
+        assert!((expect(0, 2.0) - 1.0).abs() < 1e-3);
+        assert!((expect(0, 0.0) + 0.4).abs() < 1e-2);
+        assert!((expect(0, 1.0) - 0.3).abs() < 1e-2, "{}", expect(0, 1.0));
+        assert!((expect(1, 3.0) - 0.3).abs() < 1e-2);
+        // Beyond the planes: the first or the last.
+        assert_eq!(expect(1, -5.0), expect(1, 0.0));
+        assert_eq!(expect(1, 9.0), expect(1, 4.0));
+        assert!(AggregatedCue::new(&cue[1..], &depths, [h, w], [0.0, 0.0]).is_err());
     }
 
     #[test]
