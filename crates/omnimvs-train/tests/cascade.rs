@@ -70,6 +70,59 @@ fn seeded_learner(config: &TrainConfig, device: &Device) -> Learner<CascadeNet> 
     seeded(|| Learner::<CascadeNet>::for_model(config, device).unwrap())
 }
 
+/// A learner of `config` (seeded) on the published rig, its geometry and the micro sample.
+fn learner_on_sunny(config: &TrainConfig) -> (Learner<CascadeNet>, CascadeGeometry, Sample) {
+    let (rig, hyps) = sunny_rig();
+    let learner = seeded_learner(config, &Device::flex());
+    let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
+    (learner, geometry, micro_sample(&config.net))
+}
+
+/// Steps `learner` on `sample` `1 + more` times; the first and the last loss.
+fn first_and_last_loss(
+    learner: &mut Learner<CascadeNet>,
+    sample: &Sample,
+    geometry: &CascadeGeometry,
+    more: usize,
+) -> (f32, f32) {
+    let first = learner.step(sample, geometry, &[], 0.01).unwrap();
+    let mut last = first;
+    for _ in 0..more {
+        last = learner.step(sample, geometry, &[], 0.01).unwrap();
+    }
+    (first, last)
+}
+
+/// Asserts that of the weights read `before` and `after` training, the first `frozen` stayed
+/// and the others, `what`, moved.
+fn assert_only_the_rest_moved(before: &[Vec<f32>], after: &[Vec<f32>], frozen: usize, what: &str) {
+    for (i, (a, b)) in before.iter().zip(after).enumerate() {
+        if i < frozen {
+            assert_eq!(a, b, "frozen weights {i} moved");
+        } else {
+            assert_ne!(a, b, "{what} weights {i} did not move");
+        }
+    }
+}
+
+/// Asserts that training only `parts` (a stage of the cascade) of the paper's network is
+/// refused, naming the field and the cascade.
+fn assert_the_paper_network_refuses(parts: TrainParts, device: &Device) {
+    let mut paper = TrainConfig {
+        net: NetConfig::tiny(),
+        ..TrainConfig::default()
+    };
+    paper.train_only = parts;
+    let err = Learner::<omnimvs_net::OmniMvsNet>::for_model(&paper, device)
+        .err()
+        .expect("training a stage of the paper's network alone is refused")
+        .to_string();
+    assert!(
+        err.contains("train_only") && err.contains("cascade"),
+        "{err}"
+    );
+}
+
 fn train_config(seed: u64) -> TrainConfig {
     TrainConfig {
         net: micro_config(),
@@ -122,14 +175,11 @@ fn gradients_reach_every_stage_and_it_overfits_one_frame() {
 
 #[test]
 fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
-    let (rig, hyps) = sunny_rig();
     let mut config = train_config(5);
     config.net.cascade.convex_upsampling = true;
     config.train_only = TrainParts::Upsampling;
     let device = Device::flex();
-    let mut learner = seeded_learner(&config, &device);
-    let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
-    let sample = micro_sample(&config.net);
+    let (mut learner, geometry, sample) = learner_on_sunny(&config);
     let weights = |net: &CascadeNet| {
         let selector = net.up_mid.as_ref().unwrap();
         [
@@ -143,19 +193,8 @@ fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
         .map(|t| read_values(t, "weights").unwrap())
     };
     let before = weights(&learner.net);
-    let first = learner.step(&sample, &geometry, &[], 0.01).unwrap();
-    let mut last = first;
-    for _ in 0..5 {
-        last = learner.step(&sample, &geometry, &[], 0.01).unwrap();
-    }
-    let after = weights(&learner.net);
-    for (i, (a, b)) in before.iter().zip(&after).enumerate() {
-        if i < 4 {
-            assert_eq!(a, b, "frozen weights {i} moved");
-        } else {
-            assert_ne!(a, b, "selector weights {i} did not move");
-        }
-    }
+    let (first, last) = first_and_last_loss(&mut learner, &sample, &geometry, 5);
+    assert_only_the_rest_moved(&before, &weights(&learner.net), 4, "selector");
     assert!(
         last < first,
         "the centres' loss did not fall: {first} -> {last}"
@@ -176,14 +215,11 @@ fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
 
 #[test]
 fn training_only_the_coarse_stage_moves_its_weights_and_nothing_else() {
-    let (rig, hyps) = sunny_rig();
     let mut config = train_config(7);
     config.net.cascade.convex_upsampling = true;
     config.train_only = TrainParts::Coarse;
     let device = Device::flex();
-    let mut learner = seeded_learner(&config, &device);
-    let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
-    let sample = micro_sample(&config.net);
+    let (mut learner, geometry, sample) = learner_on_sunny(&config);
     // Frozen first: the stride-2 and stride-4 features, the refinement stages, the
     // selectors; then the coarse stage's own weights.
     let weights = |net: &CascadeNet| {
@@ -218,19 +254,8 @@ fn training_only_the_coarse_stage_moves_its_weights_and_nothing_else() {
         sum / n as f32
     };
     let start = coarse_error(&learner);
-    let first = learner.step(&sample, &geometry, &[], 0.01).unwrap();
-    let mut last = first;
-    for _ in 0..15 {
-        last = learner.step(&sample, &geometry, &[], 0.01).unwrap();
-    }
-    let after = weights(&learner.net);
-    for (i, (a, b)) in before.iter().zip(&after).enumerate() {
-        if i < 7 {
-            assert_eq!(a, b, "frozen weights {i} moved");
-        } else {
-            assert_ne!(a, b, "coarse-stage weights {i} did not move");
-        }
-    }
+    let (first, last) = first_and_last_loss(&mut learner, &sample, &geometry, 15);
+    assert_only_the_rest_moved(&before, &weights(&learner.net), 7, "coarse-stage");
     assert!(
         last < first,
         "the coarse loss did not fall: {first} -> {last}"
@@ -242,24 +267,11 @@ fn training_only_the_coarse_stage_moves_its_weights_and_nothing_else() {
     );
 
     // The paper's network has no coarse stage to train alone.
-    let mut paper = TrainConfig {
-        net: NetConfig::tiny(),
-        ..TrainConfig::default()
-    };
-    paper.train_only = TrainParts::Coarse;
-    let err = Learner::<omnimvs_net::OmniMvsNet>::for_model(&paper, &device)
-        .err()
-        .expect("training the coarse stage of the paper's network is refused")
-        .to_string();
-    assert!(
-        err.contains("train_only") && err.contains("cascade"),
-        "{err}"
-    );
+    assert_the_paper_network_refuses(TrainParts::Coarse, &device);
 }
 
 #[test]
 fn training_only_the_half_stage_moves_its_weights_and_nothing_else() {
-    let (rig, hyps) = sunny_rig();
     let mut config = train_config(11);
     config.net.cascade.convex_upsampling = true;
     config.net.cascade.zncc_cue = true;
@@ -267,9 +279,7 @@ fn training_only_the_half_stage_moves_its_weights_and_nothing_else() {
     config.net.cascade.mid_cue_sgm = true;
     config.train_only = TrainParts::Mid;
     let device = Device::flex();
-    let mut learner = seeded_learner(&config, &device);
-    let geometry = CascadeGeometry::new(&rig, &config.net, &hyps, &learner.device).unwrap();
-    let sample = micro_sample(&config.net);
+    let (mut learner, geometry, sample) = learner_on_sunny(&config);
     // Frozen first: the features, the coarse stage, the full-resolution stage, the
     // selectors; then the half stage's own weights (its first convolution reads the
     // aggregated cue too).
@@ -287,33 +297,10 @@ fn training_only_the_half_stage_moves_its_weights_and_nothing_else() {
         .map(|t| read_values(t, "weights").unwrap())
     };
     let before = weights(&learner.net);
-    let first = learner.step(&sample, &geometry, &[], 0.01).unwrap();
-    let mut last = first;
-    for _ in 0..10 {
-        last = learner.step(&sample, &geometry, &[], 0.01).unwrap();
-    }
-    let after = weights(&learner.net);
-    for (i, (a, b)) in before.iter().zip(&after).enumerate() {
-        if i < 6 {
-            assert_eq!(a, b, "frozen weights {i} moved");
-        } else {
-            assert_ne!(a, b, "half-stage weights {i} did not move");
-        }
-    }
+    let (first, last) = first_and_last_loss(&mut learner, &sample, &geometry, 10);
+    assert_only_the_rest_moved(&before, &weights(&learner.net), 6, "half-stage");
     assert!(last < first, "the loss did not fall: {first} -> {last}");
 
     // The paper's network has no half stage to train alone.
-    let mut paper = TrainConfig {
-        net: NetConfig::tiny(),
-        ..TrainConfig::default()
-    };
-    paper.train_only = TrainParts::Mid;
-    let err = Learner::<omnimvs_net::OmniMvsNet>::for_model(&paper, &device)
-        .err()
-        .expect("training the half stage of the paper's network is refused")
-        .to_string();
-    assert!(
-        err.contains("train_only") && err.contains("cascade"),
-        "{err}"
-    );
+    assert_the_paper_network_refuses(TrainParts::Mid, &device);
 }
