@@ -2,12 +2,26 @@
 //! after a checkpoint round trip equals the uninterrupted run's.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+use std::sync::Mutex;
+
 use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::Device;
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::synthetic::synthetic_grids;
 use omnimvs_net::{Layout, NetConfig};
 use omnimvs_train::{Learner, Sample, TrainConfig, TrainParts};
+
+/// A learner of `config` whose initial weights are drawn under one lock: the tests of this file
+/// run in parallel and `Device::seed` seeds a generator they share, so without it a test's
+/// weights depend on the other tests' timing (one CI run drew weights whose three steps moved
+/// the frozen-statistics loss by less than that test's 1e-5).
+fn new_learner(config: &TrainConfig, device: &Device) -> Learner {
+    static INIT: Mutex<()> = Mutex::new(());
+    let _guard = INIT
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    Learner::new(config, device).unwrap()
+}
 
 /// The smallest network the decoder allows: `N = 32`, a `32 x 32` output, two cameras.
 fn micro_config() -> NetConfig {
@@ -69,7 +83,7 @@ fn train_config(seed: u64) -> TrainConfig {
 #[test]
 fn overfits_one_tiny_frame() {
     let config = train_config(1);
-    let mut learner = Learner::new(&config, &Device::flex()).unwrap();
+    let mut learner = new_learner(&config, &Device::flex());
     let sample = micro_sample(&config.net);
     let taps = learner.taps(&synthetic_grids(&config.net));
     let order = [0, 1];
@@ -94,7 +108,7 @@ fn resume_gives_the_uninterrupted_next_step_loss() {
     let grids = synthetic_grids(&config.net);
     let dir = tempfile::tempdir().unwrap();
 
-    let mut run = Learner::new(&config, &device).unwrap();
+    let mut run = new_learner(&config, &device);
     let taps = run.taps(&grids);
     for order in [[0, 1], [1, 0]] {
         run.step(&sample, &taps, &order, 0.01).unwrap();
@@ -105,7 +119,7 @@ fn resume_gives_the_uninterrupted_next_step_loss() {
         .collect();
 
     // Another seed: everything must come from the checkpoint.
-    let mut resumed = Learner::new(&train_config(99), &device).unwrap();
+    let mut resumed = new_learner(&train_config(99), &device);
     resumed.load_checkpoint(dir.path()).unwrap();
     let taps = resumed.taps(&grids);
     let actual: Vec<f32> = (0..2)
@@ -119,7 +133,7 @@ fn resume_gives_the_uninterrupted_next_step_loss() {
     }
 
     // The optimiser state matters: without the momentum the second loss differs.
-    let mut weights_only = Learner::new(&train_config(99), &device).unwrap();
+    let mut weights_only = new_learner(&train_config(99), &device);
     weights_only.load_checkpoint(dir.path()).unwrap();
     weights_only.optim = burn::optim::SgdConfig::new()
         .with_momentum(Some(burn::optim::momentum::MomentumConfig {
@@ -142,7 +156,7 @@ fn resume_gives_the_uninterrupted_next_step_loss() {
 #[test]
 fn checkpoints_are_burns_own_files_written_whole() {
     let config = train_config(3);
-    let mut learner = Learner::new(&config, &Device::flex()).unwrap();
+    let mut learner = new_learner(&config, &Device::flex());
     let sample = micro_sample(&config.net);
     let taps = learner.taps(&synthetic_grids(&config.net));
     learner.step(&sample, &taps, &[0, 1], 0.01).unwrap(); // momentum buffers to save
@@ -184,7 +198,7 @@ fn train_and_inference_losses(frozen: bool) -> Vec<(f32, f32)> {
         frozen_norm_stats: frozen,
         ..train_config(3)
     };
-    let mut learner = Learner::new(&config, &Device::flex()).unwrap();
+    let mut learner = new_learner(&config, &Device::flex());
     let sample = micro_sample(&config.net);
     let grids = synthetic_grids(&config.net);
     let taps = learner.taps(&grids);
