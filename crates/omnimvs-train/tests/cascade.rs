@@ -4,6 +4,7 @@
 
 use std::sync::Mutex;
 
+use burn::module::Module;
 use burn::optim::GradientsParams;
 use burn::tensor::Device;
 use omnimvs_camera::Rig;
@@ -67,7 +68,12 @@ fn seeded<T>(init: impl FnOnce() -> T) -> T {
 }
 
 fn seeded_learner(config: &TrainConfig, device: &Device) -> Learner<CascadeNet> {
-    seeded(|| Learner::<CascadeNet>::for_model(config, device).unwrap())
+    seeded(|| {
+        let learner = Learner::<CascadeNet>::for_model(config, device).unwrap();
+        // burn draws a parameter's initial values when it is first read: read them all here.
+        let _ = learner.net.clone().into_record();
+        learner
+    })
 }
 
 /// A learner of `config` (seeded) on the published rig, its geometry and the micro sample.

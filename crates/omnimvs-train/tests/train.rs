@@ -4,6 +4,7 @@
 
 use std::sync::Mutex;
 
+use burn::module::Module;
 use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::Device;
 use omnimvs_data::gt::GroundTruth;
@@ -13,14 +14,18 @@ use omnimvs_train::{Learner, Sample, TrainConfig, TrainParts};
 
 /// A learner of `config` whose initial weights are drawn under one lock: the tests of this file
 /// run in parallel and `Device::seed` seeds a generator they share, so without it a test's
-/// weights depend on the other tests' timing (one CI run drew weights whose three steps moved
-/// the frozen-statistics loss by less than that test's 1e-5).
+/// weights depend on the other tests' timing (two CI runs drew weights whose three steps moved
+/// the frozen-statistics loss by less than that test's 1e-5). burn draws a parameter when it
+/// is first read, so every parameter is read under the lock too.
 fn new_learner(config: &TrainConfig, device: &Device) -> Learner {
     static INIT: Mutex<()> = Mutex::new(());
     let _guard = INIT
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    Learner::new(config, device).unwrap()
+    let learner = Learner::new(config, device).unwrap();
+    // burn draws a parameter's initial values when it is first read: read them all here.
+    let _ = learner.net.clone().into_record();
+    learner
 }
 
 /// The smallest network the decoder allows: `N = 32`, a `32 x 32` output, two cameras.
