@@ -11,7 +11,7 @@ use burn::tensor::activation::{relu, sigmoid, softmax};
 use burn::tensor::{Device, Tensor, TensorData};
 
 use super::geometry::StageTaps;
-use crate::config::{Family, NetConfig};
+use crate::config::{CascadeParams, Family, NetConfig};
 use crate::error::NetError;
 use crate::model::blocks::{ConvBn2d, fold_into_conv2d};
 use crate::model::softargmin::entropy;
@@ -792,11 +792,7 @@ impl CascadeNet {
             firsts.push((&mut selector.hidden, UPSAMPLE_TAPS));
         }
         for (first, k) in firsts {
-            let weight = first.conv.weight.val(); // [C_out, C_in, 3, 3]
-            let [c_out, _, kh, kw] = weight.dims();
-            let zeros = Tensor::zeros([c_out, k, kh, kw], &weight.device());
-            let widened = Tensor::cat(vec![weight, zeros], 1).detach(); // a leaf again
-            first.conv.weight = Param::from_tensor(widened);
+            append_zero_inputs(&mut first.conv, k);
         }
         self.config.cascade.zncc_cue = true;
         self
@@ -809,23 +805,12 @@ impl CascadeNet {
     ///
     /// # Errors
     /// [`NetError::InvalidConfig`] when the network has no `zncc_cue`.
-    pub fn with_coarse_cue_sgm(mut self) -> Result<Self, NetError> {
-        if self.config.cascade.coarse_cue_sgm {
-            return Ok(self);
-        }
-        let mut config = self.config.clone();
-        config.cascade.coarse_cue_sgm = true;
-        config.validate()?;
-        let first = &mut self.coarse.c0[0];
-        let weight = first.conv.weight.val(); // [C_out, C_in, 3, 3]
-        let [c_out, _, kh, kw] = weight.dims();
-        let zeros = Tensor::zeros(
-            [c_out, config.cascade.coarse_spheres, kh, kw],
-            &weight.device(),
-        );
-        first.conv.weight = Param::from_tensor(Tensor::cat(vec![weight, zeros], 1).detach());
-        self.config = config;
-        Ok(self)
+    pub fn with_coarse_cue_sgm(self) -> Result<Self, NetError> {
+        self.with_cue_channel(
+            |p| &mut p.coarse_cue_sgm,
+            |net| &mut net.coarse.c0[0].conv,
+            |p| p.coarse_spheres,
+        )
     }
 
     /// The network with the half-resolution stage's aggregated cue switched on
@@ -836,19 +821,30 @@ impl CascadeNet {
     ///
     /// # Errors
     /// [`NetError::InvalidConfig`] when the network cannot have it.
-    pub fn with_mid_cue_sgm(mut self) -> Result<Self, NetError> {
-        if self.config.cascade.mid_cue_sgm {
+    pub fn with_mid_cue_sgm(self) -> Result<Self, NetError> {
+        self.with_cue_channel(
+            |p| &mut p.mid_cue_sgm,
+            |net| &mut net.mid.convs[0].conv,
+            |p| p.stage_hypotheses[0],
+        )
+    }
+
+    /// The network with the cue channel that `flag` switches on: unless it is on already, the
+    /// configuration with it must validate, and the convolution `first` reads `k` more input
+    /// channels (one per hypothesis of its stage) with zero weights.
+    fn with_cue_channel(
+        mut self,
+        flag: fn(&mut CascadeParams) -> &mut bool,
+        first: fn(&mut Self) -> &mut Conv2d,
+        k: fn(&CascadeParams) -> usize,
+    ) -> Result<Self, NetError> {
+        let mut config = self.config.clone();
+        if *flag(&mut config.cascade) {
             return Ok(self);
         }
-        let mut config = self.config.clone();
-        config.cascade.mid_cue_sgm = true;
+        *flag(&mut config.cascade) = true;
         config.validate()?;
-        let first = &mut self.mid.convs[0];
-        let weight = first.conv.weight.val(); // [C_out, C_in, 3, 3]
-        let [c_out, _, kh, kw] = weight.dims();
-        let k = config.cascade.stage_hypotheses[0];
-        let zeros = Tensor::zeros([c_out, k, kh, kw], &weight.device());
-        first.conv.weight = Param::from_tensor(Tensor::cat(vec![weight, zeros], 1).detach());
+        append_zero_inputs(first(&mut self), k(&config.cascade));
         self.config = config;
         Ok(self)
     }
@@ -1103,6 +1099,16 @@ impl CascadeNet {
         let regularizer = if level == 1 { &self.mid } else { &self.fine };
         Ok(regularizer.forward(fold_volume(volume))) // [B, K, H, W]
     }
+}
+
+/// `first` reading `k` more input channels, after its own, with zero weights: the network
+/// answers as before until training moves them.
+fn append_zero_inputs(first: &mut Conv2d, k: usize) {
+    let weight = first.weight.val(); // [C_out, C_in, 3, 3]
+    let [c_out, _, kh, kw] = weight.dims();
+    let zeros = Tensor::zeros([c_out, k, kh, kw], &weight.device());
+    let widened = Tensor::cat(vec![weight, zeros], 1).detach(); // a leaf again
+    first.weight = Param::from_tensor(widened);
 }
 
 /// Bilinear sampling of a channels-last table `[P, C]` (`P = rows * cols` of a feature map)
