@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
-use crate::params::{COST_SCALE, SweepStep};
+use crate::params::{COST_SCALE, SweepStep, cost_units};
 use crate::{CameraView, RunSampler, SphereProjector, StereoError};
 
 /// Cost where fewer than two cameras see the whole window.
@@ -712,7 +712,7 @@ impl Matcher<'_> {
             } else {
                 NO_PAIR_COST
             };
-            *dst = (cost * COST_SCALE + 0.5) as u16;
+            *dst = cost_units(cost);
         }
     }
 

@@ -16,7 +16,7 @@ use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use rayon::prelude::*;
 
 use crate::cost::{NO_PAIR_COST, camera_pairs, fill_odd_hypotheses, finished_volume};
-use crate::params::{COST_SCALE, SweepStep};
+use crate::params::{SweepStep, cost_units};
 use crate::{CameraView, CostTimings, CostVolume, SphereProjector, StereoError};
 
 /// One camera's dense features, `data[(y * width + x) * channels + c]`, on a grid that is the
@@ -161,7 +161,7 @@ pub fn feature_cost_volume(
                     } else {
                         NO_PAIR_COST
                     };
-                    out[x * nd + n] = (cost * COST_SCALE + 0.5) as u16;
+                    out[x * nd + n] = cost_units(cost);
                 }
             }
             if step == 2 {

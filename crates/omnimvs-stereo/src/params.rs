@@ -7,6 +7,14 @@ use crate::StereoError;
 /// units of a `u16`.
 pub const COST_SCALE: f32 = 512.0;
 
+/// A matching cost in `[0, 1]` as the `u16` units of a cost volume ([`COST_SCALE`], rounded
+/// to nearest): what every volume of this crate stores, and what a caller building one for
+/// [`crate::aggregate`] must store.
+#[inline]
+pub fn cost_units(cost: f32) -> u16 {
+    (cost * COST_SCALE + 0.5) as u16
+}
+
 /// Default `P1` (small inverse-depth changes), in matching-cost units
 /// (`(1 - zncc) / 2`, in `[0, 1]`). Tuned on generated validation rooms only
 /// (`examples/tune_sgm.rs`, README of this crate).

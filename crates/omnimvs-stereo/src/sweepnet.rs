@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use crate::cost::{
     NO_PAIR_COST, ZNCC_VARIANCE_EPS, camera_pairs, fill_odd_hypotheses, finished_volume,
 };
-use crate::params::{COST_SCALE, SweepStep};
+use crate::params::{SweepStep, cost_units};
 use crate::{CameraView, CostTimings, CostVolume, SphereProjector, StereoError};
 
 /// Output rows computed together (the warped band holds `BAND` rows and the reach of the
@@ -637,7 +637,7 @@ pub fn sweep_cost_volume(
                         } else {
                             NO_PAIR_COST
                         };
-                        out[i * nd + n] = (cost * COST_SCALE + 0.5) as u16;
+                        out[i * nd + n] = cost_units(cost);
                     }
                 }
                 if step == 2 {

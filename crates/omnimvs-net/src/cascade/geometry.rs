@@ -297,12 +297,7 @@ impl CascadeGeometry {
         let (planes, h, w) = (first.num_spheres, first.height, first.width);
         if p.mid_cue_sgm {
             // The same planes serve the half-resolution stage (`mid_cue_sgm` needs factor 2).
-            pyramid.mid_aggregate_or(AggregatedCue::new(
-                &fine,
-                &self.coarse_cue_depths,
-                [h, w],
-                [MID_SGM_P1, MID_SGM_P2],
-            )?);
+            self.mid_aggregate(pyramid, &fine)?;
         }
         let (ch, cw) = (h / factor, w / factor);
         let scale = 1.0 / (factor * factor) as f32;
@@ -425,6 +420,28 @@ impl CascadeGeometry {
         Ok(taps)
     }
 
+    /// The frame's aggregated cue of the half-resolution grid (`mid_cue_sgm`): the one made
+    /// before, or made now from `fine`, the coarse cue's planes on that grid.
+    ///
+    /// # Errors
+    /// [`NetError`] from the aggregation.
+    fn mid_aggregate<'a>(
+        &self,
+        pyramid: &'a ImagePyramid,
+        fine: &[f32],
+    ) -> Result<&'a AggregatedCue, NetError> {
+        if let Some(done) = pyramid.mid_aggregate() {
+            return Ok(done);
+        }
+        let grid = self.samplers[1].grid();
+        Ok(pyramid.mid_aggregate_or(AggregatedCue::new(
+            fine,
+            &self.coarse_cue_depths,
+            [grid.height, grid.width],
+            [MID_SGM_P1, MID_SGM_P2],
+        )?))
+    }
+
     /// The half-resolution stage's aggregated cue (`mid_cue_sgm`) at its `k` hypotheses per
     /// pixel (`index[j * pixels + pixel]`, `N` units) over its columns `cols`: `k x rows x
     /// cols.len()` values, read from the frame's [`AggregatedCue`] of the half grid (made here
@@ -443,15 +460,7 @@ impl CascadeGeometry {
         let [rows, width] = [grid.height, grid.width];
         let aggregated = match pyramid.mid_aggregate() {
             Some(done) => done,
-            None => {
-                let fine = pyramid.zncc(1, &self.coarse_grids)?;
-                pyramid.mid_aggregate_or(AggregatedCue::new(
-                    &fine,
-                    &self.coarse_cue_depths,
-                    [rows, width],
-                    [MID_SGM_P1, MID_SGM_P2],
-                )?)
-            }
+            None => self.mid_aggregate(pyramid, &pyramid.zncc(1, &self.coarse_grids)?)?,
         };
         let span = cols.len();
         let pixels = rows * span;

@@ -20,7 +20,7 @@
 use std::sync::OnceLock;
 
 use burn::tensor::{Device, Tensor, TensorData};
-use omnimvs_stereo::params::{COST_SCALE, Directions};
+use omnimvs_stereo::params::{COST_SCALE, Directions, cost_units};
 use omnimvs_stereo::{CostVolume, SgmParams, ZNCC_VARIANCE_EPS, aggregate, camera_pairs};
 use rayon::prelude::*;
 
@@ -226,8 +226,6 @@ pub struct AggregatedCue {
     pub order: Vec<usize>,
     /// `values[pixel * planes + plane]`, in `[-1, 1]`.
     pub values: Vec<f32>,
-    /// `[h, w]` of the grid.
-    pub size: [usize; 2],
 }
 
 impl AggregatedCue {
@@ -261,7 +259,7 @@ impl AggregatedCue {
         for (pixel, costs) in data.chunks_exact_mut(planes).enumerate() {
             for (cost, &j) in costs.iter_mut().zip(&order) {
                 let zncc = cue[j * plane + pixel].clamp(-1.0, 1.0);
-                *cost = ((1.0 - zncc) * 0.5 * COST_SCALE + 0.5) as u16;
+                *cost = cost_units((1.0 - zncc) * 0.5);
             }
         }
         let volume = CostVolume {
@@ -294,7 +292,6 @@ impl AggregatedCue {
             depths: order.iter().map(|&j| depths[j]).collect(),
             order,
             values,
-            size: [h, w],
         })
     }
 
