@@ -155,6 +155,19 @@ fn bad_input_gives_clear_errors_and_non_zero_exit() {
             ],
             "/nonexistent/w",
         ),
+        (
+            vec![
+                "infer",
+                itbt,
+                "--frames",
+                "1",
+                "--out",
+                out,
+                "--snap-edges",
+                "0",
+            ],
+            "expected a percentage of the hypotheses in (0, 100]",
+        ),
     ];
     for (args, needle) in cases {
         let o = omnimvs(&args);

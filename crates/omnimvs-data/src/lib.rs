@@ -7,7 +7,8 @@
 //! * [`gt`]: ground-truth inverse depth in its three encodings, cropping and
 //!   the invalid-pixel rule; the f32 TIFF writer.
 //! * [`metrics`]: the paper's error metrics per frame and over frames.
-//! * [`colormap`], [`ply`]: pictures and point clouds of results.
+//! * [`colormap`], [`ply`]: pictures and point clouds of results; [`edges`]: depth edges
+//!   without blends (no points floating between two surfaces).
 //! * [`estimate`]: [`DepthEstimator`], the one interface of every depth method, and its
 //!   [`DepthEstimate`].
 //! * [`output`]: an estimate's files, reports and the evaluation of methods side by side.
@@ -15,6 +16,7 @@
 pub mod colormap;
 mod config;
 mod dataset;
+pub mod edges;
 mod error;
 pub mod estimate;
 mod format;

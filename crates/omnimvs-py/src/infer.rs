@@ -50,12 +50,17 @@ fn load_network(
 ///     backend: the compute backend, `"cpu"` unless the package was built with the
 ///         `libtorch` or `wgpu` feature.
 ///     rig: the `omnimvs.Rig` of images given as arrays.
+///     snap_edges: `None` (the default) or a percentage of the hypotheses in (0, 100]: where a
+///         pixel's 3x3 neighbourhood spans more than that, the pixel takes the neighbourhood's
+///         nearer extreme, so that no point floats between two surfaces (`omnimvs infer
+///         --snap-edges`; 8 is the command's default).
 ///
 /// Raises:
 ///     FileNotFoundError: the weights file or an image of the frame is missing.
 ///     ValueError: a bad argument or array, or a rig that does not fit the network.
 #[pyfunction]
-#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None))]
+#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn infer<'py>(
     py: Python<'py>,
     source: &Bound<'py, PyAny>,
@@ -64,7 +69,16 @@ pub fn infer<'py>(
     preset: &str,
     backend: &str,
     rig: Option<&Bound<'py, PyRig>>,
+    snap_edges: Option<f64>,
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    if let Some(pct) = snap_edges
+        && !(pct > 0.0 && pct <= 100.0)
+    {
+        return Err(bad_argument(
+            "snap_edges",
+            format!("{pct}: expected a percentage of the hypotheses in (0, 100], e.g. 8"),
+        ));
+    }
     let (ds, images) = frame_source(source, frame, rig)?;
     let backend: Backend = backend.parse().map_err(|e| bad_argument("backend", e))?;
     let result = detached(py, || {
@@ -88,7 +102,11 @@ pub fn infer<'py>(
         )
         .py_err()?;
         let images = images.load(&ds)?;
-        estimator.estimate(&images).py_err()
+        let mut estimate = estimator.estimate(&images).py_err()?;
+        if let Some(pct) = snap_edges {
+            estimate.snap_edges(pct);
+        }
+        Ok(estimate)
     })?;
     let (height, width) = (result.spec.height(), result.spec.width());
     map_to_array(py, result.inv_depth, height, width)

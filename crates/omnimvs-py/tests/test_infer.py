@@ -78,3 +78,26 @@ def test_bundled_models_by_name(itbt, itbt_net, itbt_tiny):
     assert np.isfinite(itbt_tiny).all() and itbt_tiny.min() >= 0
     assert itbt_tiny.max() <= 1 / itbt.min_depth + 1e-6
     assert itbt_tiny.std() > 0.05
+
+
+def test_snap_edges(itbt_path, itbt, itbt_net, cli, tmp_path):
+    snapped = omnimvs.infer(itbt, 1, snap_edges=8)
+    moved = snapped != itbt_net
+    # Depth edges are a minority of the pixels, and there are some in a room with people.
+    assert 0 < moved.mean() < 0.25
+    # Every moved pixel took the answer of a pixel of its 3x3 neighbourhood, the nearer of
+    # the neighbourhood's two extremes (rows clamped, longitude wrapped).
+    padded = np.pad(itbt_net, ((1, 1), (0, 0)), mode="edge")
+    shifts = np.stack(
+        [np.roll(padded, dx, axis=1)[1 + dy:161 + dy] for dy in (-1, 0, 1) for dx in (-1, 0, 1)]
+    )
+    lo, hi = shifts.min(0), shifts.max(0)
+    nearer = np.where(itbt_net - lo < hi - itbt_net, lo, hi)
+    np.testing.assert_allclose(snapped[moved], nearer[moved], rtol=1e-5)
+    # The command line's --snap-edges (8 when given alone) writes the same map.
+    cli("infer", itbt_path, "--frames", 1, "--snap-edges", "--out", tmp_path)
+    expected = tifffile.imread(tmp_path / "00001.tiff")
+    np.testing.assert_allclose(snapped, expected, rtol=1e-5, atol=1e-6)
+    for bad in (0, -3, 101, float("nan")):
+        with pytest.raises(ValueError, match="snap_edges"):
+            omnimvs.infer(itbt, 1, snap_edges=bad)

@@ -60,6 +60,25 @@ pub struct Args {
     /// infer.json records the size used.
     #[arg(long)]
     pub input_size: Option<InputSize>,
+    /// Depth edges without blends: where a pixel's 3x3 neighbourhood spans more than PCT
+    /// percent of the hypotheses (default 8 when the flag is given alone), the pixel takes
+    /// the neighbourhood's nearer extreme, so that no point floats between two surfaces
+    /// (phantom obstacles in a point cloud). On things validation frames it lowers >1, >3
+    /// and >5, keeps the MAE and raises the RMS (a wrong side costs the whole step); off by
+    /// default. infer.json records it.
+    #[arg(long, value_name = "PCT", num_args = 0..=1, default_missing_value = "8",
+          value_parser = parse_snap_pct)]
+    pub snap_edges: Option<f64>,
+}
+
+/// `--snap-edges PCT`: a percentage in (0, 100].
+fn parse_snap_pct(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 100.0 => Ok(v),
+        _ => Err(format!(
+            "{text:?}: expected a percentage of the hypotheses in (0, 100], e.g. 8"
+        )),
+    }
 }
 
 /// `--input-size` values.
@@ -229,7 +248,8 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(order) = &args.order {
         inference.set_order(order)?;
     }
-    let settings = settings(&args.dataset, &args.weights, &inference, &args.backend);
+    let mut settings = settings(&args.dataset, &args.weights, &inference, &args.backend);
+    settings["snap_edges_pct"] = serde_json::json!(args.snap_edges);
     let mut run = DepthRun::new(&args.out, "infer.json", &settings, args.ply)?;
 
     let frames: Vec<u32> = args.frames.indices();
@@ -246,9 +266,12 @@ pub fn run(args: &Args) -> Result<()> {
         &frames,
         |f| ds.read_frame(f).with_context(|| format!("frame {f}")),
         |f, images| {
-            let est = inference
+            let mut est = inference
                 .estimate(&images)
                 .with_context(|| format!("frame {f}"))?;
+            if let Some(pct) = args.snap_edges {
+                est.snap_edges(pct);
+            }
             Ok((images, est))
         },
         |f, (images, est)| {

@@ -119,6 +119,8 @@ def infer(
     *,
     preset: str = "paper",
     backend: str = "cpu",
+    # None, or a percentage of the hypotheses: answers between two surfaces move to one.
+    snap_edges: Optional[float] = None,
 ) -> FloatMap: ...
 @overload
 def infer(
@@ -131,6 +133,7 @@ def infer(
     preset: str = "paper",
     backend: str = "cpu",
     rig: Rig,
+    snap_edges: Optional[float] = None,
 ) -> FloatMap: ...
 def evaluate(
     prediction: Union[npt.NDArray[np.float32], npt.NDArray[np.float64]],
