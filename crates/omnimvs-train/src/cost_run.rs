@@ -3,6 +3,7 @@
 //! resumable checkpoint, every file written atomically).
 
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
@@ -162,6 +163,34 @@ pub(crate) fn append_metrics<R: Serialize>(run_dir: &Path, record: &R) -> Result
     write_atomic(&metrics, text.as_bytes()).map_err(io_err(&metrics))
 }
 
+/// When a matching-cost run steps, draws from a new frame and writes a metrics line.
+pub(crate) struct Schedule {
+    /// The run's seed: frames by `seed` and `step / frame_every`, batches by `seed` and step.
+    pub seed: u64,
+    /// Total steps.
+    pub steps: usize,
+    /// Steps on each loaded frame before the next one.
+    pub frame_every: usize,
+    /// Training frames of each dataset, inclusive.
+    pub train_frames: (u32, u32),
+    /// Steps between metrics lines and checkpoints.
+    pub log_every: usize,
+    /// Adam learning rate.
+    pub lr: f64,
+}
+
+/// The figures of one metrics line: the means over the training steps since the last line and
+/// over the validation batches (loss and each trainer's accuracy), the step and the seconds
+/// since this invocation started.
+pub(crate) struct Progress {
+    pub step: usize,
+    pub train_loss: f32,
+    pub train_acc: f32,
+    pub val_loss: f32,
+    pub val_acc: f32,
+    pub seconds: f64,
+}
+
 /// What every matching-cost run holds beside its own configuration: its folder, the network
 /// being trained (on the autodiff device), Adam's state, the step and the opened datasets.
 pub(crate) struct RunState<M> {
@@ -250,5 +279,76 @@ impl<M: Module> RunState<M> {
     pub fn descend(&mut self, loss: Tensor<1>, lr: f64) {
         let grads = GradientsParams::from_grads(loss.backward(), &self.net);
         self.net = self.optim.step(lr, self.net.clone(), grads);
+    }
+
+    /// The matching-cost trainers' loop, up to `schedule.steps` (or `stop_after` more steps):
+    /// every step draws a batch (`draw`; `None` when the frame offers none, and the step
+    /// passes) from the frame of [`Self::frame_for_step`] (`load`, kept for `frame_every`
+    /// steps) with a generator seeded by the step, and descends on its `loss`; every
+    /// `log_every` steps and at the end, the network without autodiff is scored on `val` by
+    /// the same `loss` and `line` gets the [`Progress`] (to write the metrics line and the
+    /// checkpoint). A resumed run draws as the first did.
+    #[allow(clippy::too_many_arguments)]
+    pub fn train<F, B>(
+        &mut self,
+        schedule: &Schedule,
+        stop_after: Option<usize>,
+        val: &[B],
+        load: impl Fn(&[Source], usize, u32) -> Result<F, TrainError>,
+        draw: impl Fn(&[Source], &F, &mut SplitMix64) -> Option<B>,
+        loss: impl Fn(&M, &B, &burn::tensor::Device) -> (Tensor<1>, f32),
+        mut line: impl FnMut(&Self, &Progress) -> Result<(), TrainError>,
+    ) -> Result<(), TrainError> {
+        let end = stop_after.map_or(schedule.steps, |s| (self.step + s).min(schedule.steps));
+        let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
+        let mut frame: Option<F> = None;
+        let t0 = Instant::now();
+        while self.step < end {
+            let step = self.step;
+            let current = match frame.take() {
+                Some(loaded) if !step.is_multiple_of(schedule.frame_every) => loaded,
+                _ => {
+                    let (s, f) = self.frame_for_step(
+                        schedule.seed,
+                        step,
+                        schedule.frame_every,
+                        schedule.train_frames,
+                    );
+                    load(&self.sources, s, f)?
+                }
+            };
+            let mut rng = SplitMix64::for_epoch(schedule.seed ^ 0xA5A5, step);
+            if let Some(batch) = draw(&self.sources, &current, &mut rng) {
+                let (l, acc) = loss(&self.net, &batch, &self.device);
+                loss_sum += l.clone().into_scalar::<f32>();
+                acc_sum += acc;
+                count += 1;
+                self.descend(l, schedule.lr);
+            }
+            frame = Some(current);
+            self.step += 1;
+            if self.step.is_multiple_of(schedule.log_every) || self.step == end {
+                let inference = self.net.valid();
+                let device = self.device.clone().without_autodiff();
+                let (mut val_loss, mut val_acc) = (0f32, 0f32);
+                for b in val {
+                    let (l, a) = loss(&inference, b, &device);
+                    val_loss += l.into_scalar::<f32>();
+                    val_acc += a;
+                }
+                let (n, v) = (count.max(1) as f32, val.len().max(1) as f32);
+                let progress = Progress {
+                    step: self.step,
+                    train_loss: loss_sum / n,
+                    train_acc: acc_sum / n,
+                    val_loss: val_loss / v,
+                    val_acc: val_acc / v,
+                    seconds: t0.elapsed().as_secs_f64(),
+                };
+                (loss_sum, acc_sum, count) = (0.0, 0.0, 0);
+                line(self, &progress)?;
+            }
+        }
+        Ok(())
     }
 }

@@ -16,7 +16,6 @@
 //! the step number, so a resumed run makes the same choices.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use burn::module::Module;
 use burn::tensor::{Device, Tensor, TensorData, activation};
@@ -25,7 +24,7 @@ use omnimvs_net::mccnn::{self, McCnn, McCnnConfig, pool};
 use omnimvs_sweep::GrayImage;
 use serde::{Deserialize, Serialize};
 
-use crate::cost_run::{RunState, Source, append_metrics, read_run_config};
+use crate::cost_run::{RunState, Schedule, Source, append_metrics, read_run_config};
 use crate::error::TrainError;
 use crate::rng::SplitMix64;
 
@@ -59,6 +58,19 @@ pub struct CostTrainConfig {
     /// Grid and hypotheses of the ground truth (`h`, `w`, `N`).
     pub grid: (usize, usize, usize),
     pub seed: u64,
+}
+
+impl CostTrainConfig {
+    fn schedule(&self) -> Schedule {
+        Schedule {
+            seed: self.seed,
+            steps: self.steps,
+            frame_every: self.frame_every,
+            train_frames: self.train_frames,
+            log_every: self.log_every,
+            lr: self.lr,
+        }
+    }
 }
 
 impl Default for CostTrainConfig {
@@ -327,15 +339,6 @@ impl CostTrainer {
         &self.state.run_dir
     }
 
-    fn save(&self) -> Result<(), TrainError> {
-        self.state.save_checkpoint()?;
-        mccnn::save(
-            &self.state.net.valid(),
-            &self.state.run_dir.join("model.safetensors"),
-        )?;
-        Ok(())
-    }
-
     /// Fixed validation batches: two frames of each dataset's validation range.
     fn validation(&self) -> Result<Vec<Vec<f32>>, TrainError> {
         let mut out = Vec::new();
@@ -366,75 +369,33 @@ impl CostTrainer {
         mut report: impl FnMut(&CostRecord),
     ) -> Result<(), TrainError> {
         let val = self.validation()?;
-        let end = stop_after.map_or(self.config.steps, |s| {
-            (self.state.step + s).min(self.config.steps)
-        });
-        let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
-        let mut frame: Option<Frame> = None;
-        let t0 = Instant::now();
-        while self.state.step < end {
-            let step = self.state.step;
-            if frame.is_none() || step.is_multiple_of(self.config.frame_every) {
-                let (s, f) = self.state.frame_for_step(
-                    self.config.seed,
-                    step,
-                    self.config.frame_every,
-                    self.config.train_frames,
-                );
-                frame = Some(load_frame(
-                    &self.state.sources,
-                    s,
-                    f,
-                    self.config.net.stride,
-                )?);
-            }
-            let mut rng = SplitMix64::for_epoch(self.config.seed ^ 0xA5A5, step);
-            let Some(current) = frame.as_ref() else {
-                return Err(TrainError::InvalidConfig {
-                    field: "train_frames",
-                    message: "no frame to draw from".into(),
-                });
-            };
-            let patches = draw_batch(&self.state.sources, current, &self.config, &mut rng);
-            if patches.is_empty() {
-                self.state.step += 1;
-                continue;
-            }
-            let (loss, acc) = batch_loss(
-                &self.state.net,
-                patches,
-                self.config.margin,
-                &self.state.device,
-            );
-            loss_sum += loss.clone().into_scalar::<f32>();
-            acc_sum += acc;
-            count += 1;
-            self.state.descend(loss, self.config.lr);
-            self.state.step += 1;
-            if self.state.step.is_multiple_of(self.config.log_every) || self.state.step == end {
-                let inference = self.state.net.valid();
-                let dev = self.state.device.clone().without_autodiff();
-                let (mut vl, mut va) = (0f32, 0f32);
-                for b in &val {
-                    let (l, a) = batch_loss(&inference, b.clone(), self.config.margin, &dev);
-                    vl += l.into_scalar::<f32>();
-                    va += a;
-                }
+        let config = &self.config;
+        self.state.train(
+            &config.schedule(),
+            stop_after,
+            &val,
+            |sources, s, f| load_frame(sources, s, f, config.net.stride),
+            |sources, frame, rng| {
+                let patches = draw_batch(sources, frame, config, rng);
+                (!patches.is_empty()).then_some(patches)
+            },
+            |net, patches, device| batch_loss(net, patches.clone(), config.margin, device),
+            |state, p| {
                 let record = CostRecord {
-                    step: self.state.step,
-                    train_loss: loss_sum / count.max(1) as f32,
-                    train_acc: acc_sum / count.max(1) as f32,
-                    val_loss: vl / val.len() as f32,
-                    val_acc: va / val.len() as f32,
-                    seconds: t0.elapsed().as_secs_f64(),
+                    step: p.step,
+                    train_loss: p.train_loss,
+                    train_acc: p.train_acc,
+                    val_loss: p.val_loss,
+                    val_acc: p.val_acc,
+                    seconds: p.seconds,
                 };
-                (loss_sum, acc_sum, count) = (0.0, 0.0, 0);
-                append_metrics(&self.state.run_dir, &record)?;
-                self.save()?;
+                append_metrics(&state.run_dir, &record)?;
+                state.save_checkpoint()?;
+                mccnn::save(&state.net.valid(), &state.run_dir.join("model.safetensors"))?;
                 report(&record);
-            }
-        }
-        Ok(())
+                Ok(())
+            },
+        )
     }
 
     /// The trained network, without autodiff.

@@ -14,7 +14,6 @@
 //! `checkpoint/`; `--resume` continues from the last checkpoint, every draw seeded by the step.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use burn::module::Module;
 use burn::tensor::{Device, Tensor, TensorData, activation};
@@ -25,7 +24,7 @@ use omnimvs_stereo::sweepnet::{BandScratch, FeatureLayout, band_features};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::cost_run::{RunState, Source, append_metrics, read_run_config};
+use crate::cost_run::{RunState, Schedule, Source, append_metrics, read_run_config};
 use crate::error::TrainError;
 use crate::rng::SplitMix64;
 
@@ -55,6 +54,19 @@ pub struct SweepTrainConfig {
     /// Grid and hypotheses of the ground truth (`h`, `w`, `N`).
     pub grid: (usize, usize, usize),
     pub seed: u64,
+}
+
+impl SweepTrainConfig {
+    fn schedule(&self) -> Schedule {
+        Schedule {
+            seed: self.seed,
+            steps: self.steps,
+            frame_every: self.frame_every,
+            train_frames: self.train_frames,
+            log_every: self.log_every,
+            lr: self.lr,
+        }
+    }
 }
 
 impl Default for SweepTrainConfig {
@@ -335,15 +347,6 @@ impl SweepTrainer {
         &self.state.run_dir
     }
 
-    fn save(&self) -> Result<(), TrainError> {
-        self.state.save_checkpoint()?;
-        sweepnet::save(
-            &self.state.net.valid(),
-            &self.state.run_dir.join("model.safetensors"),
-        )?;
-        Ok(())
-    }
-
     /// Fixed validation batches: two bands of two frames of each dataset's validation range.
     fn validation(&self) -> Result<Vec<SweepBatch>, TrainError> {
         let mut out = Vec::new();
@@ -380,64 +383,34 @@ impl SweepTrainer {
             .map(|b| within_one(&zncc_costs(b, layout), &b.target, b.ndepth))
             .sum::<f32>()
             / val.len().max(1) as f32;
-        let end = stop_after.map_or(self.config.steps, |s| {
-            (self.state.step + s).min(self.config.steps)
-        });
-        let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
-        let mut frame: Option<Frame> = None;
-        let t0 = Instant::now();
-        while self.state.step < end {
-            let step = self.state.step;
-            if frame.is_none() || step.is_multiple_of(self.config.frame_every) {
-                let (s, f) = self.state.frame_for_step(
-                    self.config.seed,
-                    step,
-                    self.config.frame_every,
-                    self.config.train_frames,
-                );
-                frame = Some(load_frame(&self.state.sources, s, f)?);
-            }
-            let Some(current) = frame.as_ref() else {
-                return Err(TrainError::InvalidConfig {
-                    field: "train_frames",
-                    message: "no frame to draw from".into(),
-                });
-            };
-            let mut rng = SplitMix64::for_epoch(self.config.seed ^ 0xA5A5, step);
-            let batch = draw_batch(&self.state.sources, current, &self.config, &mut rng);
-            if !batch.is_empty() {
-                let (loss, acc) = batch_loss(&self.state.net, &batch, &self.state.device);
-                loss_sum += loss.clone().into_scalar::<f32>();
-                acc_sum += acc;
-                count += 1;
-                self.state.descend(loss, self.config.lr);
-            }
-            self.state.step += 1;
-            if self.state.step.is_multiple_of(self.config.log_every) || self.state.step == end {
-                let inference = self.state.net.valid();
-                let dev = self.state.device.clone().without_autodiff();
-                let (mut vl, mut va) = (0f32, 0f32);
-                for b in &val {
-                    let (l, a) = batch_loss(&inference, b, &dev);
-                    vl += l.into_scalar::<f32>();
-                    va += a;
-                }
+        let config = &self.config;
+        self.state.train(
+            &config.schedule(),
+            stop_after,
+            &val,
+            load_frame,
+            |sources, frame, rng| {
+                let batch = draw_batch(sources, frame, config, rng);
+                (!batch.is_empty()).then_some(batch)
+            },
+            batch_loss,
+            |state, p| {
                 let record = SweepRecord {
-                    step: self.state.step,
-                    train_loss: loss_sum / count.max(1) as f32,
-                    train_acc: acc_sum / count.max(1) as f32,
-                    val_loss: vl / val.len().max(1) as f32,
-                    val_acc: va / val.len().max(1) as f32,
+                    step: p.step,
+                    train_loss: p.train_loss,
+                    train_acc: p.train_acc,
+                    val_loss: p.val_loss,
+                    val_acc: p.val_acc,
                     val_zncc_acc: zncc_acc,
-                    seconds: t0.elapsed().as_secs_f64(),
+                    seconds: p.seconds,
                 };
-                (loss_sum, acc_sum, count) = (0.0, 0.0, 0);
-                append_metrics(&self.state.run_dir, &record)?;
-                self.save()?;
+                append_metrics(&state.run_dir, &record)?;
+                state.save_checkpoint()?;
+                sweepnet::save(&state.net.valid(), &state.run_dir.join("model.safetensors"))?;
                 report(&record);
-            }
-        }
-        Ok(())
+                Ok(())
+            },
+        )
     }
 
     /// The trained network, without autodiff.
