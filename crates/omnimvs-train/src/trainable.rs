@@ -283,7 +283,9 @@ impl Trainable for CascadeNet {
         match parts {
             TrainParts::All => Ok(self),
             TrainParts::Upsampling => {
-                if self.up_mid.is_none() || self.up_fine.is_none() {
+                // The selectors the network has: both grids', or the half grid's alone
+                // (`convex_upsampling_full: false`, the bundled model's).
+                if self.up_mid.is_none() && self.up_fine.is_none() {
                     return Err(no_upsampling());
                 }
                 self.features = self.features.no_grad();

@@ -207,6 +207,36 @@ fn training_only_the_upsampling_moves_the_selectors_and_nothing_else() {
         "the centres' loss did not fall: {first} -> {last}"
     );
 
+    // With the half grid's selector alone (the bundled model's configuration), that one
+    // trains and the rest stays.
+    let mut half = train_config(5);
+    half.net.cascade.convex_upsampling = true;
+    half.net.cascade.convex_upsampling_full = false;
+    half.train_only = TrainParts::Upsampling;
+    let (mut learner, geometry, sample) = learner_on_sunny(&half);
+    let half_weights = |net: &CascadeNet| {
+        assert!(net.up_fine.is_none());
+        [
+            net.features.conv0.conv.weight.val(),
+            net.mid.out.conv.weight.val(),
+            net.fine.convs[0].conv.weight.val(),
+            net.up_mid.as_ref().unwrap().out.weight.val(),
+        ]
+        .map(|t| read_values(t, "weights").unwrap())
+    };
+    let before = half_weights(&learner.net);
+    let (first, last) = first_and_last_loss(&mut learner, &sample, &geometry, 5);
+    assert_only_the_rest_moved(
+        &before,
+        &half_weights(&learner.net),
+        3,
+        "half-grid selector",
+    );
+    assert!(
+        last < first,
+        "the centres' loss did not fall: {first} -> {last}"
+    );
+
     // A network without the selectors has nothing to train.
     let mut plain = train_config(5);
     plain.train_only = TrainParts::Upsampling;
