@@ -181,10 +181,14 @@ pub(crate) struct Schedule {
 
 /// The figures of one metrics line: the means over the training steps since the last line and
 /// over the validation batches (loss and each trainer's accuracy), the step and the seconds
-/// since this invocation started.
-pub(crate) struct Progress {
+/// since this invocation started. MC-CNN's metrics line as it is (`mccnn::CostRecord`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Progress {
     pub step: usize,
     pub train_loss: f32,
+    /// The trainer's accuracy: MC-CNN's, the share of training pairs where the true sphere
+    /// matches better than the wrong one; SweepNet's, the share of pixels whose lowest cost
+    /// is within one hypothesis of the truth.
     pub train_acc: f32,
     pub val_loss: f32,
     pub val_acc: f32,

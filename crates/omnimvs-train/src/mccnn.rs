@@ -94,17 +94,9 @@ impl Default for CostTrainConfig {
     }
 }
 
-/// One metrics line.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct CostRecord {
-    pub step: usize,
-    pub train_loss: f32,
-    /// Fraction of training pairs where the true sphere matches better than the wrong one.
-    pub train_acc: f32,
-    pub val_loss: f32,
-    pub val_acc: f32,
-    pub seconds: f64,
-}
+/// One metrics line (`train_acc`, `val_acc`: the share of pairs where the true sphere matches
+/// better than the wrong one).
+pub use crate::cost_run::Progress as CostRecord;
 
 /// One frame ready for drawing samples.
 struct Frame {
@@ -380,19 +372,11 @@ impl CostTrainer {
                 (!patches.is_empty()).then_some(patches)
             },
             |net, patches, device| batch_loss(net, patches.clone(), config.margin, device),
-            |state, p| {
-                let record = CostRecord {
-                    step: p.step,
-                    train_loss: p.train_loss,
-                    train_acc: p.train_acc,
-                    val_loss: p.val_loss,
-                    val_acc: p.val_acc,
-                    seconds: p.seconds,
-                };
-                append_metrics(&state.run_dir, &record)?;
+            |state, record| {
+                append_metrics(&state.run_dir, record)?;
                 state.save_checkpoint()?;
                 mccnn::save(&state.net.valid(), &state.run_dir.join("model.safetensors"))?;
-                report(&record);
+                report(record);
                 Ok(())
             },
         )
