@@ -2,8 +2,9 @@
 # depth discontinuity of the ground truth (neighbours more than 6 index units apart), all pixels
 # and far ones (true index < 40); reference rules at 160x640.
 # Usage: error_split.py DATASET OUT1,OUT2 FIRST LAST   (/work/venv-np/bin/python3; numpy, scipy)
-import sys, glob, os, numpy as np, scipy.ndimage as nd
-import os; sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '../../../../shared/tools')); import omni_np as o
+import sys, glob, os, numpy as np
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
+from studylib import o, edge_distance  # noqa: E402
 ds = sys.argv[1]; outs = sys.argv[2].split(','); a, b = int(sys.argv[3]), int(sys.argv[4])
 _, _, md = o.load(ds)
 def pred_idx(d, f, minv, step):
@@ -15,12 +16,8 @@ acc = {}
 for f in range(a, b + 1):
     gt = o.gt_reference(ds, f, 160, 640, 45.0)
     gi, valid, minv, step = o.reference_gt_index(gt, md)
-    g = np.where(valid, gi, -50)
     # discontinuity: neighbour differs by > 6 index (horizontal or vertical)
-    dx = np.abs(np.diff(g, axis=1, append=g[:, :1])) > 6
-    dy = np.zeros_like(dx); dy[:-1] = np.abs(np.diff(g, axis=0)) > 6
-    disc = dx | dy | np.roll(dx, 1, axis=1) | np.roll(dy, 1, axis=0)
-    dist = nd.distance_transform_edt(~disc)
+    dist = edge_distance(gi, valid)
     ps = [pred_idx(d, f, minv, step) for d in outs]
     far = gi < 40
     for lo, hi in zip(bins[:-1], bins[1:]):

@@ -4,17 +4,13 @@
 # the pixel does not belong to, "a blend" when strictly between the two sides (more than 3 from
 # both), "neither" otherwise. Usage: edge_kinds.py DATASET FRAME,... NAME=DIR ...
 import sys, os, numpy as np, scipy.ndimage as nd, tifffile
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '../../../../shared/tools')); import omni_np as o
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
+from studylib import o, truth  # noqa: E402
 ds = sys.argv[1]; frames = [int(x) for x in sys.argv[2].split(',')]
 cfg, cams, md = o.load(ds)
 res = {}
 for fr in frames:
-    gt = o.gt_reference(ds, fr, 160, 640, 45.0)
-    gi, valid, _, _ = o.reference_gt_index(gt, md)
-    g = np.where(valid, gi, -50)
-    dx = np.abs(np.diff(g, axis=1, append=g[:, :1])) > 6
-    dy = np.zeros_like(dx); dy[:-1] = np.abs(np.diff(g, axis=0)) > 6
-    dist = nd.distance_transform_edt(~(dx | dy | np.roll(dx, 1, axis=1) | np.roll(dy, 1, axis=0)))
+    gi, valid, dist = truth(ds, fr, md)
     fg = nd.maximum_filter(np.where(valid, gi, -1e9), size=9, mode=('nearest', 'wrap'))
     bg = nd.minimum_filter(np.where(valid, gi, 1e9), size=9, mode=('nearest', 'wrap'))
     near = valid & (dist < 4)

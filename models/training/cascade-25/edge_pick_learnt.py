@@ -18,10 +18,8 @@ import numpy as np
 
 
 def feats(ds, outdir, a, b, dst):
-    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '../../../../shared/tools'))
-    import omni_np as o
     from PIL import Image
-    from edge_post import minmax
+    from edge_post import minmax, o
     cfg, cams, md = o.load(ds)
     out = {k: [] for k in ('cand', 'feats', 'gt', 'valid')}
     for f in range(a, b + 1):

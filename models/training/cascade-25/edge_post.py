@@ -10,8 +10,8 @@
 #                  camera pair) at that candidate's depth, box-summed over (2r+1)^2 pixels
 #   oracle k:      per pixel whichever of {v, m, M} is nearest the truth (the bound of any pick)
 import os, sys, numpy as np
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '../../../../shared/tools'))
-import omni_np as o
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
+from studylib import o  # noqa: E402
 
 
 def window(x, k):

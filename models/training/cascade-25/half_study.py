@@ -2,26 +2,24 @@
 # On the half grid (80x320): the cue at 96 depths (3 per coarse sphere), SGM (P1 .05/.1, P2 1/2),
 # the best plane (no sub-plane refinement); the network's and SGM's maps sampled at the half
 # grid's pixels; share with |error| > 3 and MAE by region.
-import sys, numpy as np, scipy.ndimage as nd, tifffile, time
-# Usage: half_study.py DATASET FRAME,FRAME,... [NAME=DIR ...]  (the functions of ../cascade-24/sgm_cue.py)
-import os
-here = os.path.dirname(os.path.abspath(__file__))
-exec(open(os.path.join(here, '../cascade-24/sgm_cue.py')).read().split('coarse = np.round')[0].replace('__file__', repr(os.path.join(here, '../cascade-24/sgm_cue.py'))))
-coarse = np.round(np.linspace(0, N - 1, 32)).astype(int)
+# Usage: half_study.py DATASET FRAME,FRAME,... [NAME=DIR ...]  (numpy, scipy, tifffile, ../studylib.py)
+import os, sys, numpy as np, tifffile
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
+from studylib import o, N, hypotheses, coarse_spheres, cue_volume, sgm, truth  # noqa: E402
+ds = sys.argv[1]; frames = [int(x) for x in sys.argv[2].split(',')]
+extra = sys.argv[3:]
+cfg, cams, md = o.load(ds)
+inv = hypotheses(md)
+coarse = coarse_spheres()
 sub3 = np.clip(np.concatenate([coarse - 2, coarse, coarse + 2]), 0, N - 1)
 order = np.argsort(sub3, kind='stable'); s96 = sub3[order].astype(float)
 res = {}
 for fr in frames:
     images = [o.read_gray(o.frame_path(ds, i, cfg, fr)) for i in range(len(cams))]
-    gt = o.gt_reference(ds, fr, 160, 640, 45.0)
-    gi, valid, _, _ = o.reference_gt_index(gt, md)
-    g = np.where(valid, gi, -50)
-    dx = np.abs(np.diff(g, axis=1, append=g[:, :1])) > 6
-    dy = np.zeros_like(dx); dy[:-1] = np.abs(np.diff(g, axis=0)) > 6
-    dist = nd.distance_transform_edt(~(dx | dy | np.roll(dx, 1, axis=1) | np.roll(dy, 1, axis=0)))
+    gi, valid, dist = truth(ds, fr, md)
     gh, vh_, dh = gi[::2, ::2], valid[::2, ::2], dist[::2, ::2]
     regions = {'all': vh_, 'open(16+)': vh_ & (dh >= 16), 'far-open': vh_ & (dh >= 16) & (gh < 40), 'mid(4-16)': vh_ & (dh >= 4) & (dh < 16)}
-    vol = cue_volume(images, 80, 320, 1, sub3)[order]
+    vol = cue_volume(cams, inv, images, 80, 320, 1, sub3)[order]
     cands = {}
     for p1, p2 in [(0.05, 1.0), (0.1, 2.0)]:
         a = sgm((1 - vol) / 2, p1, p2)
