@@ -21,7 +21,9 @@ pub struct DepthEstimate {
     pub index: Vec<f32>,
     /// Confidence in `[0, 1]` (the classical method's `1 - best/second-best cost`).
     pub confidence: Option<Vec<f32>>,
-    /// Entropy (nats) of the per-pixel distribution over hypotheses (the networks').
+    /// Entropy (nats) of the per-pixel distribution over hypotheses across the whole range
+    /// (the networks': the paper's over its spheres, the cascade's coarse stage's over its 32,
+    /// resampled to the grid), higher where the answer is less sure.
     pub entropy: Option<Vec<f32>>,
     /// Wall time of the estimate, seconds.
     pub seconds: f64,

@@ -1,16 +1,16 @@
 //! The cascade on a dataset's frames: the rig's geometry once, then per frame the inputs
-//! (normalised over the valid pixels, resized to the network's input), the forward pass and
-//! the maps of the final stage.
+//! (normalised over the valid pixels, resized to the network's input), the forward pass, the
+//! final stage's index map and the coarse stage's entropy as the estimate's uncertainty.
 
 use burn::tensor::Device;
 use omnimvs_camera::ValidityMask;
 use omnimvs_data::{Dataset, DepthEstimate, StageObserver};
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec};
+use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec, resample_map};
 
 use super::geometry::CascadeGeometry;
-use super::model::CascadeNet;
+use super::model::{CascadeNet, read_values};
 use crate::error::NetError;
-use crate::infer::{entropy_estimate, input_tensors, sweep_spec};
+use crate::infer::{input_tensors, sweep_spec};
 
 /// A cascade network ready to run on the frames of one rig.
 pub struct CascadeInference {
@@ -78,9 +78,14 @@ impl CascadeInference {
         &self.masks
     }
 
-    /// Runs the network on one frame's gray images (rig order): the final stage's maps, each
-    /// stage's time given to `observer` when it wants them (the device is then waited for
-    /// after each stage).
+    /// Runs the network on one frame's gray images (rig order): the final stage's index map,
+    /// each stage's time given to `observer` when it wants them (the device is then waited for
+    /// after each stage). The estimate's entropy is the coarse stage's, over its spheres
+    /// across the whole range, resampled to the output grid: the refinement stages' own
+    /// distributions span a few index units around their centres and say nothing of a gross
+    /// miss (on things validation frames, leaving out the tenth of the pixels with the highest
+    /// full-resolution entropy raises the MAE of the rest, 4.33 -> 4.53; by the coarse
+    /// entropy it falls to 3.21; `models/training/cascade-25/uncertainty.py`).
     ///
     /// # Errors
     /// [`NetError`] for a wrong number of images or a mask of another size.
@@ -92,7 +97,7 @@ impl CascadeInference {
         let inputs = input_tensors(&self.net.config, images, &self.masks, &self.device)?;
         let timed = observer.wants_timings();
         let (out, t) = self.net.forward_timed(&inputs, &self.geometry, timed)?;
-        let [_, _, fine] = out.stages;
+        let [coarse, _, fine] = out.stages;
         observer.stages(&[
             ("features", t.features),
             ("coarse", t.coarse),
@@ -100,6 +105,16 @@ impl CascadeInference {
             ("fine", t.fine),
             ("total", t.total),
         ]);
-        entropy_estimate(self.spec, Self::NAME, fine.entropy(), fine.index, t.total)
+        let coarse_grid = *self.geometry.samplers[0].grid();
+        let entropy = read_values(coarse.entropy(), "coarse entropy map")?;
+        let entropy = resample_map(&entropy, &coarse_grid, &self.spec.grid);
+        let index = read_values(fine.index, "index map")?;
+        Ok(DepthEstimate::with_entropy(
+            self.spec,
+            Self::NAME,
+            index,
+            entropy,
+            t.total,
+        ))
     }
 }
