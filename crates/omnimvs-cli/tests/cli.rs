@@ -168,6 +168,18 @@ fn bad_input_gives_clear_errors_and_non_zero_exit() {
             ],
             "expected a percentage of the hypotheses in (0, 100]",
         ),
+        (
+            vec![
+                "infer",
+                itbt,
+                "--frames",
+                "1",
+                "--out",
+                out,
+                "--max-entropy=-1",
+            ],
+            "expected an entropy in nats, 0 or more",
+        ),
     ];
     for (args, needle) in cases {
         let o = omnimvs(&args);

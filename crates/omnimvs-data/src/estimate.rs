@@ -61,6 +61,25 @@ impl DepthEstimate {
         moved
     }
 
+    /// Leaves the pixels whose entropy is above `max_entropy` (nats) without an answer: NaN
+    /// index and inverse depth, as ZNCC+SGM's `min_confidence` does (the metrics then score
+    /// the others and report their share as coverage; a point cloud leaves them out). Returns
+    /// how many pixels it left; none for an estimate without entropy.
+    pub fn leave_uncertain(&mut self, max_entropy: f32) -> usize {
+        let Some(entropy) = &self.entropy else {
+            return 0;
+        };
+        let mut left = 0;
+        for ((index, inv), &h) in self.index.iter_mut().zip(&mut self.inv_depth).zip(entropy) {
+            if h > max_entropy && !index.is_nan() {
+                *index = f32::NAN;
+                *inv = f32::NAN;
+                left += 1;
+            }
+        }
+        left
+    }
+
     /// An estimate of `index` on `spec`, its inverse depth computed from the hypotheses.
     pub fn from_index(spec: SweepSpec, method: impl Into<String>, index: Vec<f32>) -> Self {
         Self {
@@ -222,6 +241,30 @@ mod tests {
         assert_eq!(t.get("total"), 2.0);
         assert_eq!(t.get("cost"), 0.0);
         assert!(!NoTimings.wants_timings());
+    }
+
+    fn estimate(index: Vec<f32>, entropy: Option<Vec<f32>>) -> DepthEstimate {
+        let spec = SweepSpec::from_sizes(2, index.len() / 2, 45.0, 192, 0.5).unwrap();
+        DepthEstimate {
+            entropy,
+            ..DepthEstimate::from_index(spec, "test", index)
+        }
+    }
+
+    #[test]
+    fn uncertain_pixels_are_left_without_an_answer() {
+        let mut est = estimate(vec![10.0, 20.0, 30.0, 40.0], Some(vec![0.5, 2.5, 2.0, 3.0]));
+        assert_eq!(est.leave_uncertain(2.0), 2);
+        assert_eq!(est.index[0], 10.0);
+        assert_eq!(est.index[2], 30.0);
+        assert!(est.index[1].is_nan() && est.inv_depth[1].is_nan());
+        assert!(est.index[3].is_nan() && est.inv_depth[3].is_nan());
+        assert_eq!(est.inv_depth[0], est.spec.inv_depth_of(&[10.0])[0]);
+        // Already left pixels are not counted twice; no entropy, nothing to leave.
+        assert_eq!(est.leave_uncertain(2.0), 0);
+        let mut plain = estimate(vec![10.0, 20.0, 30.0, 40.0], None);
+        assert_eq!(plain.leave_uncertain(0.0), 0);
+        assert!(plain.index.iter().all(|v| v.is_finite()));
     }
 
     #[test]

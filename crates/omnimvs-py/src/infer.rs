@@ -54,12 +54,14 @@ fn load_network(
 ///         pixel's 3x3 neighbourhood spans more than that, the pixel takes the neighbourhood's
 ///         nearer extreme, so that no point floats between two surfaces (`omnimvs infer
 ///         --snap-edges`; 8 is the command's default).
+///     max_entropy: `None` (the default) or an entropy in nats: the pixels whose uncertainty
+///         is above it are NaN (`omnimvs infer --max-entropy`; applied after `snap_edges`).
 ///
 /// Raises:
 ///     FileNotFoundError: the weights file or an image of the frame is missing.
 ///     ValueError: a bad argument or array, or a rig that does not fit the network.
 #[pyfunction]
-#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None))]
+#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None, max_entropy=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn infer<'py>(
     py: Python<'py>,
@@ -70,7 +72,16 @@ pub fn infer<'py>(
     backend: &str,
     rig: Option<&Bound<'py, PyRig>>,
     snap_edges: Option<f64>,
+    max_entropy: Option<f32>,
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    if let Some(nats) = max_entropy
+        && !(nats.is_finite() && nats >= 0.0)
+    {
+        return Err(bad_argument(
+            "max_entropy",
+            format!("{nats}: expected an entropy in nats, 0 or more, e.g. 2.6"),
+        ));
+    }
     if let Some(pct) = snap_edges
         && !(pct > 0.0 && pct <= 100.0)
     {
@@ -105,6 +116,9 @@ pub fn infer<'py>(
         let mut estimate = estimator.estimate(&images).py_err()?;
         if let Some(pct) = snap_edges {
             estimate.snap_edges(pct);
+        }
+        if let Some(nats) = max_entropy {
+            estimate.leave_uncertain(nats);
         }
         Ok(estimate)
     })?;

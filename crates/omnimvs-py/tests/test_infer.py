@@ -101,3 +101,17 @@ def test_snap_edges(itbt_path, itbt, itbt_net, cli, tmp_path):
     for bad in (0, -3, 101, float("nan")):
         with pytest.raises(ValueError, match="snap_edges"):
             omnimvs.infer(itbt, 1, snap_edges=bad)
+
+
+def test_max_entropy(itbt, itbt_net):
+    # Above the largest entropy nothing is left; at 0 (nearly) everything is; in between, the
+    # pixels left are NaN and the others keep the default answer.
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, max_entropy=100.0), itbt_net)
+    assert np.isnan(omnimvs.infer(itbt, 1, max_entropy=0.0)).mean() > 0.99
+    some = omnimvs.infer(itbt, 1, max_entropy=1.8)
+    left = np.isnan(some)
+    assert 0.01 < left.mean() < 0.5
+    np.testing.assert_array_equal(some[~left], itbt_net[~left])
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="max_entropy"):
+            omnimvs.infer(itbt, 1, max_entropy=bad)

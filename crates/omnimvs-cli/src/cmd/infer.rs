@@ -69,6 +69,24 @@ pub struct Args {
     #[arg(long, value_name = "PCT", num_args = 0..=1, default_missing_value = "8",
           value_parser = parse_snap_pct)]
     pub snap_edges: Option<f64>,
+    /// Leave the pixels whose uncertainty (the entropy written to %05d_entropy.tiff, nats) is
+    /// above this without an answer: NaN in the maps, left out of the point cloud; the
+    /// metrics score the others and report their share as coverage (as `sgm
+    /// --min-confidence`). For the bundled cascade (its coarse stage's entropy, at most ln 32
+    /// = 3.47) 2.6 leaves about a tenth of a things frame's pixels. Applied after
+    /// --snap-edges; infer.json records it.
+    #[arg(long, value_name = "NATS", value_parser = parse_max_entropy)]
+    pub max_entropy: Option<f32>,
+}
+
+/// `--max-entropy NATS`: a finite non-negative number.
+fn parse_max_entropy(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!(
+            "{text:?}: expected an entropy in nats, 0 or more, e.g. 2.6"
+        )),
+    }
 }
 
 /// `--snap-edges PCT`: a percentage in (0, 100].
@@ -250,6 +268,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let mut settings = settings(&args.dataset, &args.weights, &inference, &args.backend);
     settings["snap_edges_pct"] = serde_json::json!(args.snap_edges);
+    settings["max_entropy"] = serde_json::json!(args.max_entropy);
     let mut run = DepthRun::new(&args.out, "infer.json", &settings, args.ply)?;
 
     let frames: Vec<u32> = args.frames.indices();
@@ -271,6 +290,9 @@ pub fn run(args: &Args) -> Result<()> {
                 .with_context(|| format!("frame {f}"))?;
             if let Some(pct) = args.snap_edges {
                 est.snap_edges(pct);
+            }
+            if let Some(nats) = args.max_entropy {
+                est.leave_uncertain(nats);
             }
             Ok((images, est))
         },

@@ -121,6 +121,8 @@ def infer(
     backend: str = "cpu",
     # None, or a percentage of the hypotheses: answers between two surfaces move to one.
     snap_edges: Optional[float] = None,
+    # None, or nats: pixels whose uncertainty is above it are NaN.
+    max_entropy: Optional[float] = None,
 ) -> FloatMap: ...
 @overload
 def infer(
@@ -134,6 +136,7 @@ def infer(
     backend: str = "cpu",
     rig: Rig,
     snap_edges: Optional[float] = None,
+    max_entropy: Optional[float] = None,
 ) -> FloatMap: ...
 def evaluate(
     prediction: Union[npt.NDArray[np.float32], npt.NDArray[np.float64]],
