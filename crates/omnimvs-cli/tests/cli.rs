@@ -180,6 +180,19 @@ fn bad_input_gives_clear_errors_and_non_zero_exit() {
             ],
             "expected an entropy in nats, 0 or more",
         ),
+        (
+            vec![
+                "infer",
+                itbt,
+                "--frames",
+                "1",
+                "--out",
+                out,
+                "--max-spread",
+                "many",
+            ],
+            "expected a spread in index units, 0 or more",
+        ),
     ];
     for (args, needle) in cases {
         let o = omnimvs(&args);

@@ -138,4 +138,24 @@ fn demo_reports_figures_of_its_outputs_in_range() {
     let (missed, right) = (missed.0 / missed.1 as f64, right.0 / right.1 as f64);
     println!("cascade entropy: {missed:.3} nats where > 5 % off, {right:.3} within 1 %");
     assert!(missed > right + 0.1, "{missed} vs {right}");
+
+    // Its spread (the coarse distribution's standard deviation, index units) likewise.
+    let spread = read_inv_depth(&out.join("net_cascade/00001_spread.tiff")).unwrap();
+    let (mut missed, mut right) = ((0.0f64, 0usize), (0.0f64, 0usize));
+    for i in 0..width * height {
+        if !truth.scored(i, omnimvs_data::metrics::Protocol::Reference) {
+            continue;
+        }
+        let e = f64::from((index.data[i] - truth.gt.index[i]).abs()) / ndepth as f64 * 100.0;
+        let s = f64::from(spread.data[i]);
+        assert!((0.0..=ndepth as f64).contains(&s), "spread {s} at {i}");
+        if e > 5.0 {
+            missed = (missed.0 + s, missed.1 + 1);
+        } else if e < 1.0 {
+            right = (right.0 + s, right.1 + 1);
+        }
+    }
+    let (missed, right) = (missed.0 / missed.1 as f64, right.0 / right.1 as f64);
+    println!("cascade spread: {missed:.2} index units where > 5 % off, {right:.2} within 1 %");
+    assert!(missed > 1.5 * right, "{missed} vs {right}");
 }

@@ -25,8 +25,22 @@ pub struct DepthEstimate {
     /// (the networks': the paper's over its spheres, the cascade's coarse stage's over its 32,
     /// resampled to the grid), higher where the answer is less sure.
     pub entropy: Option<Vec<f32>>,
+    /// Standard deviation of that distribution in index units of `spec`'s hypotheses, where
+    /// the method gives it (the cascade: its coarse stage's, resampled to the grid): how far
+    /// off the answer may be, in the unit of the error figures times `N / 100`.
+    pub spread: Option<Vec<f32>>,
     /// Wall time of the estimate, seconds.
     pub seconds: f64,
+}
+
+/// An uncertainty map of a [`DepthEstimate`] and a bound on it
+/// ([`DepthEstimate::leave_uncertain`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Uncertainty {
+    /// The entropy, nats.
+    Entropy(f32),
+    /// The spread (standard deviation), index units of the estimate's hypotheses.
+    Spread(f32),
 }
 
 impl DepthEstimate {
@@ -61,17 +75,22 @@ impl DepthEstimate {
         moved
     }
 
-    /// Leaves the pixels whose entropy is above `max_entropy` (nats) without an answer: NaN
-    /// index and inverse depth, as ZNCC+SGM's `min_confidence` does (the metrics then score
-    /// the others and report their share as coverage; a point cloud leaves them out). Returns
-    /// how many pixels it left; none for an estimate without entropy.
-    pub fn leave_uncertain(&mut self, max_entropy: f32) -> usize {
-        let Some(entropy) = &self.entropy else {
+    /// Leaves the pixels whose uncertainty is above a bound (`above`: by the entropy or by the
+    /// spread) without an answer: NaN index and inverse depth, as ZNCC+SGM's `min_confidence`
+    /// does (the metrics then score the others and report their share as coverage; a point
+    /// cloud leaves them out). Returns how many pixels it left; none for an estimate without
+    /// that map.
+    pub fn leave_uncertain(&mut self, above: Uncertainty) -> usize {
+        let (map, bound) = match above {
+            Uncertainty::Entropy(nats) => (&self.entropy, nats),
+            Uncertainty::Spread(units) => (&self.spread, units),
+        };
+        let Some(map) = map else {
             return 0;
         };
         let mut left = 0;
-        for ((index, inv), &h) in self.index.iter_mut().zip(&mut self.inv_depth).zip(entropy) {
-            if h > max_entropy && !index.is_nan() {
+        for ((index, inv), &u) in self.index.iter_mut().zip(&mut self.inv_depth).zip(map) {
+            if u > bound && !index.is_nan() {
                 *index = f32::NAN;
                 *inv = f32::NAN;
                 left += 1;
@@ -89,6 +108,7 @@ impl DepthEstimate {
             index,
             confidence: None,
             entropy: None,
+            spread: None,
             seconds: 0.0,
         }
     }
@@ -254,17 +274,27 @@ mod tests {
     #[test]
     fn uncertain_pixels_are_left_without_an_answer() {
         let mut est = estimate(vec![10.0, 20.0, 30.0, 40.0], Some(vec![0.5, 2.5, 2.0, 3.0]));
-        assert_eq!(est.leave_uncertain(2.0), 2);
+        // No spread map: nothing to leave by it.
+        assert_eq!(est.leave_uncertain(Uncertainty::Spread(0.0)), 0);
+        assert_eq!(est.leave_uncertain(Uncertainty::Entropy(2.0)), 2);
         assert_eq!(est.index[0], 10.0);
         assert_eq!(est.index[2], 30.0);
         assert!(est.index[1].is_nan() && est.inv_depth[1].is_nan());
         assert!(est.index[3].is_nan() && est.inv_depth[3].is_nan());
         assert_eq!(est.inv_depth[0], est.spec.inv_depth_of(&[10.0])[0]);
         // Already left pixels are not counted twice; no entropy, nothing to leave.
-        assert_eq!(est.leave_uncertain(2.0), 0);
+        assert_eq!(est.leave_uncertain(Uncertainty::Entropy(2.0)), 0);
         let mut plain = estimate(vec![10.0, 20.0, 30.0, 40.0], None);
-        assert_eq!(plain.leave_uncertain(0.0), 0);
+        assert_eq!(plain.leave_uncertain(Uncertainty::Entropy(0.0)), 0);
         assert!(plain.index.iter().all(|v| v.is_finite()));
+        // By the spread: index units.
+        let mut spread = DepthEstimate {
+            spread: Some(vec![1.0, 12.0, 30.0, 8.0]),
+            ..estimate(vec![10.0, 20.0, 30.0, 40.0], None)
+        };
+        assert_eq!(spread.leave_uncertain(Uncertainty::Spread(10.0)), 2);
+        assert!(spread.index[1].is_nan() && spread.index[2].is_nan());
+        assert_eq!((spread.index[0], spread.index[3]), (10.0, 40.0));
     }
 
     #[test]

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use numpy::PyArray2;
-use omnimvs_data::DepthEstimator;
+use omnimvs_data::{DepthEstimator, Uncertainty};
 use omnimvs_net::bundled::BundledModel;
 use omnimvs_net::weights::{AnyNet, common_image_size, load_family};
 use omnimvs_net::{Backend, NetConfig, NetEstimator};
@@ -56,12 +56,15 @@ fn load_network(
 ///         --snap-edges`; 8 is the command's default).
 ///     max_entropy: `None` (the default) or an entropy in nats: the pixels whose uncertainty
 ///         is above it are NaN (`omnimvs infer --max-entropy`; applied after `snap_edges`).
+///     max_spread: `None` (the default) or a spread in index units of N: the same by the
+///         standard deviation of the network's distribution, a sharper filter (`omnimvs infer
+///         --max-spread`; applied after `max_entropy`).
 ///
 /// Raises:
 ///     FileNotFoundError: the weights file or an image of the frame is missing.
 ///     ValueError: a bad argument or array, or a rig that does not fit the network.
 #[pyfunction]
-#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None, max_entropy=None))]
+#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None, max_entropy=None, max_spread=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn infer<'py>(
     py: Python<'py>,
@@ -73,14 +76,25 @@ pub fn infer<'py>(
     rig: Option<&Bound<'py, PyRig>>,
     snap_edges: Option<f64>,
     max_entropy: Option<f32>,
+    max_spread: Option<f32>,
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-    if let Some(nats) = max_entropy
-        && !(nats.is_finite() && nats >= 0.0)
-    {
-        return Err(bad_argument(
+    for (name, bound, what) in [
+        (
             "max_entropy",
-            format!("{nats}: expected an entropy in nats, 0 or more, e.g. 2.6"),
-        ));
+            max_entropy,
+            "an entropy in nats, 0 or more, e.g. 2.6",
+        ),
+        (
+            "max_spread",
+            max_spread,
+            "a spread in index units, 0 or more, e.g. 30",
+        ),
+    ] {
+        if let Some(v) = bound
+            && !(v.is_finite() && v >= 0.0)
+        {
+            return Err(bad_argument(name, format!("{v}: expected {what}")));
+        }
     }
     if let Some(pct) = snap_edges
         && !(pct > 0.0 && pct <= 100.0)
@@ -118,7 +132,10 @@ pub fn infer<'py>(
             estimate.snap_edges(pct);
         }
         if let Some(nats) = max_entropy {
-            estimate.leave_uncertain(nats);
+            estimate.leave_uncertain(Uncertainty::Entropy(nats));
+        }
+        if let Some(units) = max_spread {
+            estimate.leave_uncertain(Uncertainty::Spread(units));
         }
         Ok(estimate)
     })?;

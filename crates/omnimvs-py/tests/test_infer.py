@@ -115,3 +115,13 @@ def test_max_entropy(itbt, itbt_net):
     for bad in (-1.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match="max_entropy"):
             omnimvs.infer(itbt, 1, max_entropy=bad)
+
+
+def test_max_spread(itbt, itbt_net):
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, max_spread=1000.0), itbt_net)
+    some = omnimvs.infer(itbt, 1, max_spread=10.0)
+    left = np.isnan(some)
+    assert 0.01 < left.mean() < 0.9
+    np.testing.assert_array_equal(some[~left], itbt_net[~left])
+    with pytest.raises(ValueError, match="max_spread"):
+        omnimvs.infer(itbt, 1, max_spread=-0.5)

@@ -113,6 +113,7 @@ impl DepthEstimator for SgmEstimator {
             index: out.index.index,
             confidence: Some(out.index.confidence),
             entropy: None,
+            spread: None,
             seconds: out.timings.total_s,
         })
     }

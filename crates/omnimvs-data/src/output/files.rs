@@ -21,7 +21,8 @@ pub fn frame_path(dir: &Path, frame: u32, suffix: &str) -> PathBuf {
 
 /// Writes the maps of an estimate as f32 TIFFs on its grid: `.tiff` (inverse depth, 1/m),
 /// `_index.tiff` (hypothesis index), `_confidence.tiff` and `_confidence.png` (gray, 0..1
-/// as 0..255) when it has a confidence, `_entropy.tiff` when it has an entropy.
+/// as 0..255) when it has a confidence, `_entropy.tiff` when it has an entropy, `_spread.tiff`
+/// when it has a spread.
 ///
 /// # Errors
 /// [`DataError::Io`] for a file that cannot be written.
@@ -32,6 +33,9 @@ pub fn write_maps(dir: &Path, frame: u32, est: &DepthEstimate) -> Result<(), Dat
     write_f32_tiff(&path("_index.tiff"), w, h, &est.index)?;
     if let Some(entropy) = &est.entropy {
         write_f32_tiff(&path("_entropy.tiff"), w, h, entropy)?;
+    }
+    if let Some(spread) = &est.spread {
+        write_f32_tiff(&path("_spread.tiff"), w, h, spread)?;
     }
     if let Some(conf) = &est.confidence {
         write_f32_tiff(&path("_confidence.tiff"), w, h, conf)?;

@@ -123,6 +123,8 @@ def infer(
     snap_edges: Optional[float] = None,
     # None, or nats: pixels whose uncertainty is above it are NaN.
     max_entropy: Optional[float] = None,
+    # None, or index units of N: the same by the spread (standard deviation).
+    max_spread: Optional[float] = None,
 ) -> FloatMap: ...
 @overload
 def infer(
@@ -137,6 +139,7 @@ def infer(
     rig: Rig,
     snap_edges: Optional[float] = None,
     max_entropy: Optional[float] = None,
+    max_spread: Optional[float] = None,
 ) -> FloatMap: ...
 def evaluate(
     prediction: Union[npt.NDArray[np.float32], npt.NDArray[np.float64]],
