@@ -9,6 +9,7 @@ use omnimvs_net::weights::{AnyNet, common_image_size, load_family};
 use omnimvs_net::{Backend, NetConfig, NetEstimator};
 use omnimvs_sweep::LutCache;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::dataset::PyRig;
 use crate::error::{IntoPyResult, bad_argument, detached, with_context};
@@ -59,12 +60,17 @@ fn load_network(
 ///     max_spread: `None` (the default) or a spread in index units of N: the same by the
 ///         standard deviation of the network's distribution, a sharper filter (`omnimvs infer
 ///         --max-spread`; applied after `max_entropy`).
+///     maps: `False` (the default) for the inverse-depth array alone; `True` for a dict of
+///         every map of the estimate, each `numpy.float32` `(height, width)` or `None` where
+///         the network has none: `inv_depth`, `index` (hypothesis index, N units), `entropy`
+///         (nats) and `spread` (standard deviation, index units; the cascade's), the files
+///         `omnimvs infer` writes.
 ///
 /// Raises:
 ///     FileNotFoundError: the weights file or an image of the frame is missing.
 ///     ValueError: a bad argument or array, or a rig that does not fit the network.
 #[pyfunction]
-#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None, max_entropy=None, max_spread=None))]
+#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None, max_entropy=None, max_spread=None, maps=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn infer<'py>(
     py: Python<'py>,
@@ -77,7 +83,8 @@ pub fn infer<'py>(
     snap_edges: Option<f64>,
     max_entropy: Option<f32>,
     max_spread: Option<f32>,
-) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    maps: bool,
+) -> PyResult<Bound<'py, PyAny>> {
     for (name, bound, what) in [
         (
             "max_entropy",
@@ -140,5 +147,19 @@ pub fn infer<'py>(
         Ok(estimate)
     })?;
     let (height, width) = (result.spec.height(), result.spec.width());
-    map_to_array(py, result.inv_depth, height, width)
+    if !maps {
+        return Ok(map_to_array(py, result.inv_depth, height, width)?.into_any());
+    }
+    let dict = PyDict::new(py);
+    let optional = |map: Option<Vec<f32>>| -> PyResult<Option<Bound<'py, PyArray2<f32>>>> {
+        map.map(|m| map_to_array(py, m, height, width)).transpose()
+    };
+    dict.set_item(
+        "inv_depth",
+        map_to_array(py, result.inv_depth, height, width)?,
+    )?;
+    dict.set_item("index", map_to_array(py, result.index, height, width)?)?;
+    dict.set_item("entropy", optional(result.entropy)?)?;
+    dict.set_item("spread", optional(result.spread)?)?;
+    Ok(dict.into_any())
 }

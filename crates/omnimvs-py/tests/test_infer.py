@@ -125,3 +125,21 @@ def test_max_spread(itbt, itbt_net):
     np.testing.assert_array_equal(some[~left], itbt_net[~left])
     with pytest.raises(ValueError, match="max_spread"):
         omnimvs.infer(itbt, 1, max_spread=-0.5)
+
+
+def test_maps(itbt_path, itbt, itbt_net, cli, tmp_path):
+    # Every map of the estimate, as the command line writes them.
+    maps = omnimvs.infer(itbt, 1, maps=True)
+    assert set(maps) == {"inv_depth", "index", "entropy", "spread"}
+    np.testing.assert_array_equal(maps["inv_depth"], itbt_net)
+    cli("infer", itbt_path, "--frames", 1, "--out", tmp_path)
+    for key in ("index", "entropy", "spread"):
+        expected = tifffile.imread(tmp_path / f"00001_{key}.tiff")
+        assert maps[key].dtype == np.float32 and maps[key].shape == (160, 640)
+        np.testing.assert_allclose(maps[key], expected, rtol=1e-5, atol=1e-6)
+    # The cascade's uncertainty spans the range: entropy at most ln 32, spread in N units.
+    assert 0 <= maps["entropy"].min() and maps["entropy"].max() <= np.log(32) + 1e-4
+    assert 0 <= maps["spread"].min() and maps["spread"].max() <= 192
+    # The paper's network has an entropy and no spread.
+    tiny = omnimvs.infer(itbt, 1, weights="tiny", maps=True)
+    assert tiny["spread"] is None and tiny["entropy"].shape == (32, 128)

@@ -13,6 +13,14 @@ PathLike = Union[str, os.PathLike[str]]
 Image = npt.NDArray[np.uint8]
 FloatMap = npt.NDArray[np.float32]
 
+class Maps(TypedDict):
+    """Every map of an estimate (``infer(..., maps=True)``), each ``(height, width)``."""
+
+    inv_depth: FloatMap
+    index: FloatMap
+    entropy: Optional[FloatMap]
+    spread: Optional[FloatMap]
+
 class Metrics(TypedDict):
     """The paper's metrics of one frame (``E = |n_hat - n*| / N * 100``)."""
 
@@ -125,7 +133,22 @@ def infer(
     max_entropy: Optional[float] = None,
     # None, or index units of N: the same by the spread (standard deviation).
     max_spread: Optional[float] = None,
+    # True: a dict of every map (Maps) instead of the inverse depth alone.
+    maps: Literal[False] = False,
 ) -> FloatMap: ...
+@overload
+def infer(
+    source: Dataset,
+    frame: int,
+    weights: Optional[PathLike] = None,
+    *,
+    preset: str = "paper",
+    backend: str = "cpu",
+    snap_edges: Optional[float] = None,
+    max_entropy: Optional[float] = None,
+    max_spread: Optional[float] = None,
+    maps: Literal[True],
+) -> Maps: ...
 @overload
 def infer(
     source: Sequence[Image],
@@ -140,7 +163,22 @@ def infer(
     snap_edges: Optional[float] = None,
     max_entropy: Optional[float] = None,
     max_spread: Optional[float] = None,
+    maps: Literal[False] = False,
 ) -> FloatMap: ...
+@overload
+def infer(
+    source: Sequence[Image],
+    frame: None = None,
+    weights: Optional[PathLike] = None,
+    *,
+    preset: str = "paper",
+    backend: str = "cpu",
+    rig: Rig,
+    snap_edges: Optional[float] = None,
+    max_entropy: Optional[float] = None,
+    max_spread: Optional[float] = None,
+    maps: Literal[True],
+) -> Maps: ...
 def evaluate(
     prediction: Union[npt.NDArray[np.float32], npt.NDArray[np.float64]],
     dataset: Dataset,
