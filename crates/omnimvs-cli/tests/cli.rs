@@ -97,6 +97,12 @@ fn bad_input_gives_clear_errors_and_non_zero_exit() {
     let itbt = itbt.to_str().unwrap();
     let out = dir.path().join("x.png");
     let out = out.to_str().unwrap();
+    // `infer` on frame 1 of itbt with `extra` options.
+    let infer = |extra: &[&'static str]| {
+        let mut args = vec!["infer", itbt, "--frames", "1", "--out", out];
+        args.extend_from_slice(extra);
+        args
+    };
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (vec!["info", "/nonexistent/dataset"], "/nonexistent/dataset"),
         (
@@ -143,54 +149,19 @@ fn bad_input_gives_clear_errors_and_non_zero_exit() {
             "frame 9",
         ),
         (
-            vec![
-                "infer",
-                itbt,
-                "--frames",
-                "1",
-                "--out",
-                out,
-                "--weights",
-                "/nonexistent/w.safetensors",
-            ],
+            infer(&["--weights", "/nonexistent/w.safetensors"]),
             "/nonexistent/w",
         ),
         (
-            vec![
-                "infer",
-                itbt,
-                "--frames",
-                "1",
-                "--out",
-                out,
-                "--snap-edges",
-                "0",
-            ],
+            infer(&["--snap-edges", "0"]),
             "expected a percentage of the hypotheses in (0, 100]",
         ),
         (
-            vec![
-                "infer",
-                itbt,
-                "--frames",
-                "1",
-                "--out",
-                out,
-                "--max-entropy=-1",
-            ],
+            infer(&["--max-entropy=-1"]),
             "expected an entropy in nats, 0 or more",
         ),
         (
-            vec![
-                "infer",
-                itbt,
-                "--frames",
-                "1",
-                "--out",
-                out,
-                "--max-spread",
-                "many",
-            ],
+            infer(&["--max-spread", "many"]),
             "expected a spread in index units, 0 or more",
         ),
     ];
