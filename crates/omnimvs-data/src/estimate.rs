@@ -43,6 +43,112 @@ pub enum Uncertainty {
     Spread(f32),
 }
 
+/// What may be done to an estimate after its method, as `omnimvs infer` and `omnimvs.infer`
+/// offer it; [`Finishing::apply`] runs the steps in this order.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Finishing {
+    /// [`DepthEstimate::snap_edges`] at this percentage of the `N` hypotheses, in (0, 100].
+    pub snap_edges_pct: Option<f64>,
+    /// [`DepthEstimate::leave_uncertain`] above this entropy (nats), 0 or more.
+    pub max_entropy: Option<f32>,
+    /// [`DepthEstimate::leave_uncertain`] above this spread (index units), 0 or more.
+    pub max_spread: Option<f32>,
+}
+
+/// A [`Finishing`] option out of its range: the option (`name`, as `omnimvs.infer` calls it), the
+/// value given and what it expects.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{value}: expected {expected}")]
+pub struct FinishingError {
+    pub name: &'static str,
+    pub value: String,
+    pub expected: &'static str,
+}
+
+impl Finishing {
+    /// What `snap_edges_pct` expects.
+    pub const SNAP_EDGES_EXPECTED: &'static str =
+        "a percentage of the hypotheses in (0, 100], e.g. 8";
+    /// What `max_entropy` expects.
+    pub const MAX_ENTROPY_EXPECTED: &'static str = "an entropy in nats, 0 or more, e.g. 2.6";
+    /// What `max_spread` expects.
+    pub const MAX_SPREAD_EXPECTED: &'static str = "a spread in index units, 0 or more, e.g. 30";
+
+    /// `pct` as a `snap_edges_pct`.
+    ///
+    /// # Errors
+    /// [`FinishingError`] outside (0, 100].
+    pub fn snap_edges_pct(pct: f64) -> Result<f64, FinishingError> {
+        check(
+            pct > 0.0 && pct <= 100.0,
+            "snap_edges",
+            pct,
+            Self::SNAP_EDGES_EXPECTED,
+        )
+    }
+
+    /// `nats` as a `max_entropy`.
+    ///
+    /// # Errors
+    /// [`FinishingError`] for a negative or non-finite value.
+    pub fn max_entropy(nats: f32) -> Result<f32, FinishingError> {
+        let ok = nats.is_finite() && nats >= 0.0;
+        check(ok, "max_entropy", nats, Self::MAX_ENTROPY_EXPECTED)
+    }
+
+    /// `units` as a `max_spread`.
+    ///
+    /// # Errors
+    /// [`FinishingError`] for a negative or non-finite value.
+    pub fn max_spread(units: f32) -> Result<f32, FinishingError> {
+        let ok = units.is_finite() && units >= 0.0;
+        check(ok, "max_spread", units, Self::MAX_SPREAD_EXPECTED)
+    }
+
+    /// Every option given, checked.
+    ///
+    /// # Errors
+    /// [`FinishingError`] for the first option out of its range.
+    pub fn checked(self) -> Result<Self, FinishingError> {
+        self.snap_edges_pct.map(Self::snap_edges_pct).transpose()?;
+        self.max_entropy.map(Self::max_entropy).transpose()?;
+        self.max_spread.map(Self::max_spread).transpose()?;
+        Ok(self)
+    }
+
+    /// Snaps the edges, then leaves the pixels above the entropy bound, then those above the
+    /// spread bound, each when given.
+    pub fn apply(&self, est: &mut DepthEstimate) {
+        if let Some(pct) = self.snap_edges_pct {
+            est.snap_edges(pct);
+        }
+        if let Some(nats) = self.max_entropy {
+            est.leave_uncertain(Uncertainty::Entropy(nats));
+        }
+        if let Some(units) = self.max_spread {
+            est.leave_uncertain(Uncertainty::Spread(units));
+        }
+    }
+}
+
+/// `value` when `ok`, else the [`FinishingError`] of option `name`.
+fn check<T: fmt::Display>(
+    ok: bool,
+    name: &'static str,
+    value: T,
+    expected: &'static str,
+) -> Result<T, FinishingError> {
+    if ok {
+        Ok(value)
+    } else {
+        Err(FinishingError {
+            name,
+            value: value.to_string(),
+            expected,
+        })
+    }
+}
+
 impl DepthEstimate {
     /// A network's estimate: `index` and its `entropy` on `spec`, the inverse depth computed
     /// from the hypotheses, in `seconds`.
@@ -295,6 +401,55 @@ mod tests {
         assert_eq!(spread.leave_uncertain(Uncertainty::Spread(10.0)), 2);
         assert!(spread.index[1].is_nan() && spread.index[2].is_nan());
         assert_eq!((spread.index[0], spread.index[3]), (10.0, 40.0));
+    }
+
+    #[test]
+    fn finishing_checks_its_options_and_applies_them_in_order() {
+        let ok = Finishing {
+            snap_edges_pct: Some(8.0),
+            max_entropy: Some(2.0),
+            max_spread: None,
+        };
+        assert_eq!(ok.checked(), Ok(ok));
+        for (bad, name) in [
+            (
+                Finishing {
+                    snap_edges_pct: Some(0.0),
+                    ..ok
+                },
+                "snap_edges",
+            ),
+            (
+                Finishing {
+                    max_entropy: Some(f32::NAN),
+                    ..ok
+                },
+                "max_entropy",
+            ),
+            (
+                Finishing {
+                    max_spread: Some(-1.0),
+                    ..ok
+                },
+                "max_spread",
+            ),
+        ] {
+            let err = bad.checked().unwrap_err();
+            assert_eq!(err.name, name);
+            assert!(err.to_string().contains("expected"), "{err}");
+        }
+        // The edge 60 of the step 150 | 60 | 20 snaps to 20 first; then only the pixel whose
+        // entropy is above 2 is left.
+        let mut est = estimate(
+            vec![150.0, 60.0, 20.0, 20.0],
+            Some(vec![0.5, 1.0, 3.0, 0.5]),
+        );
+        ok.apply(&mut est);
+        assert_eq!(
+            (est.index[0], est.index[1], est.index[3]),
+            (150.0, 20.0, 20.0)
+        );
+        assert!(est.index[2].is_nan());
     }
 
     #[test]

@@ -30,6 +30,7 @@ pub use config::{DatasetConfig, FrameRange, Split, write_config_yaml};
 pub use dataset::{Dataset, RELEASED_MAX_FOV_DEG, RELEASED_MIN_DEPTH_M};
 pub use error::DataError;
 pub use estimate::{
-    DepthEstimate, DepthEstimator, EstimateError, NoTimings, StageObserver, StageTimes, Uncertainty,
+    DepthEstimate, DepthEstimator, EstimateError, Finishing, FinishingError, NoTimings,
+    StageObserver, StageTimes, Uncertainty,
 };
 pub use format::format_printf;

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use numpy::PyArray2;
-use omnimvs_data::{DepthEstimator, Uncertainty};
+use omnimvs_data::{DepthEstimator, Finishing};
 use omnimvs_net::bundled::BundledModel;
 use omnimvs_net::weights::{AnyNet, common_image_size, load_family};
 use omnimvs_net::{Backend, NetConfig, NetEstimator};
@@ -85,32 +85,13 @@ pub fn infer<'py>(
     max_spread: Option<f32>,
     maps: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    for (name, bound, what) in [
-        (
-            "max_entropy",
-            max_entropy,
-            "an entropy in nats, 0 or more, e.g. 2.6",
-        ),
-        (
-            "max_spread",
-            max_spread,
-            "a spread in index units, 0 or more, e.g. 30",
-        ),
-    ] {
-        if let Some(v) = bound
-            && !(v.is_finite() && v >= 0.0)
-        {
-            return Err(bad_argument(name, format!("{v}: expected {what}")));
-        }
+    let finishing = Finishing {
+        snap_edges_pct: snap_edges,
+        max_entropy,
+        max_spread,
     }
-    if let Some(pct) = snap_edges
-        && !(pct > 0.0 && pct <= 100.0)
-    {
-        return Err(bad_argument(
-            "snap_edges",
-            format!("{pct}: expected a percentage of the hypotheses in (0, 100], e.g. 8"),
-        ));
-    }
+    .checked()
+    .map_err(|e| bad_argument(e.name, &e))?;
     let (ds, images) = frame_source(source, frame, rig)?;
     let backend: Backend = backend.parse().map_err(|e| bad_argument("backend", e))?;
     let result = detached(py, || {
@@ -135,15 +116,7 @@ pub fn infer<'py>(
         .py_err()?;
         let images = images.load(&ds)?;
         let mut estimate = estimator.estimate(&images).py_err()?;
-        if let Some(pct) = snap_edges {
-            estimate.snap_edges(pct);
-        }
-        if let Some(nats) = max_entropy {
-            estimate.leave_uncertain(Uncertainty::Entropy(nats));
-        }
-        if let Some(units) = max_spread {
-            estimate.leave_uncertain(Uncertainty::Spread(units));
-        }
+        finishing.apply(&mut estimate);
         Ok(estimate)
     })?;
     let (height, width) = (result.spec.height(), result.spec.width());

@@ -6,7 +6,7 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::metrics::ProtocolMetrics;
 use omnimvs_data::output::{DepthRun, FrameScene, protocol_tables};
-use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, Uncertainty};
+use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, Finishing, FinishingError, FrameRange};
 use omnimvs_net::weights::common_image_size;
 use omnimvs_net::{Backend, NetEstimator};
 use omnimvs_sweep::{CacheStatus, GrayImage, LutCache};
@@ -87,35 +87,39 @@ pub struct Args {
     pub max_spread: Option<f32>,
 }
 
-/// A bound on an uncertainty map: a finite number, 0 or more (`what` and `example` for the
-/// message).
-fn parse_bound(text: &str, what: &str, example: &str) -> Result<f32, String> {
-    match text.parse::<f32>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!(
-            "{text:?}: expected {what}, 0 or more, e.g. {example}"
-        )),
-    }
+/// A number checked by one of [`Finishing`]'s rules, else what it expects (`expected`).
+fn parse_finishing<T: std::str::FromStr>(
+    text: &str,
+    check: fn(T) -> Result<T, FinishingError>,
+    expected: &str,
+) -> Result<T, String> {
+    let value = text
+        .parse::<T>()
+        .map_err(|_| format!("{text:?}: expected {expected}"))?;
+    check(value).map_err(|e| e.to_string())
 }
 
 /// `--max-entropy NATS`.
 fn parse_max_entropy(text: &str) -> Result<f32, String> {
-    parse_bound(text, "an entropy in nats", "2.6")
+    parse_finishing(
+        text,
+        Finishing::max_entropy,
+        Finishing::MAX_ENTROPY_EXPECTED,
+    )
 }
 
 /// `--max-spread UNITS`.
 fn parse_max_spread(text: &str) -> Result<f32, String> {
-    parse_bound(text, "a spread in index units", "30")
+    parse_finishing(text, Finishing::max_spread, Finishing::MAX_SPREAD_EXPECTED)
 }
 
-/// `--snap-edges PCT`: a percentage in (0, 100].
+/// `--snap-edges PCT`.
 fn parse_snap_pct(text: &str) -> Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(v) if v > 0.0 && v <= 100.0 => Ok(v),
-        _ => Err(format!(
-            "{text:?}: expected a percentage of the hypotheses in (0, 100], e.g. 8"
-        )),
-    }
+    parse_finishing(
+        text,
+        Finishing::snap_edges_pct,
+        Finishing::SNAP_EDGES_EXPECTED,
+    )
 }
 
 /// `--input-size` values.
@@ -285,10 +289,15 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(order) = &args.order {
         inference.set_order(order)?;
     }
+    let finishing = Finishing {
+        snap_edges_pct: args.snap_edges,
+        max_entropy: args.max_entropy,
+        max_spread: args.max_spread,
+    };
     let mut settings = settings(&args.dataset, &args.weights, &inference, &args.backend);
-    settings["snap_edges_pct"] = serde_json::json!(args.snap_edges);
-    settings["max_entropy"] = serde_json::json!(args.max_entropy);
-    settings["max_spread"] = serde_json::json!(args.max_spread);
+    settings["snap_edges_pct"] = serde_json::json!(finishing.snap_edges_pct);
+    settings["max_entropy"] = serde_json::json!(finishing.max_entropy);
+    settings["max_spread"] = serde_json::json!(finishing.max_spread);
     let mut run = DepthRun::new(&args.out, "infer.json", &settings, args.ply)?;
 
     let frames: Vec<u32> = args.frames.indices();
@@ -308,15 +317,7 @@ pub fn run(args: &Args) -> Result<()> {
             let mut est = inference
                 .estimate(&images)
                 .with_context(|| format!("frame {f}"))?;
-            if let Some(pct) = args.snap_edges {
-                est.snap_edges(pct);
-            }
-            if let Some(nats) = args.max_entropy {
-                est.leave_uncertain(Uncertainty::Entropy(nats));
-            }
-            if let Some(units) = args.max_spread {
-                est.leave_uncertain(Uncertainty::Spread(units));
-            }
+            finishing.apply(&mut est);
             Ok((images, est))
         },
         |f, (images, est)| {
