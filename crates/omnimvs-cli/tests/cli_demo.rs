@@ -111,51 +111,39 @@ fn demo_reports_figures_of_its_outputs_in_range() {
     }
     assert_eq!(png_size(&out.join("eval/00001_sgm.png")), (640, 160));
 
-    // The cascade's uncertainty (its coarse stage's entropy) says where it misses: higher, on
-    // average, at the scored pixels more than 5 % of N off than at those within 1 %. (The
-    // full-resolution stage's entropy, its uncertainty until stop 32, was lower there.)
+    // The cascade's uncertainty maps say where it misses: the mean of a map (each value within
+    // `range`) over the scored pixels more than 5 % of N off, and over those within 1 %.
     let index = read_inv_depth(&out.join("net_cascade/00001_index.tiff")).unwrap();
-    let entropy = read_inv_depth(&out.join("net_cascade/00001_entropy.tiff")).unwrap();
-    assert_eq!((entropy.width, entropy.height), (width, height));
-    let (mut missed, mut right) = ((0.0f64, 0usize), (0.0f64, 0usize));
-    for i in 0..width * height {
-        if !truth.scored(i, omnimvs_data::metrics::Protocol::Reference) {
-            continue;
+    let means = |name: &str, range: std::ops::RangeInclusive<f64>| {
+        let map = read_inv_depth(&out.join(format!("net_cascade/00001_{name}.tiff"))).unwrap();
+        assert_eq!((map.width, map.height), (width, height), "{name}");
+        let (mut missed, mut right) = ((0.0f64, 0usize), (0.0f64, 0usize));
+        for i in 0..width * height {
+            if !truth.scored(i, omnimvs_data::metrics::Protocol::Reference) {
+                continue;
+            }
+            let e = f64::from((index.data[i] - truth.gt.index[i]).abs()) / ndepth as f64 * 100.0;
+            let u = f64::from(map.data[i]);
+            assert!(range.contains(&u), "{name} {u} at {i}");
+            if e > 5.0 {
+                missed = (missed.0 + u, missed.1 + 1);
+            } else if e < 1.0 {
+                right = (right.0 + u, right.1 + 1);
+            }
         }
-        let e = f64::from((index.data[i] - truth.gt.index[i]).abs()) / ndepth as f64 * 100.0;
-        let h = f64::from(entropy.data[i]);
         assert!(
-            (0.0..=(32f64).ln() + 1e-4).contains(&h),
-            "entropy {h} at {i}"
+            missed.1 > 100 && right.1 > 100,
+            "{name}: {missed:?} {right:?}"
         );
-        if e > 5.0 {
-            missed = (missed.0 + h, missed.1 + 1);
-        } else if e < 1.0 {
-            right = (right.0 + h, right.1 + 1);
-        }
-    }
-    assert!(missed.1 > 100 && right.1 > 100, "{missed:?} {right:?}");
-    let (missed, right) = (missed.0 / missed.1 as f64, right.0 / right.1 as f64);
+        (missed.0 / missed.1 as f64, right.0 / right.1 as f64)
+    };
+    // Its coarse stage's entropy is higher where it misses. (The full-resolution stage's
+    // entropy, its uncertainty until stop 32, was lower there.)
+    let (missed, right) = means("entropy", 0.0..=(32f64).ln() + 1e-4);
     println!("cascade entropy: {missed:.3} nats where > 5 % off, {right:.3} within 1 %");
     assert!(missed > right + 0.1, "{missed} vs {right}");
-
-    // Its spread (the coarse distribution's standard deviation, index units) likewise.
-    let spread = read_inv_depth(&out.join("net_cascade/00001_spread.tiff")).unwrap();
-    let (mut missed, mut right) = ((0.0f64, 0usize), (0.0f64, 0usize));
-    for i in 0..width * height {
-        if !truth.scored(i, omnimvs_data::metrics::Protocol::Reference) {
-            continue;
-        }
-        let e = f64::from((index.data[i] - truth.gt.index[i]).abs()) / ndepth as f64 * 100.0;
-        let s = f64::from(spread.data[i]);
-        assert!((0.0..=ndepth as f64).contains(&s), "spread {s} at {i}");
-        if e > 5.0 {
-            missed = (missed.0 + s, missed.1 + 1);
-        } else if e < 1.0 {
-            right = (right.0 + s, right.1 + 1);
-        }
-    }
-    let (missed, right) = (missed.0 / missed.1 as f64, right.0 / right.1 as f64);
+    // So is its spread (the coarse distribution's standard deviation, index units).
+    let (missed, right) = means("spread", 0.0..=ndepth as f64);
     println!("cascade spread: {missed:.2} index units where > 5 % off, {right:.2} within 1 %");
     assert!(missed > 1.5 * right, "{missed} vs {right}");
 }
