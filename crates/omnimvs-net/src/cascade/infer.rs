@@ -1,6 +1,7 @@
 //! The cascade on a dataset's frames: the rig's geometry once, then per frame the inputs
 //! (normalised over the valid pixels, resized to the network's input), the forward pass, the
-//! final stage's index map and the coarse stage's entropy as the estimate's uncertainty.
+//! final stage's index map and the coarse stage's entropy and spread as the estimate's
+//! uncertainty.
 
 use burn::tensor::Device;
 use omnimvs_camera::ValidityMask;
@@ -82,11 +83,11 @@ impl CascadeInference {
     /// each stage's time given to `observer` when it wants them (the device is then waited for
     /// after each stage). The estimate's entropy and spread (standard deviation, `N` units) are
     /// the coarse stage's, over its spheres across the whole range, resampled to the output
-    /// grid: the refinement stages' own
-    /// distributions span a few index units around their centres and say nothing of a gross
-    /// miss (on things validation frames, leaving out the tenth of the pixels with the highest
-    /// full-resolution entropy raises the MAE of the rest, 4.33 -> 4.53; by the coarse
-    /// entropy it falls to 3.21; `models/training/cascade-25/uncertainty.py`).
+    /// grid: the refinement stages' own distributions span a few index units around their
+    /// centres and say nothing of a gross miss (on things validation frames, leaving out the
+    /// tenth of the pixels with the highest full-resolution entropy raises the MAE of the rest,
+    /// 4.33 -> 4.53; by the coarse entropy it falls to 3.21, by the spread to 2.97;
+    /// `models/training/cascade-25/uncertainty.py`).
     ///
     /// # Errors
     /// [`NetError`] for a wrong number of images or a mask of another size.
@@ -110,8 +111,8 @@ impl CascadeInference {
         let on_grid = |map: Vec<f32>| resample_map(&map, &coarse_grid, &self.spec.grid);
         let entropy = on_grid(read_values(coarse.entropy(), "coarse entropy map")?);
         // The coarse distribution's standard deviation around its soft argmax, N units.
-        let offsets = coarse.hypotheses.clone() - coarse.index.clone().unsqueeze_dim::<4>(1);
-        let variance = (coarse.prob.clone() * offsets.clone() * offsets)
+        let offsets = coarse.hypotheses - coarse.index.unsqueeze_dim::<4>(1);
+        let variance = (coarse.prob * offsets.clone() * offsets)
             .sum_dim(1)
             .squeeze_dim::<3>(1);
         let spread = on_grid(read_values(
