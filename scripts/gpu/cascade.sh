@@ -21,7 +21,11 @@
 #                   whole panorama]; TRAIN_INIT: the weights it starts from [the bundled
 #                   cascade]; TRAIN_EXTRA: more options of `omnimvs train`, space-separated
 #                   (e.g. "--train-only coarse --coarse-feature-channels 32")
-#   STEPS_PER_EPOCH [100]; VAL_FRAMES: validation frames of the two standard sets [481..488]
+#   TRAIN_B_EXTRA   when set, a second training run beside the first on the same GPU and data
+#                   (an A/B in one call), with these options after TRAIN_EXTRA's; its results
+#                   under run-b/ (each run gets half of LOADER_THREADS)
+#   STEPS_PER_EPOCH [100]; TRAIN_EPOCHS: epochs of the run, the last 3 at TRAIN_LR_LOW [100]
+#   VAL_FRAMES      validation frames of the two standard sets [481..488]
 #   LOADER_THREADS  threads preparing the training samples [8] (one left the GPU idle two
 #                   thirds of the time in stop 30)
 #   WORK            scratch folder for data and runs [/tmp/omnimvs-gpu]
@@ -57,11 +61,18 @@ pack() {
     (
         cd "$work" || exit 0
         local files=(logs)
-        for f in eval-gpu eval-cpu run/metrics.jsonl run/train_config.json run/best.safetensors \
-            run/best.json run/model.safetensors run/model.json run/curves.png run/start.json; do
+        for f in eval-gpu eval-cpu; do
             [ -e "$f" ] && files+=("$f")
         done
-        tar czf "$out/results.tar.gz.tmp" "${files[@]}" && mv "$out/results.tar.gz.tmp" "$out/results.tar.gz"
+        for r in run run-b; do
+            for f in metrics.jsonl train_config.json best.safetensors best.json model.safetensors \
+                model.json curves.png start.json; do
+                [ -e "$r/$f" ] && files+=("$r/$f")
+            done
+        done
+        # Two runs may pack at once: each through its own temporary file.
+        local tmp="$out/results.tar.gz.$BASHPID"
+        tar czf "$tmp" "${files[@]}" && mv "$tmp" "$out/results.tar.gz"
     )
 }
 # Runs a command under a time limit, its output to the console and $work/logs/NAME.log, with the
@@ -173,16 +184,34 @@ if want train; then
     lr="${TRAIN_LR:-0.00001}"
     lr_low="${TRAIN_LR_LOW:-$(awk -v r="$lr" 'BEGIN { print r / 10 }')}"
     read -r -a extra <<<"${TRAIN_EXTRA:-}"
-    step train-cascade "${TRAIN_SECONDS:-180}" "$bin" train --preset cascade --context-pairs 2 \
-        --stage-gates on --zncc-cue on --coarse-distribution 2 --refine-distribution 1 \
-        --sky-weight 0.1 --convex-upsampling half \
-        --init "${TRAIN_INIT:-$root/models/omnimvs-cascade.safetensors}" \
-        --frozen-norm-stats on --select-by reference --optimizer adam --lr "$lr" \
-        --lr-low "$lr_low" --low-lr-epochs 3 \
-        --epochs 100 --max-steps "${STEPS_PER_EPOCH:-100}" --data "$sets" --val-frames "$val" \
-        --max-val-frames 16 --loader-threads "${LOADER_THREADS:-8}" "${extra[@]}" \
-        --seed 29 --photometric on "${window[@]}" --backend "$backend" --out "$work/run"
-    cat "$work/run/metrics.jsonl" 2>/dev/null | tail -n 20
+    threads="${LOADER_THREADS:-8}"
+    [ -n "${TRAIN_B_EXTRA:-}" ] && threads=$(((threads + 1) / 2))
+    # One training run (step NAME, folder RUN, more options after TRAIN_EXTRA's).
+    train_run() {
+        local name="$1" run="$2"
+        shift 2
+        step "$name" "${TRAIN_SECONDS:-180}" "$bin" train --preset cascade --context-pairs 2 \
+            --stage-gates on --zncc-cue on --coarse-distribution 2 --refine-distribution 1 \
+            --sky-weight 0.1 --convex-upsampling half \
+            --init "${TRAIN_INIT:-$root/models/omnimvs-cascade.safetensors}" \
+            --frozen-norm-stats on --select-by reference --optimizer adam --lr "$lr" \
+            --lr-low "$lr_low" --low-lr-epochs 3 \
+            --epochs "${TRAIN_EPOCHS:-100}" --max-steps "${STEPS_PER_EPOCH:-100}" --data "$sets" \
+            --val-frames "$val" --max-val-frames 16 --loader-threads "$threads" "${extra[@]}" \
+            "$@" --seed 29 --photometric on "${window[@]}" --backend "$backend" --out "$run"
+    }
+    b_pid=""
+    if [ -n "${TRAIN_B_EXTRA:-}" ]; then
+        read -r -a extra_b <<<"$TRAIN_B_EXTRA"
+        train_run train-cascade-b "$work/run-b" "${extra_b[@]}" &
+        b_pid=$!
+    fi
+    train_run train-cascade "$work/run"
+    [ -n "$b_pid" ] && wait "$b_pid"
+    for r in run run-b; do
+        [ -e "$work/$r/metrics.jsonl" ] && { echo "== $r"; tail -n 20 "$work/$r/metrics.jsonl"; }
+    done
+    pack
 fi
 
 if want paper; then

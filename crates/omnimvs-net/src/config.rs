@@ -161,6 +161,24 @@ pub struct CascadeParams {
     /// The half stage's first convolution grows by one channel per hypothesis.
     #[serde(default, skip_serializing_if = "is_false")]
     pub mid_cue_sgm: bool,
+    /// Per refinement stage (half, full resolution), the radius `r` of the neighbourhood of
+    /// centres its outermost hypotheses stretch to (`0`, and left out of the file: none, the
+    /// hypotheses are evenly spaced). With `r > 0` the lowest hypothesis of a pixel is the
+    /// lower of its own and the lowest centre of the `(2r + 1)^2` pixels around it, the highest
+    /// likewise: at a depth edge the centre (an upsampling) blends the two surfaces, and an
+    /// evenly spaced reach around it holds neither, where the neighbours' extremes are the two
+    /// surfaces. On things validation frames the better of a pixel's own answer and its 3 x 3
+    /// neighbourhood's lowest and highest would halve the network's error (stop 32). No weight
+    /// depends on it.
+    #[serde(default, skip_serializing_if = "is_zero_pair")]
+    pub neighbour_extremes: [usize; 2],
+}
+
+/// The largest radius of [`CascadeParams::neighbour_extremes`].
+pub const MAX_NEIGHBOUR_RADIUS: usize = 4;
+
+fn is_zero_pair(value: &[usize; 2]) -> bool {
+    *value == [0, 0]
 }
 
 fn one_usize() -> usize {
@@ -218,6 +236,7 @@ impl Default for CascadeParams {
             coarse_cue_depths: 1,
             coarse_cue_sgm: false,
             mid_cue_sgm: false,
+            neighbour_extremes: [0, 0],
         }
     }
 }
@@ -442,6 +461,18 @@ impl NetConfig {
                 format!("{} must be 1, 3 or 5", p.coarse_cue_depths),
             ));
         }
+        if p.neighbour_extremes
+            .iter()
+            .any(|&r| r > MAX_NEIGHBOUR_RADIUS)
+        {
+            return Err(invalid(
+                "cascade.neighbour_extremes",
+                format!(
+                    "{:?}: each radius must be at most {MAX_NEIGHBOUR_RADIUS} pixels",
+                    p.neighbour_extremes
+                ),
+            ));
+        }
         if p.coarse_cue_sgm && !p.zncc_cue {
             return Err(invalid(
                 "cascade.coarse_cue_sgm",
@@ -649,6 +680,16 @@ mod tests {
         let json = serde_json::to_string(&deep).unwrap();
         assert!(json.contains("\"mid_cue_sgm\":true"), "{json}");
         assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
+        // The stretch of the outermost hypotheses: off unless written, radii up to the limit.
+        assert!(!json.contains("neighbour_extremes"), "{json}");
+        deep.cascade.neighbour_extremes = [0, MAX_NEIGHBOUR_RADIUS];
+        deep.validate().unwrap();
+        let json = serde_json::to_string(&deep).unwrap();
+        assert!(json.contains("\"neighbour_extremes\":[0,4]"), "{json}");
+        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
+        deep.cascade.neighbour_extremes = [MAX_NEIGHBOUR_RADIUS + 1, 1];
+        let err = deep.validate().unwrap_err().to_string();
+        assert!(err.contains("cascade.neighbour_extremes"), "{err}");
         let mut wide = NetConfig::cascade();
         wide.cascade.feature_channels[2] = 128;
         let err = wide.validate().unwrap_err().to_string();

@@ -256,6 +256,7 @@ pub fn load_cascade_grown(
     shrunk.cascade.convex_upsampling_full = saved.cascade.convex_upsampling_full;
     // The refinement stages' hypothesis spacing: no weight depends on it.
     shrunk.cascade.stage_intervals = saved.cascade.stage_intervals;
+    shrunk.cascade.neighbour_extremes = saved.cascade.neighbour_extremes;
     // Nor on the grid the coarse cue is matched on.
     shrunk.cascade.coarse_cue_oversample = saved.cascade.coarse_cue_oversample;
     shrunk.cascade.coarse_cue_depths = saved.cascade.coarse_cue_depths;
@@ -276,7 +277,7 @@ pub fn load_cascade_grown(
              `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm` and \
              `convex_upsampling` switch on, \
              `convex_upsampling_full` switch either way, and the refinement stages' \
-             `stage_intervals`, `coarse_cue_oversample`, `coarse_cue_depths` and the loss \
+             `stage_intervals`, `neighbour_extremes`, `coarse_cue_oversample`, `coarse_cue_depths` and the loss \
              weights differ)",
         ));
     }

@@ -411,6 +411,33 @@ fn weights_load_into_a_network_of_another_refinement_spacing() {
         (a - 1.0).abs() < 1e-4 && (b - 1.5).abs() < 1e-4,
         "hypothesis spacing {a} and {b}"
     );
+
+    // Nor on the stretch of the outermost hypotheses to the neighbours' extremes: the same
+    // weights load, the middle hypotheses stay, the outermost reach at least as far, and
+    // farther somewhere (a tight spacing, so that the random network's smooth answer spreads
+    // wider over 5 x 5 pixels than the hypotheses do).
+    let mut tight = config.clone();
+    tight.cascade.stage_intervals[1] = 0.01;
+    let mut stretched = tight.clone();
+    stretched.cascade.neighbour_extremes = [0, 2];
+    let full_hypotheses = |c: &NetConfig| {
+        let loaded = weights::load_cascade_grown(&path, c, &device).unwrap();
+        assert_eq!(weight(&net), weight(&loaded));
+        let geometry = CascadeGeometry::new(&ds.rig, c, &hyps, &device).unwrap();
+        values(
+            loaded.forward(&inputs, &geometry).unwrap().stages[2]
+                .hypotheses
+                .clone(),
+        )
+    };
+    let (even, wide) = (full_hypotheses(&tight), full_hypotheses(&stretched));
+    let k = config.cascade.stage_hypotheses[1];
+    let (first, last) = ((0..plane), ((k - 1) * plane..k * plane));
+    assert_eq!(even[plane..(k - 1) * plane], wide[plane..(k - 1) * plane]);
+    assert!(first.clone().all(|i| wide[i] <= even[i]));
+    assert!(last.clone().all(|i| wide[i] >= even[i]));
+    let moved = first.chain(last).filter(|&i| wide[i] != even[i]).count();
+    assert!(moved > 0, "no outermost hypothesis moved");
 }
 
 #[test]

@@ -55,6 +55,11 @@ pub enum TrainParts {
     /// only the half stage's terms reach it (each stage's hypotheses are built from the
     /// previous answer without a gradient).
     Mid,
+    /// The cascade's full-resolution stage only: its regulariser and the projection of the
+    /// stride-2 features it alone reads (`out2`); every other weight and every batch-norm
+    /// statistic stays as loaded. Its loss is the whole network's, of which only the full
+    /// stage's terms reach it.
+    Fine,
 }
 
 /// Everything that decides a training run.

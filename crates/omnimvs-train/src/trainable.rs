@@ -88,12 +88,15 @@ pub trait Trainable: Module + Sized {
         match parts {
             TrainParts::All => Ok(self),
             TrainParts::Upsampling => Err(no_upsampling()),
-            TrainParts::Coarse | TrainParts::Mid => Err(TrainError::InvalidConfig {
-                field: "train_only",
-                message: "`coarse` and `mid` train a stage of the cascade; this network is not \
-                          a cascade"
-                    .into(),
-            }),
+            TrainParts::Coarse | TrainParts::Mid | TrainParts::Fine => {
+                Err(TrainError::InvalidConfig {
+                    field: "train_only",
+                    message:
+                        "`coarse`, `mid` and `fine` train a stage of the cascade; this network \
+                          is not a cascade"
+                            .into(),
+                })
+            }
         }
     }
 }
@@ -315,6 +318,28 @@ impl Trainable for CascadeNet {
                 self.features = self.features.no_grad();
                 self.coarse = self.coarse.no_grad();
                 self.fine = self.fine.no_grad();
+                self.up_mid = self.up_mid.no_grad();
+                self.up_fine = self.up_fine.no_grad();
+                Ok(self)
+            }
+            TrainParts::Fine => {
+                // The stride-2 projection feeds the full stage alone (and the full grid's
+                // selector, frozen here, when the network has one).
+                let f = self.features;
+                self.features = CascadeFeatures {
+                    conv0: f.conv0.no_grad(),
+                    conv2: f.conv2.no_grad(),
+                    down4: f.down4.no_grad(),
+                    res4: f.res4.no_grad(),
+                    out4: f.out4.no_grad(),
+                    down8: f.down8.no_grad(),
+                    res8: f.res8.no_grad(),
+                    ctx8: f.ctx8.no_grad(),
+                    out8: f.out8.no_grad(),
+                    ..f
+                };
+                self.coarse = self.coarse.no_grad();
+                self.mid = self.mid.no_grad();
                 self.up_mid = self.up_mid.no_grad();
                 self.up_fine = self.up_fine.no_grad();
                 Ok(self)

@@ -341,3 +341,40 @@ fn training_only_the_half_stage_moves_its_weights_and_nothing_else() {
     // The paper's network has no half stage to train alone.
     assert_the_paper_network_refuses(TrainParts::Mid, &device);
 }
+
+#[test]
+fn training_only_the_full_stage_moves_its_weights_and_nothing_else() {
+    let mut config = train_config(13);
+    config.net.cascade.convex_upsampling = true;
+    config.net.cascade.convex_upsampling_full = false;
+    // The full stage's outermost hypotheses reach the neighbours' extremes.
+    config.net.cascade.neighbour_extremes = [0, 1];
+    config.train_only = TrainParts::Fine;
+    let device = Device::flex();
+    let (mut learner, geometry, sample) = learner_on_sunny(&config);
+    // Frozen first: the stem, the stride-4 and stride-8 features, the coarse and half
+    // stages, the half grid's selector; then the full stage's own weights and the stride-2
+    // projection it reads.
+    let weights = |net: &CascadeNet| {
+        [
+            net.features.conv0.conv.weight.val(),
+            net.features.conv2.conv.weight.val(),
+            net.features.out4.conv.weight.val(),
+            net.features.out8.conv.weight.val(),
+            net.coarse.out.conv.weight.val(),
+            net.mid.convs[0].conv.weight.val(),
+            net.up_mid.as_ref().unwrap().out.weight.val(),
+            net.features.out2.conv.weight.val(),
+            net.fine.convs[0].conv.weight.val(),
+            net.fine.out.conv.weight.val(),
+        ]
+        .map(|t| read_values(t, "weights").unwrap())
+    };
+    let before = weights(&learner.net);
+    let (first, last) = first_and_last_loss(&mut learner, &sample, &geometry, 10);
+    assert_only_the_rest_moved(&before, &weights(&learner.net), 7, "full-stage");
+    assert!(last < first, "the loss did not fall: {first} -> {last}");
+
+    // The paper's network has no full stage to train alone.
+    assert_the_paper_network_refuses(TrainParts::Fine, &device);
+}

@@ -196,12 +196,20 @@ pub struct Args {
     /// No weight depends on it, so --init weights of another spacing load as they are.
     #[arg(long, value_parser = parse_intervals, conflicts_with = "resume")]
     pub stage_intervals: Option<[f64; 2]>,
+    /// Cascade: per refinement stage, the radius in pixels of the neighbourhood whose lowest
+    /// and highest centre the stage's outermost hypotheses stretch to, `HALF,FULL`
+    /// (`neighbour_extremes`; 0: evenly spaced hypotheses, as before). At a depth edge the
+    /// centre blends the two surfaces; the neighbours' extremes are the surfaces. No weight
+    /// depends on it, so --init weights without it load as they are.
+    #[arg(long, value_parser = parse_radii, conflicts_with = "resume")]
+    pub neighbour_extremes: Option<[usize; 2]>,
     /// Which weights the run trains (`train_only`): `all`; `upsampling`, the cascade's
     /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
     /// --init loaded it; a cheap step, the frozen stages need no backward pass); or `coarse`,
     /// the cascade's coarse stage alone (its stride-8 features and regulariser, trained by its
     /// own loss: a step runs no refinement stage; validation still scores the whole network);
-    /// or `mid`, the half-resolution stage's regulariser alone (the whole network runs).
+    /// or `mid`, the half-resolution stage's regulariser alone (the whole network runs); or
+    /// `fine`, the full-resolution stage's regulariser and the stride-2 projection it reads.
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub train_only: Option<PartsArg>,
     /// Stop after this many epochs of this invocation (the run continues with --resume).
@@ -467,6 +475,24 @@ pub enum PartsArg {
     Coarse,
     /// The cascade's half-resolution stage (its regulariser).
     Mid,
+    /// The cascade's full-resolution stage (its regulariser and the stride-2 projection).
+    Fine,
+}
+
+/// `--neighbour-extremes HALF,FULL`: two radii of at most
+/// [`omnimvs_net::config::MAX_NEIGHBOUR_RADIUS`].
+fn parse_radii(text: &str) -> Result<[usize; 2], String> {
+    let max = omnimvs_net::config::MAX_NEIGHBOUR_RADIUS;
+    let values: Vec<usize> = text
+        .split(',')
+        .map(|v| v.trim().parse::<usize>().map_err(|e| format!("{v:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match values[..] {
+        [half, full] if half <= max && full <= max => Ok([half, full]),
+        _ => Err(format!(
+            "expected HALF,FULL, two radii in pixels from 0 to {max} (e.g. 0,1), got {text:?}"
+        )),
+    }
 }
 
 /// `--stage-intervals HALF,FULL`: two positive finite spacings.
@@ -542,6 +568,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.sky_weight.is_some()
                 || args.convex_upsampling.is_some()
                 || args.stage_intervals.is_some()
+                || args.neighbour_extremes.is_some()
                 || args.coarse_feature_channels.is_some()
                 || args.coarse_cue_oversample.is_some()
                 || args.coarse_cue_depths.is_some()
@@ -552,7 +579,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                     bail!(
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                          --refine-distribution, --sky-weight, --convex-upsampling, \
-                         --stage-intervals, --coarse-feature-channels, \
+                         --stage-intervals, --neighbour-extremes, --coarse-feature-channels, \
                          --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
                          --mid-cue-sgm are options of --preset cascade"
                     );
@@ -572,6 +599,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(intervals) = args.stage_intervals {
                     net.cascade.stage_intervals = intervals;
+                }
+                if let Some(radii) = args.neighbour_extremes {
+                    net.cascade.neighbour_extremes = radii;
                 }
                 if let Some(factor) = args.coarse_cue_oversample {
                     net.cascade.coarse_cue_oversample = factor;
@@ -632,6 +662,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                     Some(PartsArg::Upsampling) => TrainParts::Upsampling,
                     Some(PartsArg::Coarse) => TrainParts::Coarse,
                     Some(PartsArg::Mid) => TrainParts::Mid,
+                    Some(PartsArg::Fine) => TrainParts::Fine,
                     Some(PartsArg::All) | None => TrainParts::All,
                 },
                 ..TrainConfig::default()

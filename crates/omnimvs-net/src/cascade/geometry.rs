@@ -16,7 +16,7 @@ use super::model::{
     upsampling_candidates,
 };
 use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
-use super::sampler::{PixelSampler, coarse_indices, hypotheses_around};
+use super::sampler::{PixelSampler, coarse_indices, hypotheses_around, stretch_to_neighbours};
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;
@@ -392,11 +392,19 @@ impl CascadeGeometry {
         }
         let p = &self.config.cascade;
         let k = p.stage_hypotheses[stage - 1];
-        let index = hypotheses_around(
+        let mut index = hypotheses_around(
             &center,
             k,
             p.stage_intervals[stage - 1],
             self.config.num_invdepth,
+        );
+        stretch_to_neighbours(
+            &mut index,
+            &center,
+            k,
+            [sampler.grid().height, cols.len()],
+            cols.len() == sampler.grid().width,
+            p.neighbour_extremes[stage - 1],
         );
         let mid_cue = match images {
             Some(pyramid) if stage == 1 && p.mid_cue_sgm => {
