@@ -172,6 +172,32 @@ pub struct CascadeParams {
     /// depends on it.
     #[serde(default, skip_serializing_if = "is_zero_pair")]
     pub neighbour_extremes: [usize; 2],
+    /// Per refinement stage (half, full resolution), the radius `r` of the neighbourhood whose
+    /// lowest and highest centre become two more hypotheses of the stage, after its evenly
+    /// spaced ones (`0`, and left out of the file: none). Unlike `neighbour_extremes` the
+    /// evenly spaced hypotheses stay as they are, so a network grown into them
+    /// ([`crate::cascade::CascadeNet::with_neighbour_hypotheses`]) starts near its answer
+    /// without them; the stage's convolutions read the two more hypotheses' evidence after
+    /// all of the others' and score them last. Not with `mid_cue_sgm` on the half stage.
+    #[serde(default, skip_serializing_if = "is_zero_pair")]
+    pub neighbour_hypotheses: [usize; 2],
+}
+
+impl CascadeParams {
+    /// The hypotheses per pixel of refinement stage `i` (0: half, 1: full resolution): the
+    /// evenly spaced ones and, with `neighbour_hypotheses`, the two neighbours' extremes.
+    pub fn stage_hypotheses_of(&self, i: usize) -> usize {
+        self.stage_hypotheses[i] + self.neighbour_count(i)
+    }
+
+    /// The hypotheses that `neighbour_hypotheses` adds to refinement stage `i`: 2 or 0.
+    pub fn neighbour_count(&self, i: usize) -> usize {
+        if self.neighbour_hypotheses[i] > 0 {
+            2
+        } else {
+            0
+        }
+    }
 }
 
 /// The largest radius of [`CascadeParams::neighbour_extremes`].
@@ -237,6 +263,7 @@ impl Default for CascadeParams {
             coarse_cue_sgm: false,
             mid_cue_sgm: false,
             neighbour_extremes: [0, 0],
+            neighbour_hypotheses: [0, 0],
         }
     }
 }
@@ -459,6 +486,24 @@ impl NetConfig {
             return Err(invalid(
                 "cascade.coarse_cue_depths",
                 format!("{} must be 1, 3 or 5", p.coarse_cue_depths),
+            ));
+        }
+        if p.neighbour_hypotheses
+            .iter()
+            .any(|&r| r > MAX_NEIGHBOUR_RADIUS)
+        {
+            return Err(invalid(
+                "cascade.neighbour_hypotheses",
+                format!(
+                    "{:?}: each radius must be at most {MAX_NEIGHBOUR_RADIUS} pixels",
+                    p.neighbour_hypotheses
+                ),
+            ));
+        }
+        if p.neighbour_hypotheses[0] > 0 && p.mid_cue_sgm {
+            return Err(invalid(
+                "cascade.neighbour_hypotheses",
+                "the half stage's cannot go with `mid_cue_sgm`".into(),
             ));
         }
         if p.neighbour_extremes
@@ -690,6 +735,25 @@ mod tests {
         deep.cascade.neighbour_extremes = [MAX_NEIGHBOUR_RADIUS + 1, 1];
         let err = deep.validate().unwrap_err().to_string();
         assert!(err.contains("cascade.neighbour_extremes"), "{err}");
+        deep.cascade.neighbour_extremes = [0, 0];
+        // Neighbour hypotheses: two more per stage, radii up to the limit, and not on the
+        // half stage beside its aggregated cue (`deep` has it).
+        assert!(!json.contains("neighbour_hypotheses"), "{json}");
+        assert_eq!(deep.cascade.stage_hypotheses_of(1), 5);
+        deep.cascade.neighbour_hypotheses = [0, 3];
+        deep.validate().unwrap();
+        assert_eq!(deep.cascade.stage_hypotheses_of(1), 7);
+        assert_eq!(deep.cascade.stage_hypotheses_of(0), 8);
+        let json = serde_json::to_string(&deep).unwrap();
+        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
+        deep.cascade.neighbour_hypotheses = [1, 0];
+        let err = deep.validate().unwrap_err().to_string();
+        assert!(err.contains("cascade.neighbour_hypotheses"), "{err}");
+        deep.cascade.mid_cue_sgm = false;
+        deep.validate().unwrap();
+        deep.cascade.neighbour_hypotheses = [0, MAX_NEIGHBOUR_RADIUS + 1];
+        let err = deep.validate().unwrap_err().to_string();
+        assert!(err.contains("cascade.neighbour_hypotheses"), "{err}");
         let mut wide = NetConfig::cascade();
         wide.cascade.feature_channels[2] = 128;
         let err = wide.validate().unwrap_err().to_string();

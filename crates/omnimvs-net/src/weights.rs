@@ -260,6 +260,8 @@ pub fn load_cascade_grown(
     // Nor on the grid the coarse cue is matched on.
     shrunk.cascade.coarse_cue_oversample = saved.cascade.coarse_cue_oversample;
     shrunk.cascade.coarse_cue_depths = saved.cascade.coarse_cue_depths;
+    // Neighbour hypotheses may switch on (CascadeNet::with_neighbour_hypotheses).
+    shrunk.cascade.neighbour_hypotheses = saved.cascade.neighbour_hypotheses;
     // The stride-8 features may widen (CascadeFeatures::widen8).
     shrunk.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
@@ -268,14 +270,22 @@ pub fn load_cascade_grown(
         && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
         && (!saved.cascade.coarse_cue_sgm || config.cascade.coarse_cue_sgm)
         && (!saved.cascade.mid_cue_sgm || config.cascade.mid_cue_sgm)
-        && (!saved.cascade.convex_upsampling || config.cascade.convex_upsampling);
+        && (!saved.cascade.convex_upsampling || config.cascade.convex_upsampling)
+        && (0..2).all(|i| {
+            let (had, has) = (
+                saved.cascade.neighbour_count(i),
+                config.cascade.neighbour_count(i),
+            );
+            has >= had && (had == 0 || saved.cascade.zncc_cue == config.cascade.zncc_cue)
+        });
     if shrunk != saved || !grows {
         return Err(weights_error(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
              (only `context_pairs` and the stride-8 `feature_channels` may grow, \
-             `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm` and \
-             `convex_upsampling` switch on, \
+             `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm`, \
+             `neighbour_hypotheses` and `convex_upsampling` switch on (the cue not after \
+             neighbour hypotheses), \
              `convex_upsampling_full` switch either way, and the refinement stages' \
              `stage_intervals`, `neighbour_extremes`, `coarse_cue_oversample`, `coarse_cue_depths` and the loss \
              weights differ)",
@@ -302,6 +312,7 @@ pub fn load_cascade_grown(
     without_cue.cascade.coarse_cue_sgm = saved.cascade.coarse_cue_sgm;
     without_cue.cascade.mid_cue_sgm = saved.cascade.mid_cue_sgm;
     without_cue.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
+    without_cue.cascade.neighbour_hypotheses = saved.cascade.neighbour_hypotheses;
     let dropped = |p: &str| saved_fine && !fine && p.starts_with("up_fine.");
     let net = apply_file_except(
         CascadeNet::new(&without_cue, device)?,
@@ -324,7 +335,11 @@ pub fn load_cascade_grown(
     } else {
         net
     };
-    net.with_coarse_feature_channels(config.cascade.feature_channels[2])
+    let mut net = net.with_coarse_feature_channels(config.cascade.feature_channels[2])?;
+    for (i, &radius) in config.cascade.neighbour_hypotheses.iter().enumerate() {
+        net = net.with_neighbour_hypotheses(i + 1, radius)?;
+    }
+    Ok(net)
 }
 
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes

@@ -665,3 +665,97 @@ fn a_network_grows_into_the_half_stage_aggregated_cue_unchanged_and_learns_it() 
         .to_string();
     assert!(err.contains("mid_cue_sgm"), "{err}");
 }
+
+#[test]
+fn a_network_grows_into_neighbour_hypotheses_near_its_answer_and_learns_them() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let device = Device::flex();
+    let mut cued = micro_config();
+    cued.cascade.zncc_cue = true;
+    let mut grown = cued.clone();
+    grown.cascade.neighbour_hypotheses = [1, 2];
+    let small = CascadeNet::new(&cued, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("small.safetensors");
+    weights::save_module(&small, &cued, &path).unwrap();
+    let big = weights::load_cascade_grown(&path, &grown, &device).unwrap();
+    assert_eq!(big.config, grown);
+    // Each refinement stage reads the evidence of two more hypotheses (groups, visibility
+    // and cue for each) and scores two more, as a network built with them does.
+    let [_, mid, fine] = first_inputs(&small);
+    let [g0, g1] = [cued.cascade.groups[0], cued.cascade.groups[1]];
+    assert_eq!(
+        first_inputs(&big),
+        [
+            first_inputs(&small)[0],
+            mid + 2 * (g1 + 2),
+            fine + 2 * (g0 + 2)
+        ]
+    );
+    assert_eq!(
+        first_inputs(&CascadeNet::new(&grown, &device).unwrap()),
+        first_inputs(&big)
+    );
+    let [k1, k0] = cued.cascade.stage_hypotheses;
+    assert_eq!(big.mid.out.conv.weight.dims()[0], k1 + 2);
+    assert_eq!(big.fine.out.conv.weight.dims()[0], k0 + 2);
+
+    let tensors = images(&cued, &device);
+    let plain = CascadeGeometry::new(&ds.rig, &cued, &hyps, &device).unwrap();
+    let with = CascadeGeometry::new(&ds.rig, &grown, &hyps, &device).unwrap();
+    let before = small.forward(&tensors, &plain).unwrap();
+    let after = big.forward(&tensors, &with).unwrap();
+    let values = |t: burn::tensor::Tensor<4>| read_values(t, "values").unwrap();
+    // The coarse stage is the same; the half stage's hypotheses are its evenly spaced ones
+    // and then the lowest and highest centre of the 3 x 3 pixels around (the centres, the
+    // learnt upsampling's, are the same too), and the two start with little weight.
+    assert_eq!(
+        read_values(before.stages[0].index.clone(), "coarse").unwrap(),
+        read_values(after.stages[0].index.clone(), "coarse").unwrap()
+    );
+    let (even, all) = (
+        values(before.stages[1].hypotheses.clone()),
+        values(after.stages[1].hypotheses.clone()),
+    );
+    let pixels = even.len() / k1;
+    assert_eq!(all.len(), (k1 + 2) * pixels);
+    assert_eq!(even[..], all[..k1 * pixels]);
+    let [h, w] = grown.cascade_sizes()[1];
+    let centre = match after.upsampled[0].clone() {
+        Some(learnt) => read_values(learnt, "centres").unwrap(),
+        None => omnimvs_sweep::resample_map(
+            &read_values(after.stages[0].index.clone(), "coarse").unwrap(),
+            with.samplers[0].grid(),
+            with.samplers[1].grid(),
+        ),
+    };
+    let (low, high) = omnimvs_net::cascade::sampler::neighbour_min_max(&centre, [h, w], true, 1);
+    assert_eq!(all[k1 * pixels..(k1 + 1) * pixels], low[..]);
+    assert_eq!(all[(k1 + 1) * pixels..], high[..]);
+    let prob = values(after.stages[1].prob.clone());
+    let new_share = prob[k1 * pixels..].iter().sum::<f32>() / pixels as f32;
+    assert!(
+        new_share < 0.05,
+        "the new hypotheses start with {new_share} of the weight"
+    );
+    // The grown file loads as it is, and not into the network it grew from.
+    let big_path = dir.path().join("big.safetensors");
+    weights::save_module(&big, &grown, &big_path).unwrap();
+    assert_eq!(
+        weights::load_cascade(&big_path, &device).unwrap().config,
+        grown
+    );
+    assert!(weights::load_cascade_grown(&big_path, &cued, &device).is_err());
+    // Nor can they be taken out of a network that has them.
+    assert!(big.with_neighbour_hypotheses(1, 0).is_err());
+
+    // The new inputs of both stages get gradients.
+    let autodiff = Device::flex().autodiff();
+    let net = weights::load_cascade_grown(&path, &grown, &autodiff).unwrap();
+    let geometry = CascadeGeometry::new(&ds.rig, &grown, &hyps, &autodiff).unwrap();
+    let out = net.forward(&images(&grown, &autodiff), &geometry).unwrap();
+    let grads = GradientsParams::from_grads(pull_to_ten(out).backward(), &net);
+    assert_new_inputs_learn(&grads, &net.mid.convs[0].conv, 2 * (g1 + 2), "mid");
+    assert_new_inputs_learn(&grads, &net.fine.convs[0].conv, 2 * (g0 + 2), "fine");
+}

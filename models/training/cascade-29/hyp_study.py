@@ -53,3 +53,31 @@ for name, r in rows.items():
 allr = np.concatenate([np.concatenate(r, 1) for r in rows.values()], 1)
 print(f"  all  answer {allr[0].mean():.3f}  oracle {allr[1].mean():.3f}  argmax {allr[2].mean():.3f}"
       f"  centre {allr[3].mean():.3f}")
+
+# Where the truth lies around a pixel in the earlier stages' answers: per output pixel, the
+# best of the (2r + 1)^2 coarse (or half-grid) answers around its parent (rows clamp, columns
+# wrap), near an edge (< 4 px) and over all pixels.
+print("the best of the earlier stages' answers around each pixel's parent: MAE, share within 1 "
+      "and within 3 of the truth")
+for name, scale in (("coarse", 4), ("half", 2)):
+    for r in (0, 1, 2):
+        found = {"near": [], "all": []}
+        for f in range(a, b + 1):
+            shapes = json.load(open(f"{d}/{f:05d}.json"))
+            get = lambda n: np.fromfile(f"{d}/{f:05d}_{n}.f32", "<f4").reshape(shapes[n])  # noqa: E731
+            gt, valid = get("gt"), get("valid") > 0.5
+            ok = valid & (gt > 0)
+            near = ok & (edge_distance(gt, valid) < 4)
+            m = get(name)
+            best = np.full(gt.shape, np.inf)
+            for dy in range(-r, r + 1):
+                rows_ = np.clip(np.arange(m.shape[0]) + dy, 0, m.shape[0] - 1)
+                for dx in range(-r, r + 1):
+                    s = np.roll(m[rows_], -dx, axis=1)
+                    best = np.minimum(best, np.abs(np.kron(s, np.ones((scale, scale))) - gt))
+            found["near"].append(best[near])
+            found["all"].append(best[ok])
+        for cls, v in found.items():
+            v = np.concatenate(v)
+            print(f"  {name:6} {2 * r + 1}x{2 * r + 1} {cls:4}  MAE {v.mean():6.2f}  within1 "
+                  f"{100 * (v <= 1).mean():5.1f} %  within3 {100 * (v <= 3).mean():5.1f} %")

@@ -203,6 +203,13 @@ pub struct Args {
     /// depends on it, so --init weights without it load as they are.
     #[arg(long, value_parser = parse_radii, conflicts_with = "resume")]
     pub neighbour_extremes: Option<[usize; 2]>,
+    /// Cascade: per refinement stage, the radius in pixels of the neighbourhood whose lowest
+    /// and highest centre become two more hypotheses of the stage, after its evenly spaced
+    /// ones, `HALF,FULL` (`neighbour_hypotheses`; 0: none). --init weights without them grow
+    /// into them: the stage reads and scores them with zero weights (a low starting score),
+    /// so training starts near the loaded network's answer.
+    #[arg(long, value_parser = parse_radii, conflicts_with = "resume")]
+    pub neighbour_hypotheses: Option<[usize; 2]>,
     /// Which weights the run trains (`train_only`): `all`; `upsampling`, the cascade's
     /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
     /// --init loaded it; a cheap step, the frozen stages need no backward pass); or `coarse`,
@@ -569,6 +576,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.convex_upsampling.is_some()
                 || args.stage_intervals.is_some()
                 || args.neighbour_extremes.is_some()
+                || args.neighbour_hypotheses.is_some()
                 || args.coarse_feature_channels.is_some()
                 || args.coarse_cue_oversample.is_some()
                 || args.coarse_cue_depths.is_some()
@@ -579,7 +587,8 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                     bail!(
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                          --refine-distribution, --sky-weight, --convex-upsampling, \
-                         --stage-intervals, --neighbour-extremes, --coarse-feature-channels, \
+                         --stage-intervals, --neighbour-extremes, --neighbour-hypotheses, \
+                         --coarse-feature-channels, \
                          --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
                          --mid-cue-sgm are options of --preset cascade"
                     );
@@ -602,6 +611,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(radii) = args.neighbour_extremes {
                     net.cascade.neighbour_extremes = radii;
+                }
+                if let Some(radii) = args.neighbour_hypotheses {
+                    net.cascade.neighbour_hypotheses = radii;
                 }
                 if let Some(factor) = args.coarse_cue_oversample {
                     net.cascade.coarse_cue_oversample = factor;

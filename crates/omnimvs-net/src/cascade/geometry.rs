@@ -16,7 +16,9 @@ use super::model::{
     upsampling_candidates,
 };
 use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
-use super::sampler::{PixelSampler, coarse_indices, hypotheses_around, stretch_to_neighbours};
+use super::sampler::{
+    PixelSampler, coarse_indices, hypotheses_around, neighbour_min_max, stretch_to_neighbours,
+};
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;
@@ -391,21 +393,31 @@ impl CascadeGeometry {
             });
         }
         let p = &self.config.cascade;
-        let k = p.stage_hypotheses[stage - 1];
+        let even = p.stage_hypotheses[stage - 1];
+        let k = p.stage_hypotheses_of(stage - 1);
         let mut index = hypotheses_around(
             &center,
-            k,
+            even,
             p.stage_intervals[stage - 1],
             self.config.num_invdepth,
         );
+        let grid = [sampler.grid().height, cols.len()];
+        let wrap = cols.len() == sampler.grid().width;
         stretch_to_neighbours(
             &mut index,
             &center,
-            k,
-            [sampler.grid().height, cols.len()],
-            cols.len() == sampler.grid().width,
+            even,
+            grid,
+            wrap,
             p.neighbour_extremes[stage - 1],
         );
+        // Two more hypotheses, after the evenly spaced ones: the neighbours' extremes.
+        if k > even {
+            let radius = p.neighbour_hypotheses[stage - 1];
+            let (low, high) = neighbour_min_max(&center, grid, wrap, radius);
+            index.extend(low);
+            index.extend(high);
+        }
         let mid_cue = match images {
             Some(pyramid) if stage == 1 && p.mid_cue_sgm => {
                 Some(self.mid_cue(pyramid, &index, k, &cols)?)

@@ -724,16 +724,16 @@ impl CascadeNet {
                 device,
             ),
             mid: StageRegularizer::new(
-                (p.groups[1] + extra + usize::from(p.mid_cue_sgm)) * p.stage_hypotheses[0],
+                (p.groups[1] + extra + usize::from(p.mid_cue_sgm)) * p.stage_hypotheses_of(0),
                 p.stage_channels[0],
-                p.stage_hypotheses[0],
+                p.stage_hypotheses_of(0),
                 p.stage_gates,
                 device,
             ),
             fine: StageRegularizer::new(
-                (p.groups[0] + extra) * p.stage_hypotheses[1],
+                (p.groups[0] + extra) * p.stage_hypotheses_of(1),
                 p.stage_channels[1],
-                p.stage_hypotheses[1],
+                p.stage_hypotheses_of(1),
                 p.stage_gates,
                 device,
             ),
@@ -845,6 +845,57 @@ impl CascadeNet {
         *flag(&mut config.cascade) = true;
         config.validate()?;
         append_zero_inputs(first(&mut self), k(&config.cascade));
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with the two neighbour hypotheses of refinement stage `stage` (1: half,
+    /// 2: full resolution) within `radius` pixels (`neighbour_hypotheses`): the stage's first
+    /// convolution reads their evidence (after all of the evenly spaced hypotheses') with zero
+    /// weights, and its scoring convolution scores them with zero weights and a bias of
+    /// [`NEW_HYPOTHESIS_LOGIT`], so the network answers nearly as before (the two hold a small
+    /// share of each pixel's weight) until training moves them. A stage that has them already
+    /// takes the new radius.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] for another stage, a radius of 0 for a stage that has them,
+    /// or when the configuration with them is not valid.
+    pub fn with_neighbour_hypotheses(
+        mut self,
+        stage: usize,
+        radius: usize,
+    ) -> Result<Self, NetError> {
+        if !(1..=2).contains(&stage) {
+            return Err(NetError::InvalidConfig {
+                field: "neighbour_hypotheses",
+                message: format!("stage {stage}: the refinement stages are 1 and 2"),
+            });
+        }
+        let i = stage - 1;
+        let mut config = self.config.clone();
+        let had = config.cascade.neighbour_count(i) > 0;
+        config.cascade.neighbour_hypotheses[i] = radius;
+        config.validate()?;
+        if had && radius == 0 {
+            return Err(NetError::InvalidConfig {
+                field: "neighbour_hypotheses",
+                message: format!("stage {stage} has them already; they cannot be taken out"),
+            });
+        }
+        if !had && radius > 0 {
+            let p = &config.cascade;
+            let channels = p.groups[2 - stage]
+                + 1
+                + usize::from(p.zncc_cue)
+                + usize::from(stage == 1 && p.mid_cue_sgm);
+            let regularizer = if stage == 1 {
+                &mut self.mid
+            } else {
+                &mut self.fine
+            };
+            append_zero_inputs(&mut regularizer.convs[0].conv, 2 * channels);
+            append_zero_outputs(&mut regularizer.out.conv, 2, NEW_HYPOTHESIS_LOGIT);
+        }
         self.config = config;
         Ok(self)
     }
@@ -1097,7 +1148,37 @@ impl CascadeNet {
         let channels = 1 + usize::from(level == 1 && self.config.cascade.mid_cue_sgm);
         let volume = self.with_cue(volume, taps.cue.clone(), taps, channels)?;
         let regularizer = if level == 1 { &self.mid } else { &self.fine };
-        Ok(regularizer.forward(fold_volume(volume))) // [B, K, H, W]
+        // The neighbour hypotheses' evidence after all of the evenly spaced ones'.
+        let extra = self.config.cascade.neighbour_count(1 - level);
+        let folded = if extra > 0 {
+            let [_, _, k, _, _] = volume.dims();
+            let even = volume.clone().narrow(2, 0, k - extra);
+            let neighbours = volume.narrow(2, k - extra, extra);
+            Tensor::cat(vec![fold_volume(even), fold_volume(neighbours)], 1)
+        } else {
+            fold_volume(volume)
+        };
+        Ok(regularizer.forward(folded)) // [B, K, H, W]
+    }
+}
+
+/// The starting score of a hypothesis a grown stage adds ([`CascadeNet::with_neighbour_hypotheses`]):
+/// low enough that the stage starts near its answer without it, high enough for training to
+/// reach it (as `UNUSED_TAP_LOGIT` for the upsampling's candidates).
+pub const NEW_HYPOTHESIS_LOGIT: f32 = -5.0;
+
+/// `conv` writing `k` more output channels, after its own, with zero weights and `bias`.
+fn append_zero_outputs(conv: &mut Conv2d, k: usize, bias: f32) {
+    let weight = conv.weight.val(); // [C_out, C_in, kh, kw]
+    let [_, c_in, kh, kw] = weight.dims();
+    let device = weight.device();
+    let zeros = Tensor::zeros([k, c_in, kh, kw], &device);
+    conv.weight = Param::from_tensor(Tensor::cat(vec![weight, zeros], 0).detach());
+    if let Some(b) = conv.bias.take() {
+        let new = Tensor::<1>::full([k], bias, &device);
+        conv.bias = Some(Param::from_tensor(
+            Tensor::cat(vec![b.val(), new], 0).detach(),
+        ));
     }
 }
 

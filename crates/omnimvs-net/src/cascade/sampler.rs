@@ -189,24 +189,17 @@ pub fn hypotheses_around(center: &[f32], k: usize, interval: f64, num_invdepth: 
     out
 }
 
-/// Stretches the outermost of `k` hypotheses per pixel (`index[j * pixels + pixel]`, as
-/// [`hypotheses_around`] makes them) to the lowest and highest of `center` (`[rows * cols]`)
-/// over the `(2 radius + 1)^2` pixels around each pixel: the first becomes the lower of itself
-/// and that minimum, the last the higher of itself and that maximum. Columns wrap around when
-/// `wrap` (a whole panorama), else the neighbourhood stops at the first and last column (a
-/// training window). `radius` 0 or `k < 2` leaves the hypotheses as they are.
-pub fn stretch_to_neighbours(
-    index: &mut [f32],
+/// The lowest and highest of `center` (`[rows * cols]`) over the `(2 radius + 1)^2` pixels
+/// around each pixel. Columns wrap around when `wrap` (a whole panorama), else the
+/// neighbourhood stops at the first and last column (a training window); rows stop at the
+/// first and last row.
+pub fn neighbour_min_max(
     center: &[f32],
-    k: usize,
     [rows, cols]: [usize; 2],
     wrap: bool,
     radius: usize,
-) {
+) -> (Vec<f32>, Vec<f32>) {
     let pixels = rows * cols;
-    if radius == 0 || k < 2 || pixels == 0 || center.len() != pixels || index.len() != k * pixels {
-        return;
-    }
     // Separable: along each row, then along each column of the row results.
     let mut row_min = vec![0f32; pixels];
     let mut row_max = vec![0f32; pixels];
@@ -232,8 +225,8 @@ pub fn stretch_to_neighbours(
             row_max[y * cols + x] = hi;
         }
     }
-    let (first, rest) = index.split_at_mut(pixels);
-    let last = &mut rest[(k - 2) * pixels..];
+    let mut low = vec![0f32; pixels];
+    let mut high = vec![0f32; pixels];
     for y in 0..rows {
         let y0 = y.saturating_sub(radius);
         let y1 = (y + radius).min(rows - 1);
@@ -243,10 +236,36 @@ pub fn stretch_to_neighbours(
                 lo = lo.min(row_min[yy * cols + x]);
                 hi = hi.max(row_max[yy * cols + x]);
             }
-            let i = y * cols + x;
-            first[i] = first[i].min(lo);
-            last[i] = last[i].max(hi);
+            low[y * cols + x] = lo;
+            high[y * cols + x] = hi;
         }
+    }
+    (low, high)
+}
+
+/// Stretches the outermost of `k` hypotheses per pixel (`index[j * pixels + pixel]`, as
+/// [`hypotheses_around`] makes them) to the lowest and highest of `center` (`[rows * cols]`)
+/// over the `(2 radius + 1)^2` pixels around each pixel ([`neighbour_min_max`]): the first
+/// becomes the lower of itself and that minimum, the last the higher of itself and that
+/// maximum. `radius` 0 or `k < 2` leaves the hypotheses as they are.
+pub fn stretch_to_neighbours(
+    index: &mut [f32],
+    center: &[f32],
+    k: usize,
+    grid: [usize; 2],
+    wrap: bool,
+    radius: usize,
+) {
+    let pixels = grid[0] * grid[1];
+    if radius == 0 || k < 2 || pixels == 0 || center.len() != pixels || index.len() != k * pixels {
+        return;
+    }
+    let (low, high) = neighbour_min_max(center, grid, wrap, radius);
+    let (first, rest) = index.split_at_mut(pixels);
+    let last = &mut rest[(k - 2) * pixels..];
+    for i in 0..pixels {
+        first[i] = first[i].min(low[i]);
+        last[i] = last[i].max(high[i]);
     }
 }
 
