@@ -2,7 +2,8 @@
 //! per frame, `FRAME_<name>.f32` raw little-endian `f32` files and one `FRAME.json` with their
 //! shapes: the coarse, half- and full-resolution index maps (`coarse`, `half`, `full`), the full
 //! stage's hypotheses and its distribution over them (`full_hyp`, `full_prob`, `[K, H, W]`), and
-//! the ground truth on the output grid (`gt`, with `valid` as 0 / 1).
+//! the ground truth on the output grid (`gt`, with `valid` as 0 / 1); `full_even` in the JSON is
+//! how many of the full stage's hypotheses are evenly spaced (the first ones).
 //!
 //! `cargo run --release -p omnimvs-train --example cascade_dump -- WEIGHTS DATASET A B OUT [HALF,FULL]`
 //!
@@ -80,6 +81,12 @@ fn main() {
             "valid",
             gt.valid.iter().map(|&v| f32::from(u8::from(v))).collect(),
             vec![gt.height, gt.width],
+        );
+        // How many of the full stage's hypotheses are the evenly spaced ones (the rest are
+        // the neighbours' extremes, `neighbour_hypotheses`).
+        shapes.insert(
+            "full_even".into(),
+            serde_json::json!(config.cascade.stage_hypotheses[1]),
         );
         let json = serde_json::to_string_pretty(&serde_json::Value::Object(shapes)).unwrap();
         write_atomic(&out.join(format!("{frame:05}.json")), json.as_bytes()).unwrap();

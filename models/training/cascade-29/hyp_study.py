@@ -24,7 +24,9 @@ for f in range(a, b + 1):
     gt, valid = get("gt"), get("valid") > 0.5
     full, hyp, prob = get("full"), get("full_hyp"), get("full_prob")
     half = get("half")
-    centre = hyp[len(hyp) // 2]
+    # The centre: the middle of the evenly spaced hypotheses (the first `full_even`; dumps
+    # before it had only those).
+    centre = hyp[shapes.get("full_even", len(hyp)) // 2]
     ok = valid & (gt > 0)
     dist = edge_distance(gt, valid)
     err_h = np.abs(hyp - gt[None])                   # [K, H, W]
@@ -33,23 +35,26 @@ for f in range(a, b + 1):
     p_best = np.take_along_axis(prob, near_k[None], 0)[0]
     arg = np.take_along_axis(hyp, prob.argmax(0)[None], 0)[0]
     half_up = np.kron(half, np.ones((2, 2)))         # nearest parent, for the half stage's error
+    extra = prob[shapes.get("full_even", len(hyp)):].sum(0)  # weight on neighbour hypotheses
     for name, m in (("near", dist < 4), ("mid", (dist >= 4) & (dist < 16)), ("far", dist >= 16)):
         m = m & ok
         rows[name].append(np.stack([
             np.abs(full - gt)[m], best[m], np.abs(arg - gt)[m], np.abs(centre - gt)[m],
             p_best[m], (best[m] <= 1.0), np.abs(half_up - gt)[m],
-            (hyp[-1] - hyp[0])[m]]))
+            (hyp.max(0) - hyp.min(0))[m], extra[m]]))
 print(f"{label}: frames {a}-{b}; per pixel class: share, MAE of the answer, of the best "
       "hypothesis (oracle), of the most probable one, of the centre, of the half stage (nearest "
       "parent); share with a hypothesis within 1 of the truth; mean probability on the nearest "
-      "hypothesis; mean span of the hypotheses")
+      "hypothesis; mean span of the hypotheses; mean weight on the neighbour hypotheses "
+      "(`neighbour_hypotheses`, 0 without)")
 total = sum(np.concatenate(r, 1).shape[1] for r in rows.values())
 for name, r in rows.items():
     r = np.concatenate(r, 1)
     n = r.shape[1]
     print(f"  {name:4} {100 * n / total:5.1f} %  answer {r[0].mean():6.2f}  oracle {r[1].mean():6.2f}"
           f"  argmax {r[2].mean():6.2f}  centre {r[3].mean():6.2f}  half {r[6].mean():6.2f}"
-          f"  within1 {100 * r[5].mean():5.1f} %  p(nearest) {r[4].mean():.3f}  span {r[7].mean():5.2f}")
+          f"  within1 {100 * r[5].mean():5.1f} %  p(nearest) {r[4].mean():.3f}  span {r[7].mean():5.2f}"
+          f"  p(neighbour hypotheses) {r[8].mean():.3f}")
 allr = np.concatenate([np.concatenate(r, 1) for r in rows.values()], 1)
 print(f"  all  answer {allr[0].mean():.3f}  oracle {allr[1].mean():.3f}  argmax {allr[2].mean():.3f}"
       f"  centre {allr[3].mean():.3f}")
