@@ -181,6 +181,27 @@ pub struct CascadeParams {
     /// all of the others' and score them last. Not with `mid_cue_sgm` on the half stage.
     #[serde(default, skip_serializing_if = "is_zero_pair")]
     pub neighbour_hypotheses: [usize; 2],
+    /// Training only: the starting score (logit) of the two neighbour hypotheses when a
+    /// trained stage grows into them ([`crate::cascade::CascadeNet::with_neighbour_hypotheses`];
+    /// the evenly spaced ones' scores are near 0). `-5` (and left out of the file): they start
+    /// with under 1 % of each pixel's weight, the grown network at the answer it had, and the
+    /// softmax passes them little gradient; higher, they start with more of both.
+    #[serde(
+        default = "default_neighbour_start_score",
+        skip_serializing_if = "is_default_neighbour_start_score"
+    )]
+    pub neighbour_start_score: f64,
+}
+
+/// The default of [`CascadeParams::neighbour_start_score`].
+pub const DEFAULT_NEIGHBOUR_START_SCORE: f64 = -5.0;
+
+fn default_neighbour_start_score() -> f64 {
+    DEFAULT_NEIGHBOUR_START_SCORE
+}
+
+fn is_default_neighbour_start_score(value: &f64) -> bool {
+    *value == DEFAULT_NEIGHBOUR_START_SCORE
 }
 
 impl CascadeParams {
@@ -264,6 +285,7 @@ impl Default for CascadeParams {
             mid_cue_sgm: false,
             neighbour_extremes: [0, 0],
             neighbour_hypotheses: [0, 0],
+            neighbour_start_score: DEFAULT_NEIGHBOUR_START_SCORE,
         }
     }
 }
@@ -498,6 +520,12 @@ impl NetConfig {
                     "{:?}: each radius must be at most {MAX_NEIGHBOUR_RADIUS} pixels",
                     p.neighbour_hypotheses
                 ),
+            ));
+        }
+        if !p.neighbour_start_score.is_finite() {
+            return Err(invalid(
+                "cascade.neighbour_start_score",
+                format!("{} must be finite", p.neighbour_start_score),
             ));
         }
         if p.neighbour_hypotheses[0] > 0 && p.mid_cue_sgm {
@@ -754,6 +782,16 @@ mod tests {
         deep.cascade.neighbour_hypotheses = [0, MAX_NEIGHBOUR_RADIUS + 1];
         let err = deep.validate().unwrap_err().to_string();
         assert!(err.contains("cascade.neighbour_hypotheses"), "{err}");
+        deep.cascade.neighbour_hypotheses = [0, 1];
+        // Their starting score: left out of the file at its default, finite.
+        assert!(!json.contains("neighbour_start_score"), "{json}");
+        deep.cascade.neighbour_start_score = -2.0;
+        let json = serde_json::to_string(&deep).unwrap();
+        assert!(json.contains("\"neighbour_start_score\":-2.0"), "{json}");
+        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
+        deep.cascade.neighbour_start_score = f64::NAN;
+        let err = deep.validate().unwrap_err().to_string();
+        assert!(err.contains("cascade.neighbour_start_score"), "{err}");
         let mut wide = NetConfig::cascade();
         wide.cascade.feature_channels[2] = 128;
         let err = wide.validate().unwrap_err().to_string();

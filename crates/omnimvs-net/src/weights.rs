@@ -247,6 +247,7 @@ pub fn load_cascade_grown(
     shrunk.cascade.coarse_distribution_weight = saved.cascade.coarse_distribution_weight;
     shrunk.cascade.refine_distribution_weight = saved.cascade.refine_distribution_weight;
     shrunk.cascade.sky_loss_weight = saved.cascade.sky_loss_weight;
+    shrunk.cascade.neighbour_start_score = saved.cascade.neighbour_start_score;
     shrunk.cascade.context_pairs = saved.cascade.context_pairs;
     shrunk.cascade.stage_gates = saved.cascade.stage_gates;
     shrunk.cascade.zncc_cue = saved.cascade.zncc_cue;

@@ -739,6 +739,20 @@ fn a_network_grows_into_neighbour_hypotheses_near_its_answer_and_learns_them() {
         new_share < 0.05,
         "the new hypotheses start with {new_share} of the weight"
     );
+    // A higher starting score gives them more.
+    let mut bolder = grown.clone();
+    bolder.cascade.neighbour_start_score = 0.0;
+    let bold = weights::load_cascade_grown(&path, &bolder, &device).unwrap();
+    let bold_prob = values(
+        bold.forward(&tensors, &with).unwrap().stages[1]
+            .prob
+            .clone(),
+    );
+    let bold_share = bold_prob[k1 * pixels..].iter().sum::<f32>() / pixels as f32;
+    assert!(
+        bold_share > 4.0 * new_share,
+        "{bold_share} against {new_share}"
+    );
     // The grown file loads as it is, and not into the network it grew from.
     let big_path = dir.path().join("big.safetensors");
     weights::save_module(&big, &grown, &big_path).unwrap();

@@ -210,6 +210,11 @@ pub struct Args {
     /// so training starts near the loaded network's answer.
     #[arg(long, value_parser = parse_radii, conflicts_with = "resume")]
     pub neighbour_hypotheses: Option<[usize; 2]>,
+    /// Cascade: the starting score of the neighbour hypotheses when --init weights grow into
+    /// them (`neighbour_start_score`; -5: under 1 % of each pixel's weight, and little
+    /// gradient; the evenly spaced hypotheses' scores are near 0).
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "resume")]
+    pub neighbour_start_score: Option<f64>,
     /// Which weights the run trains (`train_only`): `all`; `upsampling`, the cascade's
     /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
     /// --init loaded it; a cheap step, the frozen stages need no backward pass); or `coarse`,
@@ -577,6 +582,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.stage_intervals.is_some()
                 || args.neighbour_extremes.is_some()
                 || args.neighbour_hypotheses.is_some()
+                || args.neighbour_start_score.is_some()
                 || args.coarse_feature_channels.is_some()
                 || args.coarse_cue_oversample.is_some()
                 || args.coarse_cue_depths.is_some()
@@ -588,6 +594,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                          --refine-distribution, --sky-weight, --convex-upsampling, \
                          --stage-intervals, --neighbour-extremes, --neighbour-hypotheses, \
+                         --neighbour-start-score, \
                          --coarse-feature-channels, \
                          --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
                          --mid-cue-sgm are options of --preset cascade"
@@ -614,6 +621,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(radii) = args.neighbour_hypotheses {
                     net.cascade.neighbour_hypotheses = radii;
+                }
+                if let Some(score) = args.neighbour_start_score {
+                    net.cascade.neighbour_start_score = score;
                 }
                 if let Some(factor) = args.coarse_cue_oversample {
                     net.cascade.coarse_cue_oversample = factor;

@@ -853,8 +853,8 @@ impl CascadeNet {
     /// 2: full resolution) within `radius` pixels (`neighbour_hypotheses`): the stage's first
     /// convolution reads their evidence (after all of the evenly spaced hypotheses') with zero
     /// weights, and its scoring convolution scores them with zero weights and a bias of
-    /// [`NEW_HYPOTHESIS_LOGIT`], so the network answers nearly as before (the two hold a small
-    /// share of each pixel's weight) until training moves them. A stage that has them already
+    /// `neighbour_start_score` (by default -5: the network answers nearly as before, the two
+    /// holding a small share of each pixel's weight, until training moves them). A stage that has them already
     /// takes the new radius.
     ///
     /// # Errors
@@ -894,7 +894,8 @@ impl CascadeNet {
                 &mut self.fine
             };
             append_zero_inputs(&mut regularizer.convs[0].conv, 2 * channels);
-            append_zero_outputs(&mut regularizer.out.conv, 2, NEW_HYPOTHESIS_LOGIT);
+            let score = p.neighbour_start_score as f32;
+            append_zero_outputs(&mut regularizer.out.conv, 2, score);
         }
         self.config = config;
         Ok(self)
@@ -1161,11 +1162,6 @@ impl CascadeNet {
         Ok(regularizer.forward(folded)) // [B, K, H, W]
     }
 }
-
-/// The starting score of a hypothesis a grown stage adds ([`CascadeNet::with_neighbour_hypotheses`]):
-/// low enough that the stage starts near its answer without it, high enough for training to
-/// reach it (as `UNUSED_TAP_LOGIT` for the upsampling's candidates).
-pub const NEW_HYPOTHESIS_LOGIT: f32 = -5.0;
 
 /// `conv` writing `k` more output channels, after its own, with zero weights and `bias`.
 fn append_zero_outputs(conv: &mut Conv2d, k: usize, bias: f32) {
