@@ -193,6 +193,20 @@ pub struct CascadeParams {
     pub neighbour_start_score: f64,
 }
 
+/// Refuses radii (`neighbour_extremes`, `neighbour_hypotheses`) over
+/// [`MAX_NEIGHBOUR_RADIUS`], naming `field`.
+fn check_radii(field: &'static str, radii: [usize; 2]) -> Result<(), NetError> {
+    if radii.iter().any(|&r| r > MAX_NEIGHBOUR_RADIUS) {
+        return Err(NetError::InvalidConfig {
+            field,
+            message: format!(
+                "{radii:?}: each radius must be at most {MAX_NEIGHBOUR_RADIUS} pixels"
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// The default of [`CascadeParams::neighbour_start_score`].
 pub const DEFAULT_NEIGHBOUR_START_SCORE: f64 = -5.0;
 
@@ -510,18 +524,8 @@ impl NetConfig {
                 format!("{} must be 1, 3 or 5", p.coarse_cue_depths),
             ));
         }
-        if p.neighbour_hypotheses
-            .iter()
-            .any(|&r| r > MAX_NEIGHBOUR_RADIUS)
-        {
-            return Err(invalid(
-                "cascade.neighbour_hypotheses",
-                format!(
-                    "{:?}: each radius must be at most {MAX_NEIGHBOUR_RADIUS} pixels",
-                    p.neighbour_hypotheses
-                ),
-            ));
-        }
+        check_radii("cascade.neighbour_hypotheses", p.neighbour_hypotheses)?;
+        check_radii("cascade.neighbour_extremes", p.neighbour_extremes)?;
         if !p.neighbour_start_score.is_finite() {
             return Err(invalid(
                 "cascade.neighbour_start_score",
@@ -532,18 +536,6 @@ impl NetConfig {
             return Err(invalid(
                 "cascade.neighbour_hypotheses",
                 "the half stage's cannot go with `mid_cue_sgm`".into(),
-            ));
-        }
-        if p.neighbour_extremes
-            .iter()
-            .any(|&r| r > MAX_NEIGHBOUR_RADIUS)
-        {
-            return Err(invalid(
-                "cascade.neighbour_extremes",
-                format!(
-                    "{:?}: each radius must be at most {MAX_NEIGHBOUR_RADIUS} pixels",
-                    p.neighbour_extremes
-                ),
             ));
         }
         if p.coarse_cue_sgm && !p.zncc_cue {
