@@ -20,36 +20,79 @@
 /// Never for consistent sizes; `index.len() != height * width` is a caller's bug and panics.
 pub fn snap_edges(index: &mut [f32], height: usize, width: usize, threshold: f32) -> usize {
     assert_eq!(index.len(), height * width, "index map of {height}x{width}");
-    let before = index.to_vec();
+    let (low, high) = neighbour_min_max(index, [height, width], true, 1);
     let mut changed = 0;
-    for r in 0..height {
-        let rows = [r.saturating_sub(1), r, (r + 1).min(height - 1)];
-        for c in 0..width {
-            let v = before[r * width + c];
-            if !v.is_finite() {
-                continue;
-            }
-            let cols = [(c + width - 1) % width, c, (c + 1) % width];
-            let (mut lo, mut hi) = (v, v);
-            for &rr in &rows {
-                for &cc in &cols {
-                    let x = before[rr * width + cc];
-                    if x.is_finite() {
-                        lo = lo.min(x);
-                        hi = hi.max(x);
-                    }
-                }
-            }
-            if hi - lo > threshold {
-                let snapped = if v - lo < hi - v { lo } else { hi };
-                if snapped != v {
-                    index[r * width + c] = snapped;
-                    changed += 1;
-                }
+    for ((v, lo), hi) in index.iter_mut().zip(low).zip(high) {
+        // A finite value is in its own neighbourhood: lo <= v <= hi.
+        if v.is_finite() && hi - lo > threshold {
+            let snapped = if *v - lo < hi - *v { lo } else { hi };
+            if snapped != *v {
+                *v = snapped;
+                changed += 1;
             }
         }
     }
     changed
+}
+
+/// The lowest and highest finite value of a row-major `[rows, cols]` map over the
+/// `(2 radius + 1)^2` pixels around each pixel (infinity and minus infinity where there is
+/// none). Columns wrap around when `wrap` (a whole panorama), else the neighbourhood stops at
+/// the first and last column (a window of columns); rows stop at the first and last row.
+/// Separable: along each row, then along each column of the row results.
+///
+/// # Panics
+/// Never for consistent sizes; `map.len() != rows * cols` is a caller's bug and panics.
+pub fn neighbour_min_max(
+    map: &[f32],
+    [rows, cols]: [usize; 2],
+    wrap: bool,
+    radius: usize,
+) -> (Vec<f32>, Vec<f32>) {
+    let pixels = rows * cols;
+    assert_eq!(map.len(), pixels, "map of {rows}x{cols}");
+    let mut row_min = vec![0f32; pixels];
+    let mut row_max = vec![0f32; pixels];
+    let r = radius as isize;
+    for y in 0..rows {
+        let line = &map[y * cols..(y + 1) * cols];
+        for x in 0..cols {
+            let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+            for dx in -r..=r {
+                let at = x as isize + dx;
+                let at = if wrap {
+                    at.rem_euclid(cols as isize)
+                } else if (0..cols as isize).contains(&at) {
+                    at
+                } else {
+                    continue;
+                };
+                let v = line[at as usize];
+                if v.is_finite() {
+                    lo = lo.min(v);
+                    hi = hi.max(v);
+                }
+            }
+            row_min[y * cols + x] = lo;
+            row_max[y * cols + x] = hi;
+        }
+    }
+    let mut low = vec![0f32; pixels];
+    let mut high = vec![0f32; pixels];
+    for y in 0..rows {
+        let y0 = y.saturating_sub(radius);
+        let y1 = (y + radius).min(rows - 1);
+        for x in 0..cols {
+            let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+            for yy in y0..=y1 {
+                lo = lo.min(row_min[yy * cols + x]);
+                hi = hi.max(row_max[yy * cols + x]);
+            }
+            low[y * cols + x] = lo;
+            high[y * cols + x] = hi;
+        }
+    }
+    (low, high)
 }
 
 #[cfg(test)]
@@ -84,6 +127,19 @@ mod tests {
         let original = slope.clone();
         assert_eq!(snap_edges(&mut slope, 1, 12, 16.0), 0);
         assert_eq!(slope, original);
+    }
+
+    /// Radius 2 without wrapping stops at the first and last column; non-finite values are
+    /// not extremes, and a neighbourhood without a finite value has none.
+    #[test]
+    fn neighbourhood_extremes_skip_non_finite_values() {
+        let map = [1.0, f32::NAN, 5.0, f32::INFINITY, 3.0, f32::NAN];
+        let (low, high) = neighbour_min_max(&map, [1, 6], false, 2);
+        assert_eq!(low, [1.0, 1.0, 1.0, 3.0, 3.0, 3.0]);
+        assert_eq!(high, [5.0, 5.0, 5.0, 5.0, 5.0, 3.0]);
+        let (low, high) = neighbour_min_max(&[f32::NAN; 3], [3, 1], true, 1);
+        assert!(low.iter().all(|&v| v == f32::INFINITY));
+        assert!(high.iter().all(|&v| v == f32::NEG_INFINITY));
     }
 
     #[test]

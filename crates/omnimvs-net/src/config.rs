@@ -225,6 +225,16 @@ impl CascadeParams {
         self.stage_hypotheses[i] + self.neighbour_count(i)
     }
 
+    /// The input channels per hypothesis of refinement stage `i` (0: half, 1: full
+    /// resolution): its groups' correlations, the visibility, the photometric cue with
+    /// `zncc_cue`, and on the half stage the aggregated cue with `mid_cue_sgm`.
+    pub fn stage_evidence_channels(&self, i: usize) -> usize {
+        self.groups[1 - i]
+            + 1
+            + usize::from(self.zncc_cue)
+            + usize::from(i == 0 && self.mid_cue_sgm)
+    }
+
     /// The hypotheses that `neighbour_hypotheses` adds to refinement stage `i`: 2 or 0.
     pub fn neighbour_count(&self, i: usize) -> usize {
         if self.neighbour_hypotheses[i] > 0 {

@@ -286,10 +286,9 @@ pub fn load_cascade_grown(
              (only `context_pairs` and the stride-8 `feature_channels` may grow, \
              `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm`, \
              `neighbour_hypotheses` and `convex_upsampling` switch on (the cue not after \
-             neighbour hypotheses), \
-             `convex_upsampling_full` switch either way, and the refinement stages' \
-             `stage_intervals`, `neighbour_extremes`, `coarse_cue_oversample`, `coarse_cue_depths` and the loss \
-             weights differ)",
+             neighbour hypotheses), `convex_upsampling_full` switch either way, and the \
+             refinement stages' `stage_intervals`, `neighbour_extremes`, \
+             `coarse_cue_oversample`, `coarse_cue_depths` and the loss weights differ)",
         ));
     }
     let has_fine = |c: &NetConfig| c.cascade.convex_upsampling && c.cascade.convex_upsampling_full;

@@ -730,7 +730,7 @@ fn a_network_grows_into_neighbour_hypotheses_near_its_answer_and_learns_them() {
             with.samplers[1].grid(),
         ),
     };
-    let (low, high) = omnimvs_net::cascade::sampler::neighbour_min_max(&centre, [h, w], true, 1);
+    let (low, high) = omnimvs_data::edges::neighbour_min_max(&centre, [h, w], true, 1);
     assert_eq!(all[k1 * pixels..(k1 + 1) * pixels], low[..]);
     assert_eq!(all[(k1 + 1) * pixels..], high[..]);
     let prob = values(after.stages[1].prob.clone());

@@ -491,34 +491,44 @@ pub enum PartsArg {
     Fine,
 }
 
-/// `--neighbour-extremes HALF,FULL`: two radii of at most
+/// `HALF,FULL`: two values of `T`, each of which `ok` accepts; else the message `expected`
+/// (with the text given).
+fn parse_pair<T: std::str::FromStr + Copy>(
+    text: &str,
+    ok: impl Fn(T) -> bool,
+    expected: &str,
+) -> Result<[T; 2], String>
+where
+    T::Err: std::fmt::Display,
+{
+    let values: Vec<T> = text
+        .split(',')
+        .map(|v| v.trim().parse::<T>().map_err(|e| format!("{v:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match values[..] {
+        [half, full] if ok(half) && ok(full) => Ok([half, full]),
+        _ => Err(format!("expected HALF,FULL, {expected}, got {text:?}")),
+    }
+}
+
+/// `--neighbour-extremes` / `--neighbour-hypotheses HALF,FULL`: two radii of at most
 /// [`omnimvs_net::config::MAX_NEIGHBOUR_RADIUS`].
 fn parse_radii(text: &str) -> Result<[usize; 2], String> {
     let max = omnimvs_net::config::MAX_NEIGHBOUR_RADIUS;
-    let values: Vec<usize> = text
-        .split(',')
-        .map(|v| v.trim().parse::<usize>().map_err(|e| format!("{v:?}: {e}")))
-        .collect::<Result<_, _>>()?;
-    match values[..] {
-        [half, full] if half <= max && full <= max => Ok([half, full]),
-        _ => Err(format!(
-            "expected HALF,FULL, two radii in pixels from 0 to {max} (e.g. 0,1), got {text:?}"
-        )),
-    }
+    parse_pair(
+        text,
+        |r: usize| r <= max,
+        &format!("two radii in pixels from 0 to {max} (e.g. 0,1)"),
+    )
 }
 
 /// `--stage-intervals HALF,FULL`: two positive finite spacings.
 fn parse_intervals(text: &str) -> Result<[f64; 2], String> {
-    let values: Vec<f64> = text
-        .split(',')
-        .map(|v| v.trim().parse::<f64>().map_err(|e| format!("{v:?}: {e}")))
-        .collect::<Result<_, _>>()?;
-    match values[..] {
-        [half, full] if [half, full].iter().all(|v| v.is_finite() && *v > 0.0) => Ok([half, full]),
-        _ => Err(format!(
-            "expected HALF,FULL, two positive index spacings (e.g. 2.5,1.5), got {text:?}"
-        )),
-    }
+    parse_pair(
+        text,
+        |v: f64| v.is_finite() && v > 0.0,
+        "two positive index spacings (e.g. 2.5,1.5)",
+    )
 }
 
 pub fn run(args: &Args) -> Result<()> {

@@ -9,6 +9,7 @@ use std::time::Instant;
 use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::Rig;
+use omnimvs_data::edges::neighbour_min_max;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
 use super::model::{
@@ -16,9 +17,7 @@ use super::model::{
     upsampling_candidates,
 };
 use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
-use super::sampler::{
-    PixelSampler, coarse_indices, hypotheses_around, neighbour_min_max, stretch_to_neighbours,
-};
+use super::sampler::{PixelSampler, coarse_indices, hypotheses_around, stretch_to_neighbours};
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;

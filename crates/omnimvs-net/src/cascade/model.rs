@@ -724,14 +724,14 @@ impl CascadeNet {
                 device,
             ),
             mid: StageRegularizer::new(
-                (p.groups[1] + extra + usize::from(p.mid_cue_sgm)) * p.stage_hypotheses_of(0),
+                p.stage_evidence_channels(0) * p.stage_hypotheses_of(0),
                 p.stage_channels[0],
                 p.stage_hypotheses_of(0),
                 p.stage_gates,
                 device,
             ),
             fine: StageRegularizer::new(
-                (p.groups[0] + extra) * p.stage_hypotheses_of(1),
+                p.stage_evidence_channels(1) * p.stage_hypotheses_of(1),
                 p.stage_channels[1],
                 p.stage_hypotheses_of(1),
                 p.stage_gates,
@@ -854,8 +854,8 @@ impl CascadeNet {
     /// convolution reads their evidence (after all of the evenly spaced hypotheses') with zero
     /// weights, and its scoring convolution scores them with zero weights and a bias of
     /// `neighbour_start_score` (by default -5: the network answers nearly as before, the two
-    /// holding a small share of each pixel's weight, until training moves them). A stage that has them already
-    /// takes the new radius.
+    /// holding a small share of each pixel's weight, until training moves them). A stage that
+    /// has them already takes the new radius.
     ///
     /// # Errors
     /// [`NetError::InvalidConfig`] for another stage, a radius of 0 for a stage that has them,
@@ -884,10 +884,7 @@ impl CascadeNet {
         }
         if !had && radius > 0 {
             let p = &config.cascade;
-            let channels = p.groups[2 - stage]
-                + 1
-                + usize::from(p.zncc_cue)
-                + usize::from(stage == 1 && p.mid_cue_sgm);
+            let channels = p.stage_evidence_channels(i);
             let regularizer = if stage == 1 {
                 &mut self.mid
             } else {

@@ -15,6 +15,7 @@
 use std::ops::Range;
 
 use omnimvs_camera::Rig;
+use omnimvs_data::edges::neighbour_min_max;
 use omnimvs_stereo::SphereProjector;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, normalized_pixel};
 use rayon::prelude::*;
@@ -189,63 +190,10 @@ pub fn hypotheses_around(center: &[f32], k: usize, interval: f64, num_invdepth: 
     out
 }
 
-/// The lowest and highest of `center` (`[rows * cols]`) over the `(2 radius + 1)^2` pixels
-/// around each pixel. Columns wrap around when `wrap` (a whole panorama), else the
-/// neighbourhood stops at the first and last column (a training window); rows stop at the
-/// first and last row.
-pub fn neighbour_min_max(
-    center: &[f32],
-    [rows, cols]: [usize; 2],
-    wrap: bool,
-    radius: usize,
-) -> (Vec<f32>, Vec<f32>) {
-    let pixels = rows * cols;
-    // Separable: along each row, then along each column of the row results.
-    let mut row_min = vec![0f32; pixels];
-    let mut row_max = vec![0f32; pixels];
-    let r = radius as isize;
-    for y in 0..rows {
-        let line = &center[y * cols..(y + 1) * cols];
-        for x in 0..cols {
-            let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-            for dx in -r..=r {
-                let at = x as isize + dx;
-                let at = if wrap {
-                    at.rem_euclid(cols as isize)
-                } else if (0..cols as isize).contains(&at) {
-                    at
-                } else {
-                    continue;
-                };
-                let v = line[at as usize];
-                lo = lo.min(v);
-                hi = hi.max(v);
-            }
-            row_min[y * cols + x] = lo;
-            row_max[y * cols + x] = hi;
-        }
-    }
-    let mut low = vec![0f32; pixels];
-    let mut high = vec![0f32; pixels];
-    for y in 0..rows {
-        let y0 = y.saturating_sub(radius);
-        let y1 = (y + radius).min(rows - 1);
-        for x in 0..cols {
-            let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-            for yy in y0..=y1 {
-                lo = lo.min(row_min[yy * cols + x]);
-                hi = hi.max(row_max[yy * cols + x]);
-            }
-            low[y * cols + x] = lo;
-            high[y * cols + x] = hi;
-        }
-    }
-    (low, high)
-}
-
 /// Stretches the outermost of `k` hypotheses per pixel (`index[j * pixels + pixel]`, as
 /// [`hypotheses_around`] makes them) to the lowest and highest of `center` (`[rows * cols]`)
-/// over the `(2 radius + 1)^2` pixels around each pixel ([`neighbour_min_max`]): the first
+/// over the `(2 radius + 1)^2` pixels around each pixel ([`neighbour_min_max`], columns
+/// wrapping when `wrap`): the first
 /// becomes the lower of itself and that minimum, the last the higher of itself and that
 /// maximum. `radius` 0 or `k < 2` leaves the hypotheses as they are.
 pub fn stretch_to_neighbours(
