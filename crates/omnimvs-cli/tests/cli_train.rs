@@ -382,6 +382,7 @@ fn cascade_options_are_checked_and_belong_to_the_cascade() {
             "low",
             "neighbour-start-score",
         ),
+        ("cascade", "--neighbour-gain", "0", "cascade.neighbour_gain"),
         (
             "tiny",
             "--neighbour-hypotheses",

@@ -248,6 +248,11 @@ pub fn load_cascade_grown(
     shrunk.cascade.refine_distribution_weight = saved.cascade.refine_distribution_weight;
     shrunk.cascade.sky_loss_weight = saved.cascade.sky_loss_weight;
     shrunk.cascade.neighbour_start_score = saved.cascade.neighbour_start_score;
+    // The neighbour hypotheses' gain scales weights that only exist with them: it may be
+    // chosen when the network grows into them, not changed afterwards.
+    if (0..2).all(|i| saved.cascade.neighbour_count(i) == 0) {
+        shrunk.cascade.neighbour_gain = saved.cascade.neighbour_gain;
+    }
     shrunk.cascade.context_pairs = saved.cascade.context_pairs;
     shrunk.cascade.stage_gates = saved.cascade.stage_gates;
     shrunk.cascade.zncc_cue = saved.cascade.zncc_cue;

@@ -773,3 +773,87 @@ fn a_network_grows_into_neighbour_hypotheses_near_its_answer_and_learns_them() {
     assert_new_inputs_learn(&grads, &net.mid.convs[0].conv, 2 * (g1 + 2), "mid");
     assert_new_inputs_learn(&grads, &net.fine.convs[0].conv, 2 * (g0 + 2), "fine");
 }
+
+/// The gradient of the last `k` input channels of `conv`'s weight (the grown ones), flat.
+fn new_input_grad(grads: &GradientsParams, conv: &Conv2d, k: usize) -> Vec<f32> {
+    let c_in = conv.weight.dims()[1];
+    let grad = grads.get::<4>(conv.weight.id).expect("a gradient");
+    read_values(grad.narrow(1, c_in - k, k), "grad").unwrap()
+}
+
+/// The gradient of the last `k` output channels of `conv`'s weight and bias (the grown ones).
+fn new_output_grad(grads: &GradientsParams, conv: &Conv2d, k: usize) -> Vec<f32> {
+    let c_out = conv.weight.dims()[0];
+    let weight = grads.get::<4>(conv.weight.id).expect("a gradient");
+    let mut out = read_values(weight.narrow(0, c_out - k, k), "grad").unwrap();
+    let bias = conv.bias.as_ref().expect("a bias");
+    let bias = grads.get::<1>(bias.id).expect("a gradient");
+    out.extend(read_values(bias.narrow(0, c_out - k, k), "grad").unwrap());
+    out
+}
+
+#[test]
+fn the_neighbour_gain_keeps_the_start_and_scales_the_new_weights_gradients() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let mut cued = micro_config();
+    cued.cascade.zncc_cue = true;
+    let small = CascadeNet::new(&cued, &Device::flex()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("small.safetensors");
+    weights::save_module(&small, &cued, &path).unwrap();
+    let mut plain = cued.clone();
+    plain.cascade.neighbour_hypotheses = [0, 2];
+    plain.cascade.neighbour_start_score = -2.0;
+    let mut fast = plain.clone();
+    fast.cascade.neighbour_gain = 8.0;
+    let autodiff = Device::flex().autodiff();
+    let geometry = CascadeGeometry::new(&ds.rig, &plain, &hyps, &autodiff).unwrap();
+    let tensors = images(&plain, &autodiff);
+    let run = |config: &NetConfig| {
+        let net = weights::load_cascade_grown(&path, config, &autodiff).unwrap();
+        assert_eq!(net.config, *config);
+        let out = net.forward(&tensors, &geometry).unwrap();
+        let prob = read_values(out.stages[2].prob.clone(), "prob").unwrap();
+        let grads = GradientsParams::from_grads(pull_to_ten(out).backward(), &net);
+        let k = 2 * cued.cascade.stage_evidence_channels(1);
+        let inputs = new_input_grad(&grads, &net.fine.convs[0].conv, k);
+        let outputs = new_output_grad(&grads, &net.fine.out.conv, 2);
+        (prob, inputs, outputs)
+    };
+    let (prob1, in1, out1) = run(&plain);
+    let (prob8, in8, out8) = run(&fast);
+    // The same start: the bias is the starting score over the gain.
+    assert_eq!(prob1.len(), prob8.len());
+    let worst = prob1
+        .iter()
+        .zip(&prob8)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-5, "distributions differ by {worst}");
+    // The grown weights' gradients are 8 times as large (Adam's steps are not, so their
+    // effect on the answer is): the input weights see the evidence times 8, the score
+    // weights write scores times 8.
+    for (name, one, eight) in [("inputs", &in1, &in8), ("scores", &out1, &out8)] {
+        let norm = |g: &[f32]| g.iter().map(|x| x.abs()).sum::<f32>();
+        assert!(norm(one) > 0.0, "{name}: no gradient");
+        let ratio = norm(eight) / norm(one);
+        assert!((ratio - 8.0).abs() < 0.01 * 8.0, "{name}: ratio {ratio}");
+    }
+    // A file with the neighbour hypotheses answers with its own gain only.
+    let grown_path = dir.path().join("fast.safetensors");
+    let net = weights::load_cascade_grown(&path, &fast, &Device::flex()).unwrap();
+    weights::save_module(&net, &fast, &grown_path).unwrap();
+    assert!(weights::load_cascade_grown(&grown_path, &plain, &Device::flex()).is_err());
+    assert_eq!(
+        weights::load_cascade(&grown_path, &Device::flex())
+            .unwrap()
+            .config,
+        fast
+    );
+    // And a gain must be positive.
+    let mut bad = plain.clone();
+    bad.cascade.neighbour_gain = 0.0;
+    let err = bad.validate().unwrap_err().to_string();
+    assert!(err.contains("cascade.neighbour_gain"), "{err}");
+}

@@ -215,6 +215,12 @@ pub struct Args {
     /// gradient; the evenly spaced hypotheses' scores are near 0).
     #[arg(long, allow_negative_numbers = true, conflicts_with = "resume")]
     pub neighbour_start_score: Option<f64>,
+    /// Cascade: the gain of the neighbour hypotheses' weights (`neighbour_gain`; 1): their
+    /// evidence and scores are multiplied by it, so under Adam the weights grown for them
+    /// train this many times faster than the rest of their stage. Chosen when --init weights
+    /// grow into them; the trained network answers with it.
+    #[arg(long, conflicts_with = "resume")]
+    pub neighbour_gain: Option<f64>,
     /// Which weights the run trains (`train_only`): `all`; `upsampling`, the cascade's
     /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
     /// --init loaded it; a cheap step, the frozen stages need no backward pass); or `coarse`,
@@ -593,6 +599,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.neighbour_extremes.is_some()
                 || args.neighbour_hypotheses.is_some()
                 || args.neighbour_start_score.is_some()
+                || args.neighbour_gain.is_some()
                 || args.coarse_feature_channels.is_some()
                 || args.coarse_cue_oversample.is_some()
                 || args.coarse_cue_depths.is_some()
@@ -604,7 +611,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                         "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                          --refine-distribution, --sky-weight, --convex-upsampling, \
                          --stage-intervals, --neighbour-extremes, --neighbour-hypotheses, \
-                         --neighbour-start-score, \
+                         --neighbour-start-score, --neighbour-gain, \
                          --coarse-feature-channels, \
                          --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
                          --mid-cue-sgm are options of --preset cascade"
@@ -634,6 +641,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(score) = args.neighbour_start_score {
                     net.cascade.neighbour_start_score = score;
+                }
+                if let Some(gain) = args.neighbour_gain {
+                    net.cascade.neighbour_gain = gain;
                 }
                 if let Some(factor) = args.coarse_cue_oversample {
                     net.cascade.coarse_cue_oversample = factor;
