@@ -1,8 +1,9 @@
 """What the numpy studies under models/training/ share (cascade-23/cue_study.py and
 error_split.py, cascade-24/sgm_cue.py, cascade-25/half_study.py, edge_split.py, edge_kinds.py):
 omni_np (the independent reading of FORMATS.md in ../shared/tools), the cascade's photometric
-cue at a grid's rays, semi-global matching of a cost volume with longitude wrapping, and each
-pixel's distance to the nearest depth edge of the truth.
+cue at a grid's rays, semi-global matching of a cost volume with longitude wrapping, each
+pixel's distance to the nearest depth edge of the truth, and for cascade-35's studies a
+`cascade_dump` frame's arrays and the cameras' colour agreement at given depths.
 
 A study imports it with
     sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
@@ -11,6 +12,7 @@ A study imports it with
 import itertools
 import os
 import sys
+import warnings
 
 import numpy as np
 import scipy.ndimage as nd
@@ -127,3 +129,68 @@ def truth(ds, frame, min_depth):
     the distance to the nearest depth edge."""
     gi, valid, _, _ = o.reference_gt_index(o.gt_reference(ds, frame, 160, 640, 45.0), min_depth)
     return gi, valid, edge_distance(gi, valid)
+
+
+def dump_frame(dump_dir, frame):
+    """One frame of a `cascade_dump` (`cargo run --release -p omnimvs-train --example
+    cascade_dump`): its JSON of shapes and a reader `get(name)` of each raw `f32` array."""
+    import json
+    shapes = json.load(open(f"{dump_dir}/{frame:05d}.json"))
+
+    def get(name):
+        return np.fromfile(f"{dump_dir}/{frame:05d}_{name}.f32", "<f4").reshape(shapes[name])
+    return shapes, get
+
+
+def standardised_images(ds, cfg, cams, frame):
+    """The cameras' colour images of a frame (gray repeated), each channel standardised."""
+    from PIL import Image
+    ims = []
+    for i in range(len(cams)):
+        im = np.asarray(Image.open(o.frame_path(ds, i, cfg, frame))).astype(np.float64)
+        im = np.stack([im] * 3, -1) if im.ndim == 2 else im[..., :3]
+        ims.append((im - im.mean((0, 1))) / (im.std((0, 1)) + 1e-9))
+    return ims
+
+
+def patch_colours(cams, ims, rays, rows, cols, inv, radius=1):
+    """The colours of the (2 radius + 1)^2 panorama pixels around each pixel (`rows`, `cols` of
+    `rays`, [3, H, W]; rows clamp, longitude wraps) at inverse depth `inv` (per pixel), in each
+    camera: values [cameras, pixels, 3 (2 radius + 1)^2] and whether a camera sees all of them."""
+    h, w = rays.shape[1:]
+    n = (2 * radius + 1) ** 2 * 3
+    vals = np.zeros((len(cams), len(rows), n))
+    vis = np.ones((len(cams), len(rows)), bool)
+    t = 0
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            X = rays[:, np.clip(rows + dy, 0, h - 1), (cols + dx) % w] / inv
+            for i, cam in enumerate(cams):
+                col, row, v = cam.project(X)
+                for k in range(3):
+                    val, ok = o.bilinear(ims[i][..., k], col, row)
+                    vals[i, :, t * 3 + k] = val
+                    vis[i] &= ok & v
+            t += 1
+    return vals, vis
+
+
+def pair_costs(vals, vis):
+    """Colour disagreement of `patch_colours` between the cameras that both see a pixel: mean
+    |difference| (sad) and 1 - ZNCC (zncc), as the mean over the camera pairs and the best
+    pair: a dict of per-pixel arrays, NaN where no pair sees it."""
+    cams = vals.shape[0]
+    pairs = list(itertools.combinations(range(cams), 2))
+    sad = np.full((len(pairs), vals.shape[1]), np.nan)
+    zn = np.full_like(sad, np.nan)
+    for p, (i, j) in enumerate(pairs):
+        both = vis[i] & vis[j]
+        ci = vals[i] - vals[i].mean(1, keepdims=True)
+        cj = vals[j] - vals[j].mean(1, keepdims=True)
+        z = 1 - (ci * cj).sum(1) / np.sqrt((ci ** 2).sum(1) * (cj ** 2).sum(1) + 1e-9)
+        sad[p] = np.where(both, np.abs(vals[i] - vals[j]).mean(1), np.nan)
+        zn[p] = np.where(both, z, np.nan)
+    with np.errstate(all='ignore'), warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)
+        return dict(mean_sad=np.nanmean(sad, 0), min_sad=np.nanmin(sad, 0),
+                    mean_zncc=np.nanmean(zn, 0), min_zncc=np.nanmin(zn, 0))

@@ -1,14 +1,14 @@
 #!/usr/bin/env python3
 # Error and bias of the full answer by truth band and distance to an edge. Usage: bands.py DUMP_DIR A B
-import json, os, sys
+import os
+import sys
 import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
-from studylib import edge_distance
+from studylib import dump_frame, edge_distance
 d, a, b = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 acc = []
 for f in range(a, b + 1):
-    shapes = json.load(open(f"{d}/{f:05d}.json"))
-    get = lambda n: np.fromfile(f"{d}/{f:05d}_{n}.f32", "<f4").reshape(shapes[n])
+    shapes, get = dump_frame(d, f)
     gt, valid = get("gt"), get("valid") > 0.5
     full = get("full"); ok = valid & (gt > 0)
     dist = edge_distance(gt, valid)

@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
 # Hard picks from a stage with neighbour hypotheses: wherever the two hold more than T of the
 # weight, the one it weights more instead of the soft answer. Usage: hard_pick.py DUMP_DIR A B
-import json, sys
+import os
+import sys
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
+from studylib import dump_frame  # noqa: E402
 d, a, b = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 taus = [0.2, 0.3, 0.4, 0.5, 0.6, 0.7]
 errs = {t: [] for t in ['soft', 'argmax'] + taus}
 for f in range(a, b + 1):
-    shapes = json.load(open(f"{d}/{f:05d}.json"))
-    get = lambda n: np.fromfile(f"{d}/{f:05d}_{n}.f32", "<f4").reshape(shapes[n])
+    shapes, get = dump_frame(d, f)
     gt, valid = get("gt"), get("valid") > 0.5
     ok = valid & (gt > 0)
     hyp, prob, full = get("full_hyp"), get("full_prob"), get("full")

@@ -13,20 +13,18 @@ MAE of its pick.
 
     python3 pick_study.py DUMP_DIR DATASET A B [PR [TOL]]
 """
-import json
 import os
 import sys
 
 import numpy as np
-from PIL import Image
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
-from studylib import edge_distance, o  # noqa: E402
+from studylib import (dump_frame, edge_distance, o, pair_costs, patch_colours,  # noqa: E402
+                      standardised_images)
 
 d, ds, a, b = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 PR = int(sys.argv[5]) if len(sys.argv) > 5 else 1
 TOL = float(sys.argv[6]) if len(sys.argv) > 6 else 3.0
-NV = (2 * PR + 1) ** 2 * 3
 cfg, cams, md = o.load(ds)
 H, W = 160, 640
 R = o.rays(H, W, 45.0).reshape(3, H, W)
@@ -34,10 +32,8 @@ min_inv = 1.0 / (1.0 / o.EPS)
 step = (1.0 / md - min_inv) / 191.0
 RULES = ('mean_sad', 'min_sad', 'mean_zncc', 'min_zncc')
 res = {k: [] for k in ('right_lo', 'net', 'near', 'elo', 'ehi', 'ans') + RULES}
-pairs = [(i, j) for i in range(len(cams)) for j in range(i + 1, len(cams))]
 for f in range(a, b + 1):
-    shapes = json.load(open(f"{d}/{f:05d}.json"))
-    get = lambda n: np.fromfile(f"{d}/{f:05d}_{n}.f32", "<f4").reshape(shapes[n])  # noqa: E731
+    shapes, get = dump_frame(d, f)
     gt, valid = get("gt"), get("valid") > 0.5
     hyp, prob = get("full_hyp"), get("full_prob")
     ke = shapes["full_even"]
@@ -46,39 +42,11 @@ for f in range(a, b + 1):
     elo, ehi = np.abs(lo - gt), np.abs(hi - gt)
     m = valid & (gt > 0) & (np.minimum(elo, ehi) <= TOL) & (even_best > 5) & (hi - lo > 10)
     rr, cc = np.nonzero(m)
-    ims = []
-    for i in range(len(cams)):
-        im = np.asarray(Image.open(o.frame_path(ds, i, cfg, f))).astype(np.float64)
-        im = np.stack([im] * 3, -1) if im.ndim == 2 else im[..., :3]
-        ims.append((im - im.mean((0, 1))) / (im.std((0, 1)) + 1e-9))
+    ims = standardised_images(ds, cfg, cams, f)
     cost = {}
     for name, hv in (('lo', lo), ('hi', hi)):
         inv = np.maximum(min_inv + hv[rr, cc] * step, 1e-6)
-        vals = np.zeros((len(cams), len(rr), NV))
-        vis = np.ones((len(cams), len(rr)), bool)
-        t = 0
-        for dy in range(-PR, PR + 1):
-            for dx in range(-PR, PR + 1):
-                X = R[:, np.clip(rr + dy, 0, H - 1), (cc + dx) % W] / inv
-                for i, cam in enumerate(cams):
-                    col, row, v = cam.project(X)
-                    for k in range(3):
-                        val, ok = o.bilinear(ims[i][..., k], col, row)
-                        vals[i, :, t * 3 + k] = val
-                        vis[i] &= ok & v
-                t += 1
-        sad = np.full((len(pairs), len(rr)), np.nan)
-        zn = np.full((len(pairs), len(rr)), np.nan)
-        for p, (i, j) in enumerate(pairs):
-            both = vis[i] & vis[j]
-            ci = vals[i] - vals[i].mean(1, keepdims=True)
-            cj = vals[j] - vals[j].mean(1, keepdims=True)
-            z = 1 - (ci * cj).sum(1) / np.sqrt((ci ** 2).sum(1) * (cj ** 2).sum(1) + 1e-9)
-            sad[p] = np.where(both, np.abs(vals[i] - vals[j]).mean(1), np.nan)
-            zn[p] = np.where(both, z, np.nan)
-        with np.errstate(all='ignore'):
-            cost[name] = dict(mean_sad=np.nanmean(sad, 0), min_sad=np.nanmin(sad, 0),
-                              mean_zncc=np.nanmean(zn, 0), min_zncc=np.nanmin(zn, 0))
+        cost[name] = pair_costs(*patch_colours(cams, ims, R, rr, cc, inv, PR))
     res['right_lo'].append((elo < ehi)[rr, cc])
     res['elo'].append(elo[rr, cc])
     res['ehi'].append(ehi[rr, cc])

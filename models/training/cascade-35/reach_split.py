@@ -8,20 +8,18 @@ Reads a `cascade_dump`.
 
     python3 reach_split.py DUMP_DIR A B
 """
-import json
 import os
 import sys
 
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
-from studylib import edge_distance  # noqa: E402
+from studylib import dump_frame, edge_distance  # noqa: E402
 
 d, a, b = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 acc = []
 for f in range(a, b + 1):
-    shapes = json.load(open(f"{d}/{f:05d}.json"))
-    get = lambda n: np.fromfile(f"{d}/{f:05d}_{n}.f32", "<f4").reshape(shapes[n])  # noqa: E731
+    shapes, get = dump_frame(d, f)
     gt, valid = get("gt"), get("valid") > 0.5
     ok = valid & (gt > 0)
     hyp, full, coarse = get("full_hyp"), get("full"), get("coarse")

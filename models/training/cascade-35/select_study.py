@@ -10,15 +10,13 @@ best candidate (oracle), and how often the pick is within 5 of the truth.
 
     python3 select_study.py DUMP_DIR DATASET A B
 """
-import json
 import os
 import sys
 
 import numpy as np
-from PIL import Image
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
-from studylib import o  # noqa: E402
+from studylib import dump_frame, o, pair_costs, patch_colours, standardised_images  # noqa: E402
 
 d, ds, a, b = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 cfg, cams, md = o.load(ds)
@@ -26,11 +24,9 @@ H, W = 160, 640
 R = o.rays(H, W, 45.0).reshape(3, H, W)
 min_inv = 1.0 / (1.0 / o.EPS)
 step = (1.0 / md - min_inv) / 191.0
-pairs = [(i, j) for i in range(len(cams)) for j in range(i + 1, len(cams))]
 out = {k: [] for k in ('ans', 'oracle', 'mean', 'min', 'bilinear_like')}
 for f in range(a, b + 1):
-    shapes = json.load(open(f"{d}/{f:05d}.json"))
-    get = lambda n: np.fromfile(f"{d}/{f:05d}_{n}.f32", "<f4").reshape(shapes[n])  # noqa: E731
+    shapes, get = dump_frame(d, f)
     gt, valid = get("gt"), get("valid") > 0.5
     hyp, full, coarse = get("full_hyp"), get("full"), get("coarse")
     ke = shapes.get("full_even", len(hyp))
@@ -42,36 +38,13 @@ for f in range(a, b + 1):
     ccol = np.round(cc / 4).astype(int) % cw
     cand = np.stack([coarse[np.clip(cr + dy, 0, ch - 1), (ccol + dx) % cw]
                      for dy in (-1, 0, 1) for dx in (-1, 0, 1)])  # [9, P]
-    ims = []
-    for i in range(len(cams)):
-        im = np.asarray(Image.open(o.frame_path(ds, i, cfg, f))).astype(np.float64)
-        im = np.stack([im] * 3, -1) if im.ndim == 2 else im[..., :3]
-        ims.append((im - im.mean((0, 1))) / (im.std((0, 1)) + 1e-9))
+    ims = standardised_images(ds, cfg, cams, f)
     costs = {'mean': [], 'min': []}
     for k in range(9):
         inv = np.maximum(min_inv + cand[k] * step, 1e-6)
-        vals = np.zeros((len(cams), len(rr), 27))
-        vis = np.ones((len(cams), len(rr)), bool)
-        t = 0
-        for dy in (-1, 0, 1):
-            for dx in (-1, 0, 1):
-                X = R[:, np.clip(rr + dy, 0, H - 1), (cc + dx) % W] / inv
-                for i, cam in enumerate(cams):
-                    col, row, v = cam.project(X)
-                    for c in range(3):
-                        val, okb = o.bilinear(ims[i][..., c], col, row)
-                        vals[i, :, t * 3 + c] = val
-                        vis[i] &= okb & v
-                t += 1
-        zn = np.full((len(pairs), len(rr)), np.nan)
-        for p, (i, j) in enumerate(pairs):
-            ci = vals[i] - vals[i].mean(1, keepdims=True)
-            cj = vals[j] - vals[j].mean(1, keepdims=True)
-            z = 1 - (ci * cj).sum(1) / np.sqrt((ci ** 2).sum(1) * (cj ** 2).sum(1) + 1e-9)
-            zn[p] = np.where(vis[i] & vis[j], z, np.nan)
-        with np.errstate(all='ignore'):
-            costs['mean'].append(np.nan_to_num(np.nanmean(zn, 0), nan=9.0))
-            costs['min'].append(np.nan_to_num(np.nanmin(zn, 0), nan=9.0))
+        c = pair_costs(*patch_colours(cams, ims, R, rr, cc, inv))
+        costs['mean'].append(np.nan_to_num(c['mean_zncc'], nan=9.0))
+        costs['min'].append(np.nan_to_num(c['min_zncc'], nan=9.0))
     g = gt[rr, cc]
     err = np.abs(cand - g[None])
     out['ans'].append(np.abs(full - gt)[rr, cc])

@@ -3,14 +3,17 @@
 # (dy, dx) output pixels against the truth (columns wrap, rows clamp); the coarse and half
 # answers repeated onto the output grid (so their best shift is about -1.5 and -0.5 columns).
 # Usage: shift.py DUMP_DIR A B [full|half|coarse]
-import json, sys
+import os
+import sys
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
+from studylib import dump_frame  # noqa: E402
 d, a, b = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 key = sys.argv[4] if len(sys.argv) > 4 else "full"
 res = {}
 for f in range(a, b + 1):
-    shapes = json.load(open(f"{d}/{f:05d}.json"))
-    get = lambda n: np.fromfile(f"{d}/{f:05d}_{n}.f32", "<f4").reshape(shapes[n])
+    shapes, get = dump_frame(d, f)
     gt, valid = get("gt"), get("valid") > 0.5
     ok = valid & (gt > 0)
     p = get(key)

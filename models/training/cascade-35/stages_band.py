@@ -4,17 +4,15 @@
 
     python3 stages_band.py DUMP_DIR A B
 """
-import json
 import os
 import sys
 import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
-from studylib import edge_distance
+from studylib import dump_frame, edge_distance
 d, a, b = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 acc = []
 for f in range(a, b + 1):
-    shapes = json.load(open(f"{d}/{f:05d}.json"))
-    get = lambda n: np.fromfile(f"{d}/{f:05d}_{n}.f32", "<f4").reshape(shapes[n])
+    shapes, get = dump_frame(d, f)
     gt, valid = get("gt"), get("valid") > 0.5
     ok = valid & (gt > 0)
     up = lambda m: np.kron(m, np.ones((gt.shape[0] // m.shape[0], gt.shape[1] // m.shape[1])))
