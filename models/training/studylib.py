@@ -29,6 +29,28 @@ def hypotheses(min_depth):
     return np.linspace(1.0 / (1.0 / o.EPS), 1.0 / min_depth, N)
 
 
+def index_scale(min_depth):
+    """Inverse depth (1/m) of index 0 and of one index unit of N (as the reference's
+    loadGTInvdepthIndex has them): inverse depth = first + index * step."""
+    first = 1.0 / (1.0 / o.EPS)
+    return first, (1.0 / min_depth - first) / (N - 1.0)
+
+
+def block_span(index_map, s):
+    """Per pixel of the grid `s` times coarser than the 160 x 640 `index_map` (rows
+    corner-aligned, columns `s` apart), the span (max - min) of `index_map` over the `s x s`
+    output pixels around its centre (rows clamp, longitude wraps)."""
+    h, w = 160 // s, 640 // s
+    centre_rows = np.round(np.arange(h) * 159 / (h - 1)).astype(int)
+    cols = (np.arange(w)[:, None] * s + np.arange(-s // 2, s // 2)[None, :]) % 640
+    span = np.zeros((h, w))
+    for r in range(h):
+        rows = np.clip(np.arange(centre_rows[r] - s // 2, centre_rows[r] + s // 2), 0, 159)
+        block = index_map[rows][:, cols]  # [s, w, s]
+        span[r] = block.max(axis=(0, 2)) - block.min(axis=(0, 2))
+    return span
+
+
 def coarse_spheres():
     """The cascade's 32 coarse spheres, evenly spaced in index over 0..N-1."""
     return np.round(np.linspace(0, N - 1, 32)).astype(int)

@@ -15,14 +15,13 @@ import numpy as np
 import tifffile
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
-from studylib import o  # noqa: E402
+from studylib import block_span, index_scale, o  # noqa: E402
 
 ds, dump, a, b, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
 T = float(sys.argv[6]) if len(sys.argv) > 6 else None
 P = float(sys.argv[7]) if len(sys.argv) > 7 else 1.0
 _, _, md = o.load(ds)
-min_inv = 1.0 / (1.0 / o.EPS)
-step = (1.0 / md - min_inv) / 191.0
+min_inv, step = index_scale(md)
 rng = np.random.default_rng(5)
 os.makedirs(out, exist_ok=True)
 fixed, stats = [], []
@@ -38,13 +37,7 @@ for f in range(a, b + 1):
         seed = np.where(fix, truth, min_inv + own * step)
     tifffile.imwrite(f"{out}/{f:05d}.tiff", seed.astype(np.float32))
     full = (o.gt_for_output(ds, f, 160, 640, 45.0) - min_inv) / step
-    centre_rows = np.round(np.arange(40) * 159 / 39).astype(int)
-    span = np.zeros((40, 160))
-    for r in range(40):
-        rows = np.clip(np.arange(centre_rows[r] - 2, centre_rows[r] + 2), 0, 159)
-        for c in range(160):
-            block = full[np.ix_(rows, np.arange(4 * c - 2, 4 * c + 2) % 640)]
-            span[r, c] = block.max() - block.min()
+    span = block_span(full, 4)
     stats.append(np.stack([np.abs(own - gidx).ravel(), span.ravel(), (gidx > 0).ravel()]))
 if fixed:
     print(f"{out}: truth put in at {100 * np.mean(fixed):.1f} % of the coarse pixels")

@@ -19,8 +19,8 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
-from studylib import (dump_frame, edge_distance, o, pair_costs, patch_colours,  # noqa: E402
-                      standardised_images)
+from studylib import (dump_frame, edge_distance, index_scale, o, pair_costs,  # noqa: E402
+                      patch_colours, standardised_images)
 
 d, ds, a, b = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 PR = int(sys.argv[5]) if len(sys.argv) > 5 else 1
@@ -28,8 +28,7 @@ TOL = float(sys.argv[6]) if len(sys.argv) > 6 else 3.0
 cfg, cams, md = o.load(ds)
 H, W = 160, 640
 R = o.rays(H, W, 45.0).reshape(3, H, W)
-min_inv = 1.0 / (1.0 / o.EPS)
-step = (1.0 / md - min_inv) / 191.0
+min_inv, step = index_scale(md)
 RULES = ('mean_sad', 'min_sad', 'mean_zncc', 'min_zncc')
 res = {k: [] for k in ('right_lo', 'net', 'near', 'elo', 'ehi', 'ans') + RULES}
 for f in range(a, b + 1):

@@ -16,14 +16,14 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
-from studylib import dump_frame, o, pair_costs, patch_colours, standardised_images  # noqa: E402
+from studylib import (dump_frame, index_scale, o, pair_costs, patch_colours,  # noqa: E402
+                      standardised_images)
 
 d, ds, a, b = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 cfg, cams, md = o.load(ds)
 H, W = 160, 640
 R = o.rays(H, W, 45.0).reshape(3, H, W)
-min_inv = 1.0 / (1.0 / o.EPS)
-step = (1.0 / md - min_inv) / 191.0
+min_inv, step = index_scale(md)
 out = {k: [] for k in ('ans', 'oracle', 'mean', 'min', 'bilinear_like')}
 for f in range(a, b + 1):
     shapes, get = dump_frame(d, f)
