@@ -57,6 +57,17 @@ pub struct CascadeParams {
     pub groups: [usize; 3],
     /// Spheres of the coarse cost volume, evenly spaced in index over `0..=N-1`.
     pub coarse_spheres: usize,
+    /// How many times coarser than the output the coarse stage's grid is: `4` (and left out
+    /// of the file: 40 x 160 for the paper's grid, every cascade before stop 35) or `2` (the
+    /// half-resolution grid, 80 x 320). At 40 x 160 a quarter of a things frame's pixels hold
+    /// a depth edge in their 4 x 4 block of the output, and 61 % of the coarse stage's misses
+    /// over 20 index units lie there, out of the refinement's reach; at 80 x 320 6.5 % of the
+    /// 2 x 2 blocks do (`models/training/cascade-35/edge_blocks.py`). With `2` the half stage
+    /// centres on the coarse answer itself (no upsampling, so no half-grid selector), the
+    /// coarse stage still reads the stride-8 features, and its cue is matched on its own grid
+    /// from the half-size images (`coarse_cue_oversample` must be 1, no `mid_cue_sgm`).
+    #[serde(default = "four", skip_serializing_if = "is_four")]
+    pub coarse_scale: usize,
     /// Channels of the coarse 2D encoder-decoder (full, half and quarter resolution).
     pub coarse_channels: [usize; 3],
     /// Per-pixel hypotheses of the half- and full-resolution stages.
@@ -274,6 +285,14 @@ fn one_usize() -> usize {
     1
 }
 
+fn four() -> usize {
+    4
+}
+
+fn is_four(value: &usize) -> bool {
+    *value == 4
+}
+
 fn is_one_usize(value: &usize) -> bool {
     *value == 1
 }
@@ -308,6 +327,7 @@ impl Default for CascadeParams {
             feature_channels: [8, 16, 16],
             groups: [4, 4, 8],
             coarse_spheres: 32,
+            coarse_scale: 4,
             coarse_channels: [48, 64, 96],
             stage_hypotheses: [8, 5],
             stage_intervals: [2.0, 1.0],
@@ -508,7 +528,8 @@ impl NetConfig {
     /// full-resolution stages.
     pub fn cascade_sizes(&self) -> [[usize; 2]; 3] {
         let [h, w] = [self.out_height, self.out_width];
-        [[h / 4, w / 4], [h / 2, w / 2], [h, w]]
+        let s = self.cascade.coarse_scale.max(1);
+        [[h / s, w / s], [h / 2, w / 2], [h, w]]
     }
 
     /// Feature-map sizes `[rows, cols]` at strides 2, 4 and 8 of the input (each a 3x3 or 5x5
@@ -537,6 +558,23 @@ impl NetConfig {
                     ),
                 ));
             }
+        }
+        if !matches!(p.coarse_scale, 2 | 4) {
+            return Err(invalid(
+                "cascade.coarse_scale",
+                format!(
+                    "{} must be 4 (the coarse grid a quarter of the output's) or 2 (half)",
+                    p.coarse_scale
+                ),
+            ));
+        }
+        if p.coarse_scale == 2 && (p.coarse_cue_oversample != 1 || p.mid_cue_sgm) {
+            return Err(invalid(
+                "cascade.coarse_scale",
+                "2 (the coarse stage on the half-resolution grid) needs `coarse_cue_oversample: \
+                 1` and no `mid_cue_sgm`: the cue is matched on the coarse grid itself"
+                    .into(),
+            ));
         }
         if !matches!(p.coarse_cue_oversample, 1 | 2) {
             return Err(invalid(

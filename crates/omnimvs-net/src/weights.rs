@@ -270,7 +270,13 @@ pub fn load_cascade_grown(
     shrunk.cascade.neighbour_hypotheses = saved.cascade.neighbour_hypotheses;
     // The stride-8 features may widen (CascadeFeatures::widen8).
     shrunk.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
+    // The coarse stage may move to the half grid, over other spheres
+    // (CascadeNet::with_coarse_grid).
+    shrunk.cascade.coarse_scale = saved.cascade.coarse_scale;
+    shrunk.cascade.coarse_spheres = saved.cascade.coarse_spheres;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
+        && (saved.cascade.coarse_scale == config.cascade.coarse_scale
+            || config.cascade.coarse_scale < saved.cascade.coarse_scale)
         && saved.cascade.feature_channels[2] <= config.cascade.feature_channels[2]
         && (!saved.cascade.stage_gates || config.cascade.stage_gates)
         && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
@@ -293,7 +299,9 @@ pub fn load_cascade_grown(
              `neighbour_hypotheses` and `convex_upsampling` switch on (the cue not after \
              neighbour hypotheses), `convex_upsampling_full` switch either way, and the \
              refinement stages' `stage_intervals`, `neighbour_extremes`, \
-             `coarse_cue_oversample`, `coarse_cue_depths` and the loss weights differ)",
+             `coarse_cue_oversample`, `coarse_cue_depths` and the loss weights differ, \
+             and the coarse stage move to a finer grid (`coarse_scale`) over other \
+             `coarse_spheres`)",
         ));
     }
     let has_fine = |c: &NetConfig| c.cascade.convex_upsampling && c.cascade.convex_upsampling_full;
@@ -318,6 +326,10 @@ pub fn load_cascade_grown(
     without_cue.cascade.mid_cue_sgm = saved.cascade.mid_cue_sgm;
     without_cue.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
     without_cue.cascade.neighbour_hypotheses = saved.cascade.neighbour_hypotheses;
+    without_cue.cascade.coarse_scale = saved.cascade.coarse_scale;
+    without_cue.cascade.coarse_spheres = saved.cascade.coarse_spheres;
+    // The cue's grid settings must be valid with the saved scale.
+    without_cue.cascade.coarse_cue_oversample = saved.cascade.coarse_cue_oversample;
     let dropped = |p: &str| saved_fine && !fine && p.starts_with("up_fine.");
     let net = apply_file_except(
         CascadeNet::new(&without_cue, device)?,
@@ -343,6 +355,17 @@ pub fn load_cascade_grown(
     let mut net = net.with_coarse_feature_channels(config.cascade.feature_channels[2])?;
     for (i, &radius) in config.cascade.neighbour_hypotheses.iter().enumerate() {
         net = net.with_neighbour_hypotheses(i + 1, radius)?;
+    }
+    let (p, had) = (&config.cascade, &saved.cascade);
+    if (p.coarse_scale, p.coarse_spheres) != (had.coarse_scale, had.coarse_spheres) {
+        // The configuration asked for on the saved grid, then the move (which checks the
+        // cue's grid settings against the new scale).
+        let mut before = config.clone();
+        before.cascade.coarse_scale = had.coarse_scale;
+        before.cascade.coarse_spheres = had.coarse_spheres;
+        net.config = before;
+        net = net.with_coarse_grid(p.coarse_scale, p.coarse_spheres)?;
+        net.config = config.clone();
     }
     Ok(net)
 }

@@ -129,6 +129,17 @@ pub struct Args {
     /// before (up to a perturbation of about 1 % of the coarse correlation).
     #[arg(long, conflicts_with = "resume")]
     pub coarse_feature_channels: Option<usize>,
+    /// Cascade: how many times coarser than the output the coarse stage's grid is
+    /// (`coarse_scale`): 4 (40 x 160 at the paper's grid, every cascade before stop 35) or 2
+    /// (80 x 320, where the half stage centres on the coarse answer itself; needs
+    /// --coarse-cue-oversample 1). --init weights with the coarse stage at 4 move to it: its
+    /// first and scoring convolutions resampled along the spheres, every other weight kept.
+    #[arg(long, conflicts_with = "resume")]
+    pub coarse_scale: Option<usize>,
+    /// Cascade: spheres of the coarse cost volume (`coarse_spheres`, 32 in the preset). --init
+    /// weights over other spheres are resampled along them (as for --coarse-scale).
+    #[arg(long, conflicts_with = "resume")]
+    pub coarse_spheres: Option<usize>,
     /// Cascade with the photometric cue: the grid the coarse stage's cue is matched on, 1 the
     /// coarse grid (quarter-size images), 2 the half-resolution grid (half-size images, 2 x 2
     /// means; `coarse_cue_oversample`, from `cascade-22`). No weight depends on it.
@@ -603,6 +614,8 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.coarse_feature_channels.is_some()
                 || args.coarse_cue_oversample.is_some()
                 || args.coarse_cue_depths.is_some()
+                || args.coarse_scale.is_some()
+                || args.coarse_spheres.is_some()
                 || args.coarse_cue_sgm.is_some()
                 || args.mid_cue_sgm.is_some()
             {
@@ -613,6 +626,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                          --stage-intervals, --neighbour-extremes, --neighbour-hypotheses, \
                          --neighbour-start-score, --neighbour-gain, \
                          --coarse-feature-channels, \
+                         --coarse-scale, --coarse-spheres, \
                          --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
                          --mid-cue-sgm are options of --preset cascade"
                     );
@@ -650,6 +664,12 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(depths) = args.coarse_cue_depths {
                     net.cascade.coarse_cue_depths = depths;
+                }
+                if let Some(scale) = args.coarse_scale {
+                    net.cascade.coarse_scale = scale;
+                }
+                if let Some(spheres) = args.coarse_spheres {
+                    net.cascade.coarse_spheres = spheres;
                 }
                 if let Some(sgm) = args.coarse_cue_sgm {
                     net.cascade.coarse_cue_sgm = sgm == Switch::On;

@@ -289,10 +289,10 @@ impl CascadeGeometry {
         let p = &self.config.cascade;
         let (factor, depths) = (p.coarse_cue_oversample, p.coarse_cue_depths);
         // Matched on its grid (images of the matching level: the quarter-size ones for the
-        // coarse grid itself), each coarse pixel the mean of its factor x factor block (itself
+        // coarse grid itself at `coarse_scale` 4, the half-size ones at 2), each coarse pixel the mean of its factor x factor block (itself
         // for factor 1); then each sphere the best of its depths. `zncc` refuses an empty set
         // of grids, so there is a first one after it.
-        let level = 2 - factor.trailing_zeros() as usize;
+        let level = (p.coarse_scale.trailing_zeros() - factor.trailing_zeros()) as usize;
         let fine = pyramid.zncc(level, &self.coarse_grids)?;
         let first = &self.coarse_grids[0];
         let (planes, h, w) = (first.num_spheres, first.height, first.width);

@@ -737,7 +737,8 @@ impl CascadeNet {
                 p.stage_gates,
                 device,
             ),
-            up_mid: p.convex_upsampling.then(|| {
+            // With the coarse stage on the half grid (`coarse_scale` 2) nothing is upsampled.
+            up_mid: (p.convex_upsampling && p.coarse_scale == 4).then(|| {
                 CandidateSelector::new(
                     [(p.groups[1] + extra) * UPSAMPLE_TAPS, p.stage_channels[0]],
                     device,
@@ -914,6 +915,50 @@ impl CascadeNet {
         self.features = self
             .features
             .widen8(c8, config.cascade.groups[2], &device)?;
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with its coarse stage moved to the grid `scale` times coarser than the
+    /// output (`coarse_scale`) and over `spheres` spheres (`coarse_spheres`), from a trained
+    /// one: every weight is kept but the coarse stage's first convolution, which reads each
+    /// evidence channel per sphere, and its scoring convolution, which writes one score per
+    /// sphere. Those are resampled along the spheres ([`sphere_resampling`]): the new first
+    /// convolution gives the old one's output for evidence that varies linearly over inverse
+    /// depth, and each new score is the old scores interpolated at the new sphere's inverse
+    /// depth. The 2D convolutions keep their kernels, now over pixels half the size with
+    /// `scale` 2; with `scale` 2 the half grid's selector (`up_mid`) goes: the half stage
+    /// centres on the coarse answer itself. A starting point for training, not an answer.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when the configuration with them is not valid.
+    pub fn with_coarse_grid(mut self, scale: usize, spheres: usize) -> Result<Self, NetError> {
+        let mut config = self.config.clone();
+        let old = config.cascade.coarse_spheres;
+        config.cascade.coarse_scale = scale;
+        config.cascade.coarse_spheres = spheres;
+        config.validate()?;
+        if spheres != old {
+            let n = config.num_invdepth;
+            let conv = &mut self.coarse.c0[0].conv;
+            conv.weight = Param::from_tensor(resample_axis(
+                conv.weight.val(),
+                1,
+                &sphere_resampling(old, spheres, n, true),
+                spheres,
+            )?);
+            let out = &mut self.coarse.out.conv;
+            let to_new = sphere_resampling(old, spheres, n, false);
+            out.weight = Param::from_tensor(resample_axis(out.weight.val(), 0, &to_new, spheres)?);
+            if let Some(bias) = out.bias.take() {
+                let bias = bias.val().reshape([old, 1, 1, 1]);
+                let bias = resample_axis(bias, 0, &to_new, spheres)?;
+                out.bias = Some(Param::from_tensor(bias.reshape([spheres])));
+            }
+        }
+        if scale != 4 {
+            self.up_mid = None;
+        }
         self.config = config;
         Ok(self)
     }
@@ -1184,6 +1229,87 @@ fn append_zero_outputs(conv: &mut Conv2d, k: usize, bias: f32) {
             Tensor::cat(vec![b.val(), new], 0).detach(),
         ));
     }
+}
+
+/// The matrix that carries a per-sphere quantity from `from` coarse spheres to `to`
+/// ([`super::sampler::coarse_indices`] over `N = num_invdepth`), row-major `[to, from]` when
+/// `transpose` is false: each new sphere's value interpolated linearly between the two old
+/// spheres around its inverse depth (scores). With `transpose`, `[from, to]`'s transpose laid
+/// out as `[to, from]` too: the weight that a new sphere's evidence takes over from each old
+/// sphere's, so that `sum_old w_old e_old = sum_new w_new e_new` whenever the old evidence is
+/// the new one interpolated linearly (first-layer weights).
+pub fn sphere_resampling(from: usize, to: usize, num_invdepth: usize, transpose: bool) -> Vec<f32> {
+    let interpolate = |at: &[f64], grid: &[f64]| -> Vec<f32> {
+        // Rows: positions `at`; columns: the `grid` spheres.
+        let spacing = super::sampler::coarse_spacing(grid.len(), num_invdepth);
+        let mut m = vec![0f32; at.len() * grid.len()];
+        for (r, &x) in at.iter().enumerate() {
+            let u = (x / spacing).clamp(0.0, (grid.len() - 1) as f64);
+            let i0 = (u.floor() as usize).min(grid.len() - 1);
+            let i1 = (i0 + 1).min(grid.len() - 1);
+            let f = (u - i0 as f64) as f32;
+            m[r * grid.len() + i0] += 1.0 - f;
+            m[r * grid.len() + i1] += f;
+        }
+        m
+    };
+    let old = super::sampler::coarse_indices(from, num_invdepth);
+    let new = super::sampler::coarse_indices(to, num_invdepth);
+    if !transpose {
+        return interpolate(&new, &old);
+    }
+    // Old positions from new spheres, `[from, to]`, transposed to `[to, from]`.
+    let m = interpolate(&old, &new);
+    let mut t = vec![0f32; to * from];
+    for i in 0..from {
+        for j in 0..to {
+            t[j * from + i] = m[i * to + j];
+        }
+    }
+    t
+}
+
+/// `weight` (`[O, I, kh, kw]`) with the sphere axis inside `axis` (0 or 1; that axis is
+/// `groups x from` with the sphere fastest, as [`fold_volume`] lays a volume out) carried to
+/// `to` spheres by `matrix` (`[to, from]`, [`sphere_resampling`]).
+///
+/// # Errors
+/// [`NetError`] when the weights cannot be read back from the device.
+fn resample_axis(
+    weight: Tensor<4>,
+    axis: usize,
+    matrix: &[f32],
+    to: usize,
+) -> Result<Tensor<4>, NetError> {
+    let dims = weight.dims();
+    let device = weight.device();
+    let values = read_values(weight, "coarse stage weights")?;
+    let from = matrix.len() / to;
+    let groups = dims[axis] / from;
+    let mut out_dims = dims;
+    out_dims[axis] = groups * to;
+    // Row-major strides of `dims` and of the output.
+    let inner: usize = dims[axis + 1..].iter().product();
+    let outer: usize = dims[..axis].iter().product();
+    let mut out = vec![0f32; outer * groups * to * inner];
+    for o in 0..outer {
+        for g in 0..groups {
+            for j in 0..to {
+                let dst = ((o * groups + g) * to + j) * inner;
+                for i in 0..from {
+                    let m = matrix[j * from + i];
+                    if m == 0.0 {
+                        continue;
+                    }
+                    let src = ((o * groups + g) * from + i) * inner;
+                    for e in 0..inner {
+                        out[dst + e] += m * values[src + e];
+                    }
+                }
+            }
+        }
+    }
+    Ok(Tensor::from_data(TensorData::new(out, out_dims), &device))
 }
 
 /// `first` reading `k` more input channels, after its own, with zero weights: the network
