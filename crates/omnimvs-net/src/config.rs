@@ -68,6 +68,16 @@ pub struct CascadeParams {
     /// from the half-size images (`coarse_cue_oversample` must be 1, no `mid_cue_sgm`).
     #[serde(default = "four", skip_serializing_if = "is_four")]
     pub coarse_scale: usize,
+    /// Whether the coarse stage also correlates the stride-4 features (in `groups[1]` groups)
+    /// at its samples, beside the stride-8 ones (`true`; `false`, and left out of the file:
+    /// the stride-8 ones only). On the half-resolution grid (`coarse_scale` 2) the stride-8
+    /// features blur a depth edge over about two of its pixels: moved there and trained,
+    /// the coarse stage still missed by over 20 at a third of the things pixels whose 4 x 4
+    /// output block holds an edge (36.9 % at 40 x 160; `models/training/cascade-37`). The
+    /// first convolution reads `groups[1]` more channels per sphere, after the others (zero
+    /// weights when switched on from weights without them, [`crate::cascade::CascadeNet::with_coarse_stride4`]).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub coarse_stride4: bool,
     /// Channels of the coarse 2D encoder-decoder (full, half and quarter resolution).
     pub coarse_channels: [usize; 3],
     /// Per-pixel hypotheses of the half- and full-resolution stages.
@@ -328,6 +338,7 @@ impl Default for CascadeParams {
             groups: [4, 4, 8],
             coarse_spheres: 32,
             coarse_scale: 4,
+            coarse_stride4: false,
             coarse_channels: [48, 64, 96],
             stage_hypotheses: [8, 5],
             stage_intervals: [2.0, 1.0],

@@ -274,12 +274,15 @@ pub fn load_cascade_grown(
     // (CascadeNet::with_coarse_grid).
     shrunk.cascade.coarse_scale = saved.cascade.coarse_scale;
     shrunk.cascade.coarse_spheres = saved.cascade.coarse_spheres;
+    // It may also correlate the stride-4 features (CascadeNet::with_coarse_stride4).
+    shrunk.cascade.coarse_stride4 = saved.cascade.coarse_stride4;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
         && (saved.cascade.coarse_scale == config.cascade.coarse_scale
             || config.cascade.coarse_scale < saved.cascade.coarse_scale)
         && saved.cascade.feature_channels[2] <= config.cascade.feature_channels[2]
         && (!saved.cascade.stage_gates || config.cascade.stage_gates)
         && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
+        && (!saved.cascade.coarse_stride4 || config.cascade.coarse_stride4)
         && (!saved.cascade.coarse_cue_sgm || config.cascade.coarse_cue_sgm)
         && (!saved.cascade.mid_cue_sgm || config.cascade.mid_cue_sgm)
         && (!saved.cascade.convex_upsampling || config.cascade.convex_upsampling)
@@ -295,7 +298,7 @@ pub fn load_cascade_grown(
             path,
             "the network of these weights is neither the one asked for nor a part of it \
              (only `context_pairs` and the stride-8 `feature_channels` may grow, \
-             `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm`, \
+             `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm`, `coarse_stride4`, \
              `neighbour_hypotheses` and `convex_upsampling` switch on (the cue not after \
              neighbour hypotheses), `convex_upsampling_full` switch either way, and the \
              refinement stages' `stage_intervals`, `neighbour_extremes`, \
@@ -326,6 +329,7 @@ pub fn load_cascade_grown(
     without_cue.cascade.mid_cue_sgm = saved.cascade.mid_cue_sgm;
     without_cue.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
     without_cue.cascade.neighbour_hypotheses = saved.cascade.neighbour_hypotheses;
+    without_cue.cascade.coarse_stride4 = saved.cascade.coarse_stride4;
     without_cue.cascade.coarse_scale = saved.cascade.coarse_scale;
     without_cue.cascade.coarse_spheres = saved.cascade.coarse_spheres;
     // The cue's grid settings must be valid with the saved scale.
@@ -349,6 +353,11 @@ pub fn load_cascade_grown(
     };
     let net = if config.cascade.mid_cue_sgm {
         net.with_mid_cue_sgm()?
+    } else {
+        net
+    };
+    let net = if config.cascade.coarse_stride4 {
+        net.with_coarse_stride4()?
     } else {
         net
     };

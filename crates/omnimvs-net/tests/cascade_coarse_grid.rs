@@ -277,3 +277,80 @@ fn saved_weights_move_to_the_half_grid_when_loaded_and_not_back() {
     let again = weights::load_cascade_grown(&moved_path, &moved_config, &device).unwrap();
     assert_eq!(again.config, moved_config);
 }
+
+#[test]
+fn the_stride4_correlation_grows_in_unchanged_and_learns() {
+    let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
+    let hyps = ds.hypotheses(32).unwrap();
+    let mut config = half_grid(&micro_config());
+    config.cascade.zncc_cue = true;
+    config.cascade.coarse_cue_sgm = true;
+    let device = Device::flex();
+    let net = CascadeNet::new(&config, &device).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("stride8.safetensors");
+    weights::save_module(&net, &config, &path).unwrap();
+
+    let mut sharp = config.clone();
+    sharp.cascade.coarse_stride4 = true;
+    let grown = weights::load_cascade_grown(&path, &sharp, &device).unwrap();
+    let (k, [g4, g8]) = (
+        config.cascade.coarse_spheres,
+        [config.cascade.groups[1], config.cascade.groups[2]],
+    );
+    // Stride-8 groups, visibility, cue, aggregated cue, then the stride-4 groups.
+    assert_eq!(grown.coarse.c0[0].conv.weight.dims()[1], (g8 + 3 + g4) * k);
+    let inputs = images(&config, &device);
+    let before = net
+        .forward(
+            &inputs,
+            &CascadeGeometry::new(&ds.rig, &config, &hyps, &device).unwrap(),
+        )
+        .unwrap();
+    let geometry = CascadeGeometry::new(&ds.rig, &sharp, &hyps, &device).unwrap();
+    assert!(geometry.coarse4.is_some());
+    let after = grown.forward(&inputs, &geometry).unwrap();
+    for s in 0..3 {
+        let a = read_values(before.stages[s].index.clone(), "before").unwrap();
+        let b = read_values(after.stages[s].index.clone(), "after").unwrap();
+        assert!(max_difference(&a, &b) < 1e-4, "stage {s}");
+    }
+    // The network without it does not run on a geometry with it, nor the other way.
+    assert!(net.forward(&inputs, &geometry).is_err());
+
+    // The new inputs learn.
+    let device = Device::flex().autodiff();
+    let net = CascadeNet::new(&config, &device)
+        .unwrap()
+        .with_coarse_stride4()
+        .unwrap();
+    let geometry = CascadeGeometry::new(&ds.rig, &sharp, &hyps, &device).unwrap();
+    let out = net.forward(&images(&sharp, &device), &geometry).unwrap();
+    let loss = out.stages[0].index.clone().sub_scalar(10.0).abs().mean();
+    let grads = GradientsParams::from_grads(loss.backward(), &net);
+    let grad = grads
+        .get::<4>(net.coarse.c0[0].conv.weight.id)
+        .unwrap()
+        .narrow(1, (g8 + 3) * k, g4 * k);
+    let norm: f32 = read_values(grad, "grad")
+        .unwrap()
+        .iter()
+        .map(|g| g.abs())
+        .sum();
+    assert!(norm > 0.0 && norm.is_finite(), "{norm}");
+
+    // A cue switched on later goes before the stride-4 inputs, which keep their weights.
+    let device = Device::flex();
+    let mut plain = micro_config();
+    plain.cascade.coarse_stride4 = true;
+    let net = CascadeNet::new(&plain, &device).unwrap();
+    let tail = |net: &CascadeNet| {
+        let w = net.coarse.c0[0].conv.weight.val();
+        let c_in = w.dims()[1];
+        read_values(w.narrow(1, c_in - g4 * k, g4 * k), "tail").unwrap()
+    };
+    let old_tail = tail(&net);
+    let cued = net.with_zncc_cue().with_coarse_cue_sgm().unwrap();
+    assert_eq!(cued.coarse.c0[0].conv.weight.dims()[1], (g8 + 3 + g4) * k);
+    assert_eq!(max_difference(&old_tail, &tail(&cued)), 0.0);
+}

@@ -140,6 +140,11 @@ pub struct Args {
     /// weights over other spheres are resampled along them (as for --coarse-scale).
     #[arg(long, conflicts_with = "resume")]
     pub coarse_spheres: Option<usize>,
+    /// Cascade: whether the coarse stage also correlates the stride-4 features at its samples
+    /// (`coarse_stride4`; sharper evidence at depth edges than the stride-8 ones). --init
+    /// weights without it grow into it answering as before (zero weights for the new inputs).
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub coarse_stride4: Option<Switch>,
     /// Cascade with the photometric cue: the grid the coarse stage's cue is matched on, 1 the
     /// coarse grid (quarter-size images), 2 the half-resolution grid (half-size images, 2 x 2
     /// means; `coarse_cue_oversample`, from `cascade-22`). No weight depends on it.
@@ -616,6 +621,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.coarse_cue_depths.is_some()
                 || args.coarse_scale.is_some()
                 || args.coarse_spheres.is_some()
+                || args.coarse_stride4.is_some()
                 || args.coarse_cue_sgm.is_some()
                 || args.mid_cue_sgm.is_some()
             {
@@ -626,7 +632,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                          --stage-intervals, --neighbour-extremes, --neighbour-hypotheses, \
                          --neighbour-start-score, --neighbour-gain, \
                          --coarse-feature-channels, \
-                         --coarse-scale, --coarse-spheres, \
+                         --coarse-scale, --coarse-spheres, --coarse-stride4, \
                          --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
                          --mid-cue-sgm are options of --preset cascade"
                     );
@@ -670,6 +676,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(spheres) = args.coarse_spheres {
                     net.cascade.coarse_spheres = spheres;
+                }
+                if let Some(stride4) = args.coarse_stride4 {
+                    net.cascade.coarse_stride4 = stride4 == Switch::On;
                 }
                 if let Some(sgm) = args.coarse_cue_sgm {
                     net.cascade.coarse_cue_sgm = sgm == Switch::On;

@@ -176,6 +176,9 @@ impl StageTaps {
 pub struct CascadeGeometry {
     /// The coarse stage's taps (fixed spheres).
     pub coarse: StageTaps,
+    /// The same samples in the stride-4 feature maps, when the coarse stage also correlates
+    /// those (`coarse_stride4`).
+    pub coarse4: Option<StageTaps>,
     /// Samplers of the coarse, half- and full-resolution grids.
     pub samplers: [PixelSampler; 3],
     /// The `N` hypotheses.
@@ -248,6 +251,18 @@ impl CascadeGeometry {
             .flat_map(|&n| std::iter::repeat_n(n as f32, plane))
             .collect();
         let feature_sizes = config.cascade_feature_sizes();
+        // The same samples in the stride-4 features (`coarse_stride4`).
+        let coarse4 = if config.cascade.coarse_stride4 {
+            Some(StageTaps::new(
+                &coarse_grids,
+                index.clone(),
+                feature_sizes[1],
+                host_correlation,
+                device,
+            )?)
+        } else {
+            None
+        };
         let coarse = StageTaps::new(
             &coarse_grids,
             index,
@@ -266,6 +281,7 @@ impl CascadeGeometry {
         };
         Ok(Self {
             coarse,
+            coarse4,
             samplers,
             hypotheses: *hypotheses,
             config: config.clone(),
@@ -874,7 +890,8 @@ impl CascadeNet {
         geometry: &CascadeGeometry,
     ) -> Result<StageOutput, NetError> {
         let cue = geometry.coarse_cue(photo)?;
-        self.coarse_stage(&levels[2], &geometry.coarse, cue)
+        let stride4 = geometry.coarse4.as_ref().map(|taps| (&levels[1][..], taps));
+        self.coarse_stage(&levels[2], &geometry.coarse, cue, stride4)
     }
 
     /// The taps of refinement `stage` (1: half, 2: full resolution) over its columns `cols`,

@@ -718,7 +718,11 @@ impl CascadeNet {
         Ok(Self {
             features: CascadeFeatures::new(p.feature_channels, p.context_pairs, device),
             coarse: CoarseRegularizer::new(
-                (p.groups[2] + extra + usize::from(p.coarse_cue_sgm)) * p.coarse_spheres,
+                (p.groups[2]
+                    + extra
+                    + usize::from(p.coarse_cue_sgm)
+                    + if p.coarse_stride4 { p.groups[1] } else { 0 })
+                    * p.coarse_spheres,
                 p.coarse_spheres,
                 p.coarse_channels,
                 device,
@@ -784,8 +788,10 @@ impl CascadeNet {
             p.stage_hypotheses[0],
             p.stage_hypotheses[1],
         ];
+        // The coarse stage's cue goes before its stride-4 correlation (`coarse_stride4`).
+        let tail = self.coarse_stride4_inputs();
+        insert_zero_inputs(&mut self.coarse.c0[0].conv, tail, ks[0]);
         let mut firsts = vec![
-            (&mut self.coarse.c0[0], ks[0]),
             (&mut self.mid.convs[0], ks[1]),
             (&mut self.fine.convs[0], ks[2]),
         ];
@@ -807,11 +813,24 @@ impl CascadeNet {
     /// # Errors
     /// [`NetError::InvalidConfig`] when the network has no `zncc_cue`.
     pub fn with_coarse_cue_sgm(self) -> Result<Self, NetError> {
+        let tail = self.coarse_stride4_inputs();
         self.with_cue_channel(
             |p| &mut p.coarse_cue_sgm,
             |net| &mut net.coarse.c0[0].conv,
             |p| p.coarse_spheres,
+            tail,
         )
+    }
+
+    /// The input channels of the coarse stage's first convolution that read the stride-4
+    /// correlation (`coarse_stride4`; the last ones): `groups[1]` per sphere, or 0.
+    fn coarse_stride4_inputs(&self) -> usize {
+        let p = &self.config.cascade;
+        if p.coarse_stride4 {
+            p.groups[1] * p.coarse_spheres
+        } else {
+            0
+        }
     }
 
     /// The network with the half-resolution stage's aggregated cue switched on
@@ -827,17 +846,19 @@ impl CascadeNet {
             |p| &mut p.mid_cue_sgm,
             |net| &mut net.mid.convs[0].conv,
             |p| p.stage_hypotheses[0],
+            0,
         )
     }
 
     /// The network with the cue channel that `flag` switches on: unless it is on already, the
     /// configuration with it must validate, and the convolution `first` reads `k` more input
-    /// channels (one per hypothesis of its stage) with zero weights.
+    /// channels (one per hypothesis of its stage) with zero weights, before its last `tail`.
     fn with_cue_channel(
         mut self,
         flag: fn(&mut CascadeParams) -> &mut bool,
         first: fn(&mut Self) -> &mut Conv2d,
         k: fn(&CascadeParams) -> usize,
+        tail: usize,
     ) -> Result<Self, NetError> {
         let mut config = self.config.clone();
         if *flag(&mut config.cascade) {
@@ -845,7 +866,7 @@ impl CascadeNet {
         }
         *flag(&mut config.cascade) = true;
         config.validate()?;
-        append_zero_inputs(first(&mut self), k(&config.cascade));
+        insert_zero_inputs(first(&mut self), tail, k(&config.cascade));
         self.config = config;
         Ok(self)
     }
@@ -915,6 +936,26 @@ impl CascadeNet {
         self.features = self
             .features
             .widen8(c8, config.cascade.groups[2], &device)?;
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with the coarse stage also correlating the stride-4 features
+    /// (`coarse_stride4`): its first convolution reads `groups[1]` more channels per sphere,
+    /// after all of the others, with zero weights, so that it answers exactly as before until
+    /// training moves them. A network that has them is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when the configuration with them is not valid.
+    pub fn with_coarse_stride4(mut self) -> Result<Self, NetError> {
+        if self.config.cascade.coarse_stride4 {
+            return Ok(self);
+        }
+        let mut config = self.config.clone();
+        config.cascade.coarse_stride4 = true;
+        config.validate()?;
+        let p = &config.cascade;
+        append_zero_inputs(&mut self.coarse.c0[0].conv, p.groups[1] * p.coarse_spheres);
         self.config = config;
         Ok(self)
     }
@@ -1087,19 +1128,39 @@ impl CascadeNet {
     }
 
     /// Coarse stage from the stride-8 features of every camera and, with `zncc_cue`, the
-    /// photometric cue at its samples.
+    /// photometric cue at its samples; with `coarse_stride4`, `stride4` gives the stride-4
+    /// features and their taps at the same samples, whose group-wise correlation (without a
+    /// second visibility) follows everything else.
     ///
     /// # Errors
-    /// See [`CascadeNet::correlation`]; a missing cue.
+    /// See [`CascadeNet::correlation`]; a missing cue, or stride-4 features missing where the
+    /// network reads them (or given where it does not).
     pub fn coarse_stage(
         &self,
         features: &[Tensor<4>],
         taps: &StageTaps,
         cue: Option<Tensor<5>>,
+        stride4: Option<(&[Tensor<4>], &StageTaps)>,
     ) -> Result<StageOutput, NetError> {
-        let volume = Self::correlation(features, taps, self.config.cascade.groups[2])?;
-        let channels = 1 + usize::from(self.config.cascade.coarse_cue_sgm);
-        let volume = self.with_cue(volume, cue, taps, channels)?;
+        let p = &self.config.cascade;
+        let volume = Self::correlation(features, taps, p.groups[2])?;
+        let channels = 1 + usize::from(p.coarse_cue_sgm);
+        let mut volume = self.with_cue(volume, cue, taps, channels)?;
+        match (p.coarse_stride4, stride4) {
+            (false, None) => {}
+            (true, Some((features4, taps4))) => {
+                let fine = Self::correlation(features4, taps4, p.groups[1])?;
+                let fine = fine.narrow(1, 0, p.groups[1]); // the visibility is there already
+                volume = Tensor::cat(vec![volume, fine], 1);
+            }
+            (has, given) => {
+                return Err(NetError::Shape {
+                    what: "stride-4 features of the coarse stage (`coarse_stride4`)".into(),
+                    expected: vec![usize::from(has)],
+                    actual: vec![usize::from(given.is_some())],
+                });
+            }
+        }
         let scores = self.coarse.forward(fold_volume(volume)); // [B, K, H, W]
         Ok(Self::soft_argmax(scores, taps.hypotheses.clone()))
     }
@@ -1315,10 +1376,21 @@ fn resample_axis(
 /// `first` reading `k` more input channels, after its own, with zero weights: the network
 /// answers as before until training moves them.
 fn append_zero_inputs(first: &mut Conv2d, k: usize) {
+    insert_zero_inputs(first, 0, k);
+}
+
+/// `first` reading `k` more input channels with zero weights, placed before its last `tail`
+/// input channels (after all of them with `tail` 0).
+fn insert_zero_inputs(first: &mut Conv2d, tail: usize, k: usize) {
     let weight = first.weight.val(); // [C_out, C_in, 3, 3]
-    let [c_out, _, kh, kw] = weight.dims();
+    let [c_out, c_in, kh, kw] = weight.dims();
     let zeros = Tensor::zeros([c_out, k, kh, kw], &weight.device());
-    let widened = Tensor::cat(vec![weight, zeros], 1).detach(); // a leaf again
+    let head = c_in - tail.min(c_in);
+    let mut parts = vec![weight.clone().narrow(1, 0, head), zeros];
+    if head < c_in {
+        parts.push(weight.narrow(1, head, c_in - head));
+    }
+    let widened = Tensor::cat(parts, 1).detach(); // a leaf again
     first.weight = Param::from_tensor(widened);
 }
 
