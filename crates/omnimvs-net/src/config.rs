@@ -42,8 +42,8 @@ pub enum Family {
     #[default]
     OmniMvs,
     /// The coarse-to-fine network ([`crate::cascade::CascadeNet`]): a small cost volume at a
-    /// quarter of the output resolution, then per-pixel hypotheses around the coarse estimate
-    /// at half and full resolution.
+    /// quarter (or half, `coarse_scale`) of the output resolution, then per-pixel hypotheses
+    /// around the coarse estimate at half and full resolution.
     Cascade,
 }
 

@@ -1,6 +1,7 @@
 //! The coarse-to-fine network: features at three strides, a group-wise correlation cost
-//! volume over a few spheres at a quarter of the output resolution regularised by a small 2D
-//! encoder-decoder (hypotheses as channels), then two stages of per-pixel hypotheses around the previous estimate.
+//! volume over a few spheres at a quarter (or, with `coarse_scale` 2, half) of the output
+//! resolution regularised by a small 2D encoder-decoder (hypotheses as channels), then two
+//! stages of per-pixel hypotheses around the previous estimate.
 
 use burn::module::Module;
 use burn::module::Param;
