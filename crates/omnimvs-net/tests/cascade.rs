@@ -20,7 +20,7 @@ use samples::sample as sample_dir;
 
 #[path = "support/micro_cascade.rs"]
 mod micro_cascade;
-use micro_cascade::{micro_config, micro_images};
+use micro_cascade::{max_difference, micro_config, micro_images};
 
 fn sunny_rig() -> (Rig, InvDepthHypotheses) {
     let ds = Dataset::open(&sample_dir("sunny_single")).unwrap();
@@ -110,15 +110,6 @@ fn stages_have_the_expected_shapes_and_stay_in_range() {
         .collect();
     assert!(net.forward(&two, &geometry).is_err());
     assert!(net.forward(&learner_images[..3], &geometry).is_err());
-}
-
-/// Largest absolute difference between two equally long slices.
-fn max_difference(a: &[f32], b: &[f32]) -> f32 {
-    assert_eq!(a.len(), b.len());
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0f32, f32::max)
 }
 
 /// Gives a batch norm inference statistics and an affine part away from the identity, from

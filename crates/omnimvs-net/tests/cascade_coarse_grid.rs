@@ -19,7 +19,7 @@ use samples::sample as sample_dir;
 
 #[path = "support/micro_cascade.rs"]
 mod micro_cascade;
-use micro_cascade::{micro_config, micro_image_tensors as images};
+use micro_cascade::{max_difference, micro_config, micro_image_tensors as images};
 
 fn half_grid(config: &NetConfig) -> NetConfig {
     let mut moved = config.clone();
@@ -41,14 +41,6 @@ fn noise(dims: [usize; 4], seed: u32, device: &Device) -> Tensor<4> {
         .map(|i| ((i as f32 * 0.618 + seed as f32 * 1.37).sin() * 43758.547).fract() - 0.5)
         .collect();
     Tensor::from_data(TensorData::new(values, dims), device)
-}
-
-fn max_difference(a: &[f32], b: &[f32]) -> f32 {
-    assert_eq!(a.len(), b.len());
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0f32, f32::max)
 }
 
 #[test]

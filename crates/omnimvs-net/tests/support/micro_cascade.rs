@@ -54,3 +54,12 @@ pub fn micro_image_tensors(config: &NetConfig, device: &Device) -> Vec<Tensor<4>
         })
         .collect()
 }
+
+/// Largest absolute difference between two equally long slices.
+pub fn max_difference(a: &[f32], b: &[f32]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0f32, f32::max)
+}
