@@ -332,8 +332,6 @@ pub fn load_cascade_grown(
     without_cue.cascade.coarse_stride4 = saved.cascade.coarse_stride4;
     without_cue.cascade.coarse_scale = saved.cascade.coarse_scale;
     without_cue.cascade.coarse_spheres = saved.cascade.coarse_spheres;
-    // The cue's grid settings must be valid with the saved scale.
-    without_cue.cascade.coarse_cue_oversample = saved.cascade.coarse_cue_oversample;
     let dropped = |p: &str| saved_fine && !fine && p.starts_with("up_fine.");
     let net = apply_file_except(
         CascadeNet::new(&without_cue, device)?,
@@ -365,18 +363,9 @@ pub fn load_cascade_grown(
     for (i, &radius) in config.cascade.neighbour_hypotheses.iter().enumerate() {
         net = net.with_neighbour_hypotheses(i + 1, radius)?;
     }
-    let (p, had) = (&config.cascade, &saved.cascade);
-    if (p.coarse_scale, p.coarse_spheres) != (had.coarse_scale, had.coarse_spheres) {
-        // The configuration asked for on the saved grid, then the move (which checks the
-        // cue's grid settings against the new scale).
-        let mut before = config.clone();
-        before.cascade.coarse_scale = had.coarse_scale;
-        before.cascade.coarse_spheres = had.coarse_spheres;
-        net.config = before;
-        net = net.with_coarse_grid(p.coarse_scale, p.coarse_spheres)?;
-        net.config = config.clone();
-    }
-    Ok(net)
+    // Everything asked for but the saved grid and spheres by now; the move keeps what it has
+    // where they are the same.
+    net.with_coarse_grid(config.cascade.coarse_scale, config.cascade.coarse_spheres)
 }
 
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes
