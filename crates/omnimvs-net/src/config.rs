@@ -266,6 +266,33 @@ impl CascadeParams {
             + usize::from(i == 0 && self.mid_cue_sgm)
     }
 
+    /// The input channels per sphere of the coarse stage: the stride-8 groups' correlations,
+    /// the visibility, the photometric cue with `zncc_cue`, the aggregated cue with
+    /// `coarse_cue_sgm`, and last the stride-4 groups' correlations with `coarse_stride4`.
+    pub fn coarse_evidence_channels(&self) -> usize {
+        self.groups[2]
+            + 1
+            + usize::from(self.zncc_cue)
+            + usize::from(self.coarse_cue_sgm)
+            + self.coarse_stride4_groups()
+    }
+
+    /// The stride-4 groups the coarse stage correlates (`coarse_stride4`): `groups[1]` or 0.
+    pub fn coarse_stride4_groups(&self) -> usize {
+        if self.coarse_stride4 {
+            self.groups[1]
+        } else {
+            0
+        }
+    }
+
+    /// Whether the half stage centres on a learnt upsampling of the coarse answer (a half-grid
+    /// selector): with `convex_upsampling`, when the coarse grid is coarser than the half
+    /// grid (`coarse_scale` 4).
+    pub fn half_grid_selector(&self) -> bool {
+        self.convex_upsampling && self.coarse_scale == 4
+    }
+
     /// The hypotheses that `neighbour_hypotheses` adds to refinement stage `i`: 2 or 0.
     pub fn neighbour_count(&self, i: usize) -> usize {
         if self.neighbour_hypotheses[i] > 0 {

@@ -305,8 +305,9 @@ impl CascadeGeometry {
         let p = &self.config.cascade;
         let (factor, depths) = (p.coarse_cue_oversample, p.coarse_cue_depths);
         // Matched on its grid (images of the matching level: the quarter-size ones for the
-        // coarse grid itself at `coarse_scale` 4, the half-size ones at 2), each coarse pixel the mean of its factor x factor block (itself
-        // for factor 1); then each sphere the best of its depths. `zncc` refuses an empty set
+        // coarse grid itself at `coarse_scale` 4, the half-size ones at 2), each coarse pixel
+        // the mean of its factor x factor block (itself for factor 1); then each sphere the
+        // best of its depths. `zncc` refuses an empty set
         // of grids, so there is a first one after it.
         let level = (p.coarse_scale.trailing_zeros() - factor.trailing_zeros()) as usize;
         let fine = pyramid.zncc(level, &self.coarse_grids)?;

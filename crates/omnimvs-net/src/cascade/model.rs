@@ -719,11 +719,7 @@ impl CascadeNet {
         Ok(Self {
             features: CascadeFeatures::new(p.feature_channels, p.context_pairs, device),
             coarse: CoarseRegularizer::new(
-                (p.groups[2]
-                    + extra
-                    + usize::from(p.coarse_cue_sgm)
-                    + if p.coarse_stride4 { p.groups[1] } else { 0 })
-                    * p.coarse_spheres,
+                p.coarse_evidence_channels() * p.coarse_spheres,
                 p.coarse_spheres,
                 p.coarse_channels,
                 device,
@@ -742,8 +738,7 @@ impl CascadeNet {
                 p.stage_gates,
                 device,
             ),
-            // With the coarse stage on the half grid (`coarse_scale` 2) nothing is upsampled.
-            up_mid: (p.convex_upsampling && p.coarse_scale == 4).then(|| {
+            up_mid: p.half_grid_selector().then(|| {
                 CandidateSelector::new(
                     [(p.groups[1] + extra) * UPSAMPLE_TAPS, p.stage_channels[0]],
                     device,
@@ -827,11 +822,7 @@ impl CascadeNet {
     /// correlation (`coarse_stride4`; the last ones): `groups[1]` per sphere, or 0.
     fn coarse_stride4_inputs(&self) -> usize {
         let p = &self.config.cascade;
-        if p.coarse_stride4 {
-            p.groups[1] * p.coarse_spheres
-        } else {
-            0
-        }
+        p.coarse_stride4_groups() * p.coarse_spheres
     }
 
     /// The network with the half-resolution stage's aggregated cue switched on
@@ -955,9 +946,9 @@ impl CascadeNet {
         let mut config = self.config.clone();
         config.cascade.coarse_stride4 = true;
         config.validate()?;
-        let p = &config.cascade;
-        append_zero_inputs(&mut self.coarse.c0[0].conv, p.groups[1] * p.coarse_spheres);
         self.config = config;
+        let inputs = self.coarse_stride4_inputs();
+        append_zero_inputs(&mut self.coarse.c0[0].conv, inputs);
         Ok(self)
     }
 
@@ -998,7 +989,7 @@ impl CascadeNet {
                 out.bias = Some(Param::from_tensor(bias.reshape([spheres])));
             }
         }
-        if scale != 4 {
+        if !config.cascade.half_grid_selector() {
             self.up_mid = None;
         }
         self.config = config;
