@@ -24,6 +24,8 @@
 #   TRAIN_B_EXTRA   when set, a second training run beside the first on the same GPU and data
 #                   (an A/B in one call), with these options after TRAIN_EXTRA's; its results
 #                   under run-b/ (each run gets half of LOADER_THREADS)
+#   TRAIN_A_EXTRA   options of the first run alone, after TRAIN_EXTRA's (an option that the two
+#                   runs set differently goes here and in TRAIN_B_EXTRA: a repeated one is refused)
 #   STEPS_PER_EPOCH [100]; TRAIN_EPOCHS: epochs of the run, the last 3 at TRAIN_LR_LOW [100]
 #   VAL_FRAMES      validation frames of the two standard sets [481..488]
 #   LOADER_THREADS  threads preparing the training samples [8] (one left the GPU idle two
@@ -206,7 +208,8 @@ if want train; then
         train_run train-cascade-b "$work/run-b" "${extra_b[@]}" &
         b_pid=$!
     fi
-    train_run train-cascade "$work/run"
+    read -r -a extra_a <<<"${TRAIN_A_EXTRA:-}"
+    train_run train-cascade "$work/run" "${extra_a[@]}"
     [ -n "$b_pid" ] && wait "$b_pid"
     for r in run run-b; do
         [ -e "$work/$r/metrics.jsonl" ] && { echo "== $r"; tail -n 20 "$work/$r/metrics.jsonl"; }

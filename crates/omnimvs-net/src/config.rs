@@ -78,6 +78,16 @@ pub struct CascadeParams {
     /// weights when switched on from weights without them, [`crate::cascade::CascadeNet::with_coarse_stride4`]).
     #[serde(default, skip_serializing_if = "is_false")]
     pub coarse_stride4: bool,
+    /// With `coarse_scale` 2 and `convex_upsampling`: whether the half stage centres on a
+    /// learnt choice among the coarse answers of the 3 x 3 pixels around each pixel (`true`:
+    /// the half-grid selector `up_mid` on the coarse grid itself, starting at the pixel's own
+    /// answer, [`crate::cascade::model::same_grid_prior`]) or on the pixel's own answer
+    /// (`false`, and left out of the file). On the half grid the coarse answer is better than
+    /// at 40 x 160, but the half stage refined it less without the choice of side that the
+    /// learnt upsampling made at a depth edge (house: 4.53 -> 4.08 against 4.80 -> 3.94,
+    /// `models/training/cascade-37/stage_errors.py`, stop 35).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub same_grid_selector: bool,
     /// Channels of the coarse 2D encoder-decoder (full, half and quarter resolution).
     pub coarse_channels: [usize; 3],
     /// Per-pixel hypotheses of the half- and full-resolution stages.
@@ -286,11 +296,12 @@ impl CascadeParams {
         }
     }
 
-    /// Whether the half stage centres on a learnt upsampling of the coarse answer (a half-grid
+    /// Whether the half stage centres on a learnt choice among coarse answers (a half-grid
     /// selector): with `convex_upsampling`, when the coarse grid is coarser than the half
-    /// grid (`coarse_scale` 4).
+    /// grid (`coarse_scale` 4: the learnt upsampling) or with `same_grid_selector` (on the
+    /// half grid itself).
     pub fn half_grid_selector(&self) -> bool {
-        self.convex_upsampling && self.coarse_scale == 4
+        self.convex_upsampling && (self.coarse_scale == 4 || self.same_grid_selector)
     }
 
     /// The hypotheses that `neighbour_hypotheses` adds to refinement stage `i`: 2 or 0.
@@ -366,6 +377,7 @@ impl Default for CascadeParams {
             coarse_spheres: 32,
             coarse_scale: 4,
             coarse_stride4: false,
+            same_grid_selector: false,
             coarse_channels: [48, 64, 96],
             stage_hypotheses: [8, 5],
             stage_intervals: [2.0, 1.0],
@@ -612,6 +624,16 @@ impl NetConfig {
                 "2 (the coarse stage on the half-resolution grid) needs `coarse_cue_oversample: \
                  1` and no `mid_cue_sgm`: the cue is matched on the coarse grid itself"
                     .into(),
+            ));
+        }
+        if p.same_grid_selector && (p.coarse_scale != 2 || !p.convex_upsampling) {
+            return Err(invalid(
+                "cascade.same_grid_selector",
+                format!(
+                    "needs `coarse_scale: 2` (got {}) and `convex_upsampling: true` (got {}): \
+                     it chooses among the coarse answers on the half grid itself",
+                    p.coarse_scale, p.convex_upsampling
+                ),
             ));
         }
         if !matches!(p.coarse_cue_oversample, 1 | 2) {

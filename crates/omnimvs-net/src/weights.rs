@@ -276,6 +276,8 @@ pub fn load_cascade_grown(
     shrunk.cascade.coarse_spheres = saved.cascade.coarse_spheres;
     // It may also correlate the stride-4 features (CascadeNet::with_coarse_stride4).
     shrunk.cascade.coarse_stride4 = saved.cascade.coarse_stride4;
+    // And centre its half stage on a learnt choice (CascadeNet::with_same_grid_selector).
+    shrunk.cascade.same_grid_selector = saved.cascade.same_grid_selector;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
         && (saved.cascade.coarse_scale == config.cascade.coarse_scale
             || config.cascade.coarse_scale < saved.cascade.coarse_scale)
@@ -283,6 +285,7 @@ pub fn load_cascade_grown(
         && (!saved.cascade.stage_gates || config.cascade.stage_gates)
         && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
         && (!saved.cascade.coarse_stride4 || config.cascade.coarse_stride4)
+        && (!saved.cascade.same_grid_selector || config.cascade.same_grid_selector)
         && (!saved.cascade.coarse_cue_sgm || config.cascade.coarse_cue_sgm)
         && (!saved.cascade.mid_cue_sgm || config.cascade.mid_cue_sgm)
         && (!saved.cascade.convex_upsampling || config.cascade.convex_upsampling)
@@ -299,7 +302,7 @@ pub fn load_cascade_grown(
             "the network of these weights is neither the one asked for nor a part of it \
              (only `context_pairs` and the stride-8 `feature_channels` may grow, \
              `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm`, `coarse_stride4`, \
-             `neighbour_hypotheses` and `convex_upsampling` switch on (the cue not after \
+             `same_grid_selector`, `neighbour_hypotheses` and `convex_upsampling` switch on (the cue not after \
              neighbour hypotheses), `convex_upsampling_full` switch either way, and the \
              refinement stages' `stage_intervals`, `neighbour_extremes`, \
              `coarse_cue_oversample`, `coarse_cue_depths` and the loss weights differ, \
@@ -332,6 +335,7 @@ pub fn load_cascade_grown(
     without_cue.cascade.coarse_stride4 = saved.cascade.coarse_stride4;
     without_cue.cascade.coarse_scale = saved.cascade.coarse_scale;
     without_cue.cascade.coarse_spheres = saved.cascade.coarse_spheres;
+    without_cue.cascade.same_grid_selector = saved.cascade.same_grid_selector;
     let dropped = |p: &str| saved_fine && !fine && p.starts_with("up_fine.");
     let net = apply_file_except(
         CascadeNet::new(&without_cue, device)?,
@@ -365,7 +369,12 @@ pub fn load_cascade_grown(
     }
     // Everything asked for but the saved grid and spheres by now; the move keeps what it has
     // where they are the same.
-    net.with_coarse_grid(config.cascade.coarse_scale, config.cascade.coarse_spheres)
+    let net = net.with_coarse_grid(config.cascade.coarse_scale, config.cascade.coarse_spheres)?;
+    if config.cascade.same_grid_selector {
+        net.with_same_grid_selector()
+    } else {
+        Ok(net)
+    }
 }
 
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes

@@ -145,6 +145,12 @@ pub struct Args {
     /// weights without it grow into it answering as before (zero weights for the new inputs).
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub coarse_stride4: Option<Switch>,
+    /// Cascade with --coarse-scale 2 and --convex-upsampling: whether the half stage centres
+    /// on a learnt choice among the coarse answers of the 3 x 3 pixels around each pixel
+    /// (`same_grid_selector`) instead of the pixel's own. --init weights without it grow a
+    /// selector that starts at the pixel's own answer (within the 5 % its other taps keep).
+    #[arg(long, value_enum, conflicts_with = "resume")]
+    pub same_grid_selector: Option<Switch>,
     /// Cascade with the photometric cue: the grid the coarse stage's cue is matched on, 1 the
     /// coarse grid (quarter-size images), 2 the half-resolution grid (half-size images, 2 x 2
     /// means; `coarse_cue_oversample`, from `cascade-22`). No weight depends on it.
@@ -622,6 +628,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.coarse_scale.is_some()
                 || args.coarse_spheres.is_some()
                 || args.coarse_stride4.is_some()
+                || args.same_grid_selector.is_some()
                 || args.coarse_cue_sgm.is_some()
                 || args.mid_cue_sgm.is_some()
             {
@@ -633,6 +640,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                          --neighbour-start-score, --neighbour-gain, \
                          --coarse-feature-channels, \
                          --coarse-scale, --coarse-spheres, --coarse-stride4, \
+                         --same-grid-selector, \
                          --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
                          --mid-cue-sgm are options of --preset cascade"
                     );
@@ -679,6 +687,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(stride4) = args.coarse_stride4 {
                     net.cascade.coarse_stride4 = stride4 == Switch::On;
+                }
+                if let Some(selector) = args.same_grid_selector {
+                    net.cascade.same_grid_selector = selector == Switch::On;
                 }
                 if let Some(sgm) = args.coarse_cue_sgm {
                     net.cascade.coarse_cue_sgm = sgm == Switch::On;

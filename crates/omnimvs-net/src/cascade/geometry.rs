@@ -13,8 +13,8 @@ use omnimvs_data::edges::neighbour_min_max;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
 use super::model::{
-    CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, hypothesis_tensor, read_values,
-    upsampling_candidates,
+    CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, hypothesis_tensor,
+    neighbourhood_candidates, read_values, same_grid_prior, upsampling_candidates,
 };
 use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
 use super::sampler::{PixelSampler, coarse_indices, hypotheses_around, stretch_to_neighbours};
@@ -917,10 +917,23 @@ impl CascadeNet {
             return Ok((taps, None));
         };
         let from = geometry.samplers[stage - 1].grid();
-        let candidates = upsampling_candidates(previous, [from.height, from.width], cols);
+        let rows = geometry.samplers[stage].grid().height;
+        // On the coarse grid itself (`same_grid_selector`) each pixel chooses among its own
+        // neighbourhood, starting at its own answer; else among its parent's, starting at the
+        // bilinear upsampling.
+        let (candidates, prior) = if rows == from.height {
+            (
+                neighbourhood_candidates(previous, [from.height, from.width], 1, cols),
+                same_grid_prior(rows, cols, &geometry.device),
+            )
+        } else {
+            (
+                upsampling_candidates(previous, [from.height, from.width], cols),
+                bilinear_prior(rows, cols, &geometry.device),
+            )
+        };
         let candidate_taps =
             geometry.taps_for(stage, candidates, UPSAMPLE_TAPS, cols.clone(), photo)?;
-        let prior = bilinear_prior(2 * from.height, cols, &geometry.device);
         let up = self.select_centres(level, selector, &levels[level], &candidate_taps, prior)?;
         let centre = read_values(up.clone(), "upsampled index")?;
         let taps = geometry.taps_around(stage, centre, cols.clone(), photo)?;

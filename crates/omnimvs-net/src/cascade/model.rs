@@ -551,6 +551,19 @@ impl CandidateSelector {
         Self { hidden, out }
     }
 
+    /// A new selector for the half grid of a network with `params` (its evidence: the half
+    /// stage's groups, the visibility and, with the cue, the cue at each candidate).
+    fn half_grid(params: &CascadeParams, device: &Device) -> Self {
+        let extra = 1 + usize::from(params.zncc_cue);
+        Self::new(
+            [
+                (params.groups[1] + extra) * UPSAMPLE_TAPS,
+                params.stage_channels[0],
+            ],
+            device,
+        )
+    }
+
     /// The candidates' evidence `[1, C, H, W]` -> logits `[1, 9, H, W]` (before the prior).
     pub fn forward(&self, evidence: Tensor<4>) -> Tensor<4> {
         self.out.forward(self.hidden.forward(evidence))
@@ -563,15 +576,26 @@ impl CandidateSelector {
 /// columns, of which `cols`. Rows beyond the top and bottom repeat the edge; columns wrap.
 pub fn upsampling_candidates(
     coarse: &[f32],
-    [coarse_rows, coarse_cols]: [usize; 2],
+    coarse_dims: [usize; 2],
     cols: &std::ops::Range<usize>,
 ) -> Vec<f32> {
-    let rows = 2 * coarse_rows;
+    neighbourhood_candidates(coarse, coarse_dims, 2, cols)
+}
+
+/// [`upsampling_candidates`] for a grid `factor` (1 or 2) times finer than `coarse`'s: with
+/// 1 (`same_grid_selector`) each pixel is its own parent, and tap 4 is its own value.
+pub fn neighbourhood_candidates(
+    coarse: &[f32],
+    [coarse_rows, coarse_cols]: [usize; 2],
+    factor: usize,
+    cols: &std::ops::Range<usize>,
+) -> Vec<f32> {
+    let rows = factor * coarse_rows;
     let n = rows * cols.len();
     let mut out = vec![0.0f32; UPSAMPLE_TAPS * n];
     for r in 0..rows {
         for (i, c) in cols.clone().enumerate() {
-            let (pr, pc) = (r / 2, c / 2);
+            let (pr, pc) = (r / factor, c / factor);
             for dr in 0..3 {
                 let rr = (pr + dr).saturating_sub(1).min(coarse_rows - 1);
                 for dc in 0..3 {
@@ -599,6 +623,20 @@ pub fn bilinear_prior(rows: usize, cols: &std::ops::Range<usize>, device: &Devic
             }
         }
     }
+    Tensor::from_data(
+        TensorData::new(out, [1, UPSAMPLE_TAPS, rows, cols.len()]),
+        device,
+    )
+}
+
+/// The prior logits of a selector on the coarse grid itself (`same_grid_selector`),
+/// `[1, 9, rows, cols.len()]`: 0 for the pixel's own answer (tap 4), [`UNUSED_TAP_LOGIT`] for
+/// its 8 neighbours', so that a grown selector starts at the pixel's own answer (the
+/// neighbours together keep about 5 % of the weight).
+pub fn same_grid_prior(rows: usize, cols: &std::ops::Range<usize>, device: &Device) -> Tensor<4> {
+    let n = rows * cols.len();
+    let mut out = vec![UNUSED_TAP_LOGIT; UPSAMPLE_TAPS * n];
+    out[UPSAMPLE_TAPS / 2 * n..(UPSAMPLE_TAPS / 2 + 1) * n].fill(0.0);
     Tensor::from_data(
         TensorData::new(out, [1, UPSAMPLE_TAPS, rows, cols.len()]),
         device,
@@ -738,12 +776,9 @@ impl CascadeNet {
                 p.stage_gates,
                 device,
             ),
-            up_mid: p.half_grid_selector().then(|| {
-                CandidateSelector::new(
-                    [(p.groups[1] + extra) * UPSAMPLE_TAPS, p.stage_channels[0]],
-                    device,
-                )
-            }),
+            up_mid: p
+                .half_grid_selector()
+                .then(|| CandidateSelector::half_grid(p, device)),
             up_fine: (p.convex_upsampling && p.convex_upsampling_full).then(|| {
                 CandidateSelector::new(
                     [(p.groups[0] + extra) * UPSAMPLE_TAPS, p.stage_channels[1]],
@@ -989,9 +1024,32 @@ impl CascadeNet {
                 out.bias = Some(Param::from_tensor(bias.reshape([spheres])));
             }
         }
-        if !config.cascade.half_grid_selector() {
+        if !config.cascade.half_grid_selector() || scale != self.config.cascade.coarse_scale {
+            // A selector that upsampled 40 x 160 does not choose on the half grid.
             self.up_mid = None;
         }
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with its half stage centred on a learnt choice among the 3 x 3 coarse
+    /// answers around each pixel (`same_grid_selector`; the coarse stage on the half grid):
+    /// a new selector whose last convolution has zero weights, so that it starts at each
+    /// pixel's own answer (the 8 neighbours keeping about 5 % of the weight,
+    /// [`same_grid_prior`]). A network that has it is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] unless the network has `coarse_scale` 2 and
+    /// `convex_upsampling`.
+    pub fn with_same_grid_selector(mut self) -> Result<Self, NetError> {
+        if self.config.cascade.same_grid_selector && self.up_mid.is_some() {
+            return Ok(self);
+        }
+        let mut config = self.config.clone();
+        config.cascade.same_grid_selector = true;
+        config.validate()?;
+        let device = self.coarse.out.conv.weight.val().device();
+        self.up_mid = Some(CandidateSelector::half_grid(&config.cascade, &device));
         self.config = config;
         Ok(self)
     }
