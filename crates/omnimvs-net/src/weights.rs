@@ -302,9 +302,9 @@ pub fn load_cascade_grown(
             "the network of these weights is neither the one asked for nor a part of it \
              (only `context_pairs` and the stride-8 `feature_channels` may grow, \
              `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm`, `coarse_stride4`, \
-             `same_grid_selector`, `neighbour_hypotheses` and `convex_upsampling` switch on (the cue not after \
-             neighbour hypotheses), `convex_upsampling_full` switch either way, and the \
-             refinement stages' `stage_intervals`, `neighbour_extremes`, \
+             `same_grid_selector`, `neighbour_hypotheses` and `convex_upsampling` switch on \
+             (the cue not after neighbour hypotheses), `convex_upsampling_full` switch either \
+             way, and the refinement stages' `stage_intervals`, `neighbour_extremes`, \
              `coarse_cue_oversample`, `coarse_cue_depths` and the loss weights differ, \
              and the coarse stage move to a finer grid (`coarse_scale`) over other \
              `coarse_spheres`)",

@@ -307,8 +307,8 @@ impl CascadeGeometry {
         // Matched on its grid (images of the matching level: the quarter-size ones for the
         // coarse grid itself at `coarse_scale` 4, the half-size ones at 2), each coarse pixel
         // the mean of its factor x factor block (itself for factor 1); then each sphere the
-        // best of its depths. `zncc` refuses an empty set
-        // of grids, so there is a first one after it.
+        // best of its depths. `zncc` refuses an empty set of grids, so there is a first one
+        // after it.
         let level = (p.coarse_scale.trailing_zeros() - factor.trailing_zeros()) as usize;
         let fine = pyramid.zncc(level, &self.coarse_grids)?;
         let first = &self.coarse_grids[0];

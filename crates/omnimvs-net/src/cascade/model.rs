@@ -551,14 +551,15 @@ impl CandidateSelector {
         Self { hidden, out }
     }
 
-    /// A new selector for the half grid of a network with `params` (its evidence: the half
-    /// stage's groups, the visibility and, with the cue, the cue at each candidate).
-    fn half_grid(params: &CascadeParams, device: &Device) -> Self {
+    /// A new selector for the grid of refinement stage `i` (0: half, 1: full resolution) of a
+    /// network with `params`: its evidence is that stage's groups, the visibility and, with the
+    /// cue, the cue at each candidate; its hidden width the stage's.
+    fn for_stage(params: &CascadeParams, i: usize, device: &Device) -> Self {
         let extra = 1 + usize::from(params.zncc_cue);
         Self::new(
             [
-                (params.groups[1] + extra) * UPSAMPLE_TAPS,
-                params.stage_channels[0],
+                (params.groups[1 - i] + extra) * UPSAMPLE_TAPS,
+                params.stage_channels[i],
             ],
             device,
         )
@@ -752,8 +753,6 @@ impl CascadeNet {
         }
         config.validate()?;
         let p = &config.cascade;
-        // Per hypothesis: the groups' correlations, the visibility and, with it, the cue.
-        let extra = 1 + usize::from(p.zncc_cue);
         Ok(Self {
             features: CascadeFeatures::new(p.feature_channels, p.context_pairs, device),
             coarse: CoarseRegularizer::new(
@@ -778,13 +777,9 @@ impl CascadeNet {
             ),
             up_mid: p
                 .half_grid_selector()
-                .then(|| CandidateSelector::half_grid(p, device)),
-            up_fine: (p.convex_upsampling && p.convex_upsampling_full).then(|| {
-                CandidateSelector::new(
-                    [(p.groups[0] + extra) * UPSAMPLE_TAPS, p.stage_channels[1]],
-                    device,
-                )
-            }),
+                .then(|| CandidateSelector::for_stage(p, 0, device)),
+            up_fine: (p.convex_upsampling && p.convex_upsampling_full)
+                .then(|| CandidateSelector::for_stage(p, 1, device)),
             config: config.clone(),
         })
     }
@@ -1049,7 +1044,7 @@ impl CascadeNet {
         config.cascade.same_grid_selector = true;
         config.validate()?;
         let device = self.coarse.out.conv.weight.val().device();
-        self.up_mid = Some(CandidateSelector::half_grid(&config.cascade, &device));
+        self.up_mid = Some(CandidateSelector::for_stage(&config.cascade, 0, &device));
         self.config = config;
         Ok(self)
     }
