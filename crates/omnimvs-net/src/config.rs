@@ -88,6 +88,15 @@ pub struct CascadeParams {
     /// `models/training/cascade-37/stage_errors.py`, stop 35).
     #[serde(default, skip_serializing_if = "is_false")]
     pub same_grid_selector: bool,
+    /// Channels of a 1x1 convolution that the coarse stage's evidence passes through before
+    /// its first 3x3 convolution (`0`, and left out of the file: none, the 3x3 convolution
+    /// reads every sphere's evidence itself). That first convolution is the coarse stage's
+    /// largest layer: at 80 x 320 with 16 spheres it maps 240 channels to 48 in 0.080 s of
+    /// the stage's 0.22 s, and through 64 channels the pair takes 0.027 s (2 cores,
+    /// `examples/lowrank_bench.rs`). A trained network is factorised into it by a truncated
+    /// SVD of that layer's weights ([`crate::cascade::CascadeNet::with_coarse_squeeze`]).
+    #[serde(default, skip_serializing_if = "is_zero_usize")]
+    pub coarse_squeeze: usize,
     /// Channels of the coarse 2D encoder-decoder (full, half and quarter resolution).
     pub coarse_channels: [usize; 3],
     /// Per-pixel hypotheses of the half- and full-resolution stages.
@@ -337,6 +346,10 @@ fn four() -> usize {
     4
 }
 
+fn is_zero_usize(value: &usize) -> bool {
+    *value == 0
+}
+
 fn is_four(value: &usize) -> bool {
     *value == 4
 }
@@ -378,6 +391,7 @@ impl Default for CascadeParams {
             coarse_scale: 4,
             coarse_stride4: false,
             same_grid_selector: false,
+            coarse_squeeze: 0,
             coarse_channels: [48, 64, 96],
             stage_hypotheses: [8, 5],
             stage_intervals: [2.0, 1.0],
@@ -633,6 +647,16 @@ impl NetConfig {
                     "needs `coarse_scale: 2` (got {}) and `convex_upsampling: true` (got {}): \
                      it chooses among the coarse answers on the half grid itself",
                     p.coarse_scale, p.convex_upsampling
+                ),
+            ));
+        }
+        let coarse_inputs = p.coarse_evidence_channels() * p.coarse_spheres;
+        if p.coarse_squeeze > coarse_inputs {
+            return Err(invalid(
+                "cascade.coarse_squeeze",
+                format!(
+                    "{} channels, more than the {coarse_inputs} it would squeeze (0: none)",
+                    p.coarse_squeeze
                 ),
             ));
         }

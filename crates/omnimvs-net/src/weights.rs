@@ -278,6 +278,8 @@ pub fn load_cascade_grown(
     shrunk.cascade.coarse_stride4 = saved.cascade.coarse_stride4;
     // And centre its half stage on a learnt choice (CascadeNet::with_same_grid_selector).
     shrunk.cascade.same_grid_selector = saved.cascade.same_grid_selector;
+    // Its evidence may be squeezed (CascadeNet::with_coarse_squeeze), once.
+    shrunk.cascade.coarse_squeeze = saved.cascade.coarse_squeeze;
     let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
         && (saved.cascade.coarse_scale == config.cascade.coarse_scale
             || config.cascade.coarse_scale < saved.cascade.coarse_scale)
@@ -286,6 +288,8 @@ pub fn load_cascade_grown(
         && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
         && (!saved.cascade.coarse_stride4 || config.cascade.coarse_stride4)
         && (!saved.cascade.same_grid_selector || config.cascade.same_grid_selector)
+        && (saved.cascade.coarse_squeeze == 0
+            || saved.cascade.coarse_squeeze == config.cascade.coarse_squeeze)
         && (!saved.cascade.coarse_cue_sgm || config.cascade.coarse_cue_sgm)
         && (!saved.cascade.mid_cue_sgm || config.cascade.mid_cue_sgm)
         && (!saved.cascade.convex_upsampling || config.cascade.convex_upsampling)
@@ -307,7 +311,7 @@ pub fn load_cascade_grown(
              way, and the refinement stages' `stage_intervals`, `neighbour_extremes`, \
              `coarse_cue_oversample`, `coarse_cue_depths` and the loss weights differ, \
              and the coarse stage move to a finer grid (`coarse_scale`) over other \
-             `coarse_spheres`)",
+             `coarse_spheres` and its evidence be squeezed, once (`coarse_squeeze`))",
         ));
     }
     let has_fine = |c: &NetConfig| c.cascade.convex_upsampling && c.cascade.convex_upsampling_full;
@@ -336,6 +340,7 @@ pub fn load_cascade_grown(
     without_cue.cascade.coarse_scale = saved.cascade.coarse_scale;
     without_cue.cascade.coarse_spheres = saved.cascade.coarse_spheres;
     without_cue.cascade.same_grid_selector = saved.cascade.same_grid_selector;
+    without_cue.cascade.coarse_squeeze = saved.cascade.coarse_squeeze;
     let dropped = |p: &str| saved_fine && !fine && p.starts_with("up_fine.");
     let net = apply_file_except(
         CascadeNet::new(&without_cue, device)?,
@@ -370,8 +375,14 @@ pub fn load_cascade_grown(
     // Everything asked for but the saved grid and spheres by now; the move keeps what it has
     // where they are the same.
     let net = net.with_coarse_grid(config.cascade.coarse_scale, config.cascade.coarse_spheres)?;
-    if config.cascade.same_grid_selector {
-        net.with_same_grid_selector()
+    let net = if config.cascade.same_grid_selector {
+        net.with_same_grid_selector()?
+    } else {
+        net
+    };
+    // Last, so that the factorised layer is the one every growth above left.
+    if config.cascade.coarse_squeeze > 0 {
+        net.with_coarse_squeeze(config.cascade.coarse_squeeze)
     } else {
         Ok(net)
     }

@@ -151,6 +151,12 @@ pub struct Args {
     /// selector that starts at the pixel's own answer (within the 5 % its other taps keep).
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub same_grid_selector: Option<Switch>,
+    /// Cascade: channels of a 1x1 convolution the coarse stage's evidence passes through
+    /// before its first 3x3 convolution (`coarse_squeeze`; 0 or left out: none), the coarse
+    /// stage's largest layer. --init weights without it are factorised into it by a truncated
+    /// SVD of that layer (the same answers when the channels reach the layer's rank).
+    #[arg(long, conflicts_with = "resume")]
+    pub coarse_squeeze: Option<usize>,
     /// Cascade with the photometric cue: the grid the coarse stage's cue is matched on, 1 the
     /// coarse grid (quarter-size images), 2 the half-resolution grid (half-size images, 2 x 2
     /// means; `coarse_cue_oversample`, from `cascade-22`). No weight depends on it.
@@ -629,6 +635,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 || args.coarse_spheres.is_some()
                 || args.coarse_stride4.is_some()
                 || args.same_grid_selector.is_some()
+                || args.coarse_squeeze.is_some()
                 || args.coarse_cue_sgm.is_some()
                 || args.mid_cue_sgm.is_some()
             {
@@ -640,7 +647,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                          --neighbour-start-score, --neighbour-gain, \
                          --coarse-feature-channels, \
                          --coarse-scale, --coarse-spheres, --coarse-stride4, \
-                         --same-grid-selector, \
+                         --same-grid-selector, --coarse-squeeze, \
                          --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
                          --mid-cue-sgm are options of --preset cascade"
                     );
@@ -690,6 +697,9 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
                 }
                 if let Some(selector) = args.same_grid_selector {
                     net.cascade.same_grid_selector = selector == Switch::On;
+                }
+                if let Some(channels) = args.coarse_squeeze {
+                    net.cascade.coarse_squeeze = channels;
                 }
                 if let Some(sgm) = args.coarse_cue_sgm {
                     net.cascade.coarse_cue_sgm = sgm == Switch::On;

@@ -400,6 +400,9 @@ impl Up2d {
 /// two stride-2 levels, skip additions, one score per sphere.
 #[derive(Module, Debug)]
 pub struct CoarseRegularizer {
+    /// The 1x1 convolution (no bias) the evidence passes through first (`coarse_squeeze`),
+    /// when the network has one.
+    pub squeeze: Option<Conv2d>,
     /// Full-resolution convolutions.
     pub c0: Vec<PanoConv2d>,
     /// Half resolution.
@@ -426,10 +429,19 @@ fn run(blocks: &[PanoConv2d], x: Tensor<4>) -> Tensor<4> {
 }
 
 impl CoarseRegularizer {
-    fn new(cin: usize, spheres: usize, [a, b, c]: [usize; 3], device: &Device) -> Self {
+    /// `squeeze` 0: none ([`CoarseRegularizer::squeeze`]).
+    fn new(
+        cin: usize,
+        squeeze: usize,
+        spheres: usize,
+        [a, b, c]: [usize; 3],
+        device: &Device,
+    ) -> Self {
         let conv = |i, o, s| PanoConv2d::new([i, o], s, true, device);
+        let first = if squeeze > 0 { squeeze } else { cin };
         Self {
-            c0: vec![conv(cin, a, 1), conv(a, a, 1)],
+            squeeze: (squeeze > 0).then(|| squeeze_conv(cin, squeeze, device)),
+            c0: vec![conv(first, a, 1), conv(a, a, 1)],
             c1: vec![conv(a, b, 2), conv(b, b, 1)],
             c2: vec![conv(b, c, 2), conv(c, c, 1)],
             up1: Up2d::new([c, b], device),
@@ -443,6 +455,7 @@ impl CoarseRegularizer {
     #[must_use]
     pub fn fold_batch_norm(self) -> Self {
         Self {
+            squeeze: self.squeeze,
             c0: fold_pano(self.c0),
             c1: fold_pano(self.c1),
             c2: fold_pano(self.c2),
@@ -454,6 +467,10 @@ impl CoarseRegularizer {
 
     /// `[B, C, H, W]` -> scores `[B, D, H, W]`.
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        let x = match &self.squeeze {
+            Some(squeeze) => squeeze.forward(x), // [B, squeeze, H, W]
+            None => x,
+        };
         let x0 = run(&self.c0, x); // [B, a, H, W]
         let x1 = run(&self.c1, x0.clone()); // [B, b, H/2, W/2]
         let x2 = run(&self.c2, x1.clone()); // [B, c, H/4, W/4]
@@ -461,6 +478,25 @@ impl CoarseRegularizer {
         let y0 = self.up0.forward(y1, x0); // [B, a, H, W]
         self.out.forward(y0) // [B, D, H, W]
     }
+}
+
+impl CoarseRegularizer {
+    /// The convolution that reads the evidence channels: the squeeze when there is one, else
+    /// the first 3x3 convolution. Growing or resampling the evidence changes its inputs.
+    fn input_conv(&mut self) -> &mut Conv2d {
+        match &mut self.squeeze {
+            Some(squeeze) => squeeze,
+            None => &mut self.c0[0].conv,
+        }
+    }
+}
+
+/// A 1x1 convolution from `cin` to `cout` channels without bias ([`CoarseRegularizer::squeeze`]).
+fn squeeze_conv(cin: usize, cout: usize, device: &Device) -> Conv2d {
+    Conv2dConfig::new([cin, cout], [1, 1])
+        .with_padding(PaddingConfig2d::Valid)
+        .with_bias(false)
+        .init(device)
 }
 
 /// A refinement stage's 2D convolutions over its per-pixel hypotheses.
@@ -757,6 +793,7 @@ impl CascadeNet {
             features: CascadeFeatures::new(p.feature_channels, p.context_pairs, device),
             coarse: CoarseRegularizer::new(
                 p.coarse_evidence_channels() * p.coarse_spheres,
+                p.coarse_squeeze,
                 p.coarse_spheres,
                 p.coarse_channels,
                 device,
@@ -816,7 +853,7 @@ impl CascadeNet {
         ];
         // The coarse stage's cue goes before its stride-4 correlation (`coarse_stride4`).
         let tail = self.coarse_stride4_inputs();
-        insert_zero_inputs(&mut self.coarse.c0[0].conv, tail, ks[0]);
+        insert_zero_inputs(self.coarse.input_conv(), tail, ks[0]);
         let mut firsts = vec![
             (&mut self.mid.convs[0], ks[1]),
             (&mut self.fine.convs[0], ks[2]),
@@ -842,7 +879,7 @@ impl CascadeNet {
         let tail = self.coarse_stride4_inputs();
         self.with_cue_channel(
             |p| &mut p.coarse_cue_sgm,
-            |net| &mut net.coarse.c0[0].conv,
+            |net| net.coarse.input_conv(),
             |p| p.coarse_spheres,
             tail,
         )
@@ -978,7 +1015,7 @@ impl CascadeNet {
         config.validate()?;
         self.config = config;
         let inputs = self.coarse_stride4_inputs();
-        append_zero_inputs(&mut self.coarse.c0[0].conv, inputs);
+        append_zero_inputs(self.coarse.input_conv(), inputs);
         Ok(self)
     }
 
@@ -1003,7 +1040,7 @@ impl CascadeNet {
         config.validate()?;
         if spheres != old {
             let n = config.num_invdepth;
-            let conv = &mut self.coarse.c0[0].conv;
+            let conv = self.coarse.input_conv();
             conv.weight = Param::from_tensor(resample_axis(
                 conv.weight.val(),
                 1,
@@ -1045,6 +1082,91 @@ impl CascadeNet {
         config.validate()?;
         let device = self.coarse.out.conv.weight.val().device();
         self.up_mid = Some(CandidateSelector::for_stage(&config.cascade, 0, &device));
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with its coarse evidence squeezed through `channels` channels
+    /// (`coarse_squeeze`) before the first 3x3 convolution, from a trained one. That
+    /// convolution's weights `W[o, i, y, x]`, as a matrix with a row per `(o, y, x)` and a
+    /// column per input `i`, are replaced by their best approximation of rank `channels` (a
+    /// truncated SVD `U S V^T`, the largest singular values kept): the squeeze, a 1x1
+    /// convolution without bias, takes `V^T`, and the 3x3 convolution reads its `channels`
+    /// outputs through `U S`, keeping its bias and batch norm. With `channels` at least the
+    /// matrix's rank the network answers as before up to rounding; below it, as nearly as
+    /// a layer of that rank can. A network with that squeeze is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when `channels` is 0 or more than the evidence channels,
+    /// or the network has a squeeze of another width; [`NetError::Shape`] when the weights
+    /// cannot be read.
+    pub fn with_coarse_squeeze(mut self, channels: usize) -> Result<Self, NetError> {
+        let have = self.config.cascade.coarse_squeeze;
+        if have == channels && (have == 0) == self.coarse.squeeze.is_none() {
+            return Ok(self);
+        }
+        if have != 0 || channels == 0 {
+            return Err(NetError::InvalidConfig {
+                field: "cascade.coarse_squeeze",
+                message: format!(
+                    "cannot squeeze to {channels} channels a network whose squeeze has {have}: \
+                     factorise a network without one"
+                ),
+            });
+        }
+        let mut config = self.config.clone();
+        config.cascade.coarse_squeeze = channels;
+        config.validate()?;
+        let first = &mut self.coarse.c0[0].conv;
+        let weight = first.weight.val();
+        let device = weight.device();
+        let [outputs, inputs, kh, kw] = weight.dims();
+        let values = read_values(weight, "coarse stage weights")?;
+        let taps = kh * kw;
+        let rows = outputs * taps;
+        // M[(o, y, x), i] = W[o, i, y, x].
+        let mut m = nalgebra::DMatrix::<f64>::zeros(rows, inputs);
+        for o in 0..outputs {
+            for i in 0..inputs {
+                for t in 0..taps {
+                    m[(o * taps + t, i)] = f64::from(values[(o * inputs + i) * taps + t]);
+                }
+            }
+        }
+        let svd = m.svd(true, true);
+        let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+            return Err(NetError::Shape {
+                what: "SVD of the coarse stage's first convolution".into(),
+                expected: vec![rows, inputs],
+                actual: vec![],
+            });
+        };
+        let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
+        order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
+        // Ranks beyond the matrix's own get zero weights on both sides.
+        let mut three = vec![0f32; outputs * channels * taps]; // [o, k, y, x] = U S
+        let mut squeeze = vec![0f32; channels * inputs]; // [k, i] = V^T
+        for (k, &j) in order.iter().take(channels).enumerate() {
+            let sigma = svd.singular_values[j];
+            for o in 0..outputs {
+                for t in 0..taps {
+                    three[(o * channels + k) * taps + t] = (u[(o * taps + t, j)] * sigma) as f32;
+                }
+            }
+            for i in 0..inputs {
+                squeeze[k * inputs + i] = v_t[(j, i)] as f32;
+            }
+        }
+        first.weight = Param::from_tensor(Tensor::from_data(
+            TensorData::new(three, [outputs, channels, kh, kw]),
+            &device,
+        ));
+        let mut conv = squeeze_conv(inputs, channels, &device);
+        conv.weight = Param::from_tensor(Tensor::from_data(
+            TensorData::new(squeeze, [channels, inputs, 1, 1]),
+            &device,
+        ));
+        self.coarse.squeeze = Some(conv);
         self.config = config;
         Ok(self)
     }
