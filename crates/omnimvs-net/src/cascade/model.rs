@@ -1094,12 +1094,13 @@ impl CascadeNet {
     /// convolution without bias, takes `V^T`, and the 3x3 convolution reads its `channels`
     /// outputs through `U S`, keeping its bias and batch norm. With `channels` at least the
     /// matrix's rank the network answers as before up to rounding; below it, as nearly as
-    /// a layer of that rank can. A network with that squeeze is returned as it is.
+    /// a layer of that rank can. A network with that squeeze, or with none when `channels` is
+    /// 0, is returned as it is.
     ///
     /// # Errors
-    /// [`NetError::InvalidConfig`] when `channels` is 0 or more than the evidence channels,
-    /// or the network has a squeeze of another width; [`NetError::Shape`] when the weights
-    /// cannot be read.
+    /// [`NetError::InvalidConfig`] when `channels` is more than the evidence channels, or the
+    /// network has a squeeze of another width (a squeeze is not undone); [`NetError::Shape`]
+    /// when the weights cannot be read.
     pub fn with_coarse_squeeze(mut self, channels: usize) -> Result<Self, NetError> {
         let have = self.config.cascade.coarse_squeeze;
         if have == channels && (have == 0) == self.coarse.squeeze.is_none() {
