@@ -117,6 +117,14 @@ fn the_factorisation_answers_as_before_at_full_rank_and_nearer_as_the_rank_grows
             "rank {k}: {error} after {previous}"
         );
         previous = error;
+        // The best rank-k layer keeps the k largest of 36 singular values, so at least k/36 of
+        // the energy: a factorisation by any other k of them would leave more out (at full
+        // rank, rounding only: below).
+        let bound = energy * (1.0 - k as f32 / FULL_RANK as f32).max(1e-8);
+        assert!(
+            error <= bound * (1.0 + 1e-4),
+            "rank {k}: error {error} above {bound}"
+        );
         let (c, f) = answers(&squeezed, &squeezed.config);
         let diff = max_difference(&coarse, &c);
         if k == FULL_RANK {
