@@ -37,12 +37,12 @@ fn main() -> ExitCode {
 }
 
 fn run(input: &Path, output: &Path, channels: usize) -> Result<(), String> {
-    let mut config =
-        weights::read_config(&weights::config_path(input)).map_err(|e| e.to_string())?;
-    let device = Device::flex();
-    let before = weights::load_cascade(input, &device).map_err(|e| e.to_string())?;
-    config.cascade.coarse_squeeze = channels;
-    let net = weights::load_cascade_grown(input, &config, &device).map_err(|e| e.to_string())?;
+    let before = weights::load_cascade(input, &Device::flex()).map_err(|e| e.to_string())?;
+    let net = before
+        .clone()
+        .with_coarse_squeeze(channels)
+        .map_err(|e| e.to_string())?;
+    let config = net.config.clone();
     // The energy kept: |A B|^2 / |W|^2 with W the original layer, A B its factorisation
     // (the factorisation is orthogonal, so this is the kept singular values' share).
     let energy = |v: Vec<f32>| v.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>();

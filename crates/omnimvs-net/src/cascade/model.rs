@@ -478,9 +478,7 @@ impl CoarseRegularizer {
         let y0 = self.up0.forward(y1, x0); // [B, a, H, W]
         self.out.forward(y0) // [B, D, H, W]
     }
-}
 
-impl CoarseRegularizer {
     /// The convolution that reads the evidence channels: the squeeze when there is one, else
     /// the first 3x3 convolution. Growing or resampling the evidence changes its inputs.
     fn input_conv(&mut self) -> &mut Conv2d {
@@ -1103,10 +1101,10 @@ impl CascadeNet {
     /// when the weights cannot be read.
     pub fn with_coarse_squeeze(mut self, channels: usize) -> Result<Self, NetError> {
         let have = self.config.cascade.coarse_squeeze;
-        if have == channels && (have == 0) == self.coarse.squeeze.is_none() {
+        if have == channels {
             return Ok(self);
         }
-        if have != 0 || channels == 0 {
+        if have != 0 {
             return Err(NetError::InvalidConfig {
                 field: "cascade.coarse_squeeze",
                 message: format!(
@@ -1142,20 +1140,18 @@ impl CascadeNet {
                 actual: vec![],
             });
         };
-        let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
-        order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
-        // Ranks beyond the matrix's own get zero weights on both sides.
+        // `svd` sorts the singular values in descending order: the first `channels` are the
+        // largest. Ranks beyond the matrix's own get zero weights on both sides.
         let mut three = vec![0f32; outputs * channels * taps]; // [o, k, y, x] = U S
         let mut squeeze = vec![0f32; channels * inputs]; // [k, i] = V^T
-        for (k, &j) in order.iter().take(channels).enumerate() {
-            let sigma = svd.singular_values[j];
+        for (k, &sigma) in svd.singular_values.iter().take(channels).enumerate() {
             for o in 0..outputs {
                 for t in 0..taps {
-                    three[(o * channels + k) * taps + t] = (u[(o * taps + t, j)] * sigma) as f32;
+                    three[(o * channels + k) * taps + t] = (u[(o * taps + t, k)] * sigma) as f32;
                 }
             }
             for i in 0..inputs {
-                squeeze[k * inputs + i] = v_t[(j, i)] as f32;
+                squeeze[k * inputs + i] = v_t[(k, i)] as f32;
             }
         }
         first.weight = Param::from_tensor(Tensor::from_data(
