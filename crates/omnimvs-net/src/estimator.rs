@@ -50,7 +50,11 @@ impl NetEstimator {
             }
             AnyNet::Cascade(net) => (
                 Self::Cascade(Box::new(CascadeInference::new(
-                    (*net).fold_batch_norm(),
+                    if sweep_on_device {
+                        (*net).fold_batch_norm()
+                    } else {
+                        (*net).fold_batch_norm().with_host_convs()
+                    },
                     dataset,
                     device,
                     !sweep_on_device,

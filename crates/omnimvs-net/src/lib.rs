@@ -16,6 +16,7 @@
 //! - [`learned_sgm`]: SGM on ZNCC or a learned cost, by name.
 //! - [`sweepnet`]: the SweepNet-style matching-cost head for `omnimvs-stereo`'s SGM (issue 15).
 //! - [`synthetic`]: a lookup table without a rig, for benchmarks and tests.
+//! - [`hostconv`]: 2D convolutions on the host for inference on a CPU.
 //! - [`backend`]: run-time choice of the compute backend (`cpu`, `libtorch`, `wgpu`, ...).
 //!
 //! Training is the crate `omnimvs-train`; the benchmarks of `omnimvs bench` are the CLI's.
@@ -26,6 +27,7 @@ pub mod cascade;
 pub mod config;
 pub mod error;
 pub mod estimator;
+pub mod hostconv;
 pub mod infer;
 pub mod learned_sgm;
 pub mod mccnn;

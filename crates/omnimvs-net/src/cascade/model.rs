@@ -3,6 +3,8 @@
 //! resolution regularised by a small 2D encoder-decoder (hypotheses as channels), then two
 //! stages of per-pixel hypotheses around the previous estimate.
 
+use std::sync::Arc;
+
 use burn::module::Module;
 use burn::module::Param;
 use burn::nn::Initializer;
@@ -14,6 +16,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use super::geometry::StageTaps;
 use crate::config::{CascadeParams, Family, NetConfig};
 use crate::error::NetError;
+use crate::hostconv::{HostConv2d, host_forward};
 use crate::model::blocks::{ConvBn2d, fold_into_conv2d};
 use crate::model::softargmin::entropy;
 
@@ -104,6 +107,25 @@ impl CascadeFeatures {
             res8: fold(self.res8),
             ctx8: fold(self.ctx8),
             out8: self.out8.fold_batch_norm(),
+        }
+    }
+
+    /// The features with every convolution also on the host ([`ConvBn2d::with_host_conv`]).
+    #[must_use]
+    pub fn with_host_convs(self) -> Self {
+        let host =
+            |blocks: Vec<ConvBn2d>| blocks.into_iter().map(ConvBn2d::with_host_conv).collect();
+        Self {
+            conv0: self.conv0.with_host_conv(),
+            conv2: self.conv2.with_host_conv(),
+            out2: self.out2.with_host_conv(),
+            down4: self.down4.with_host_conv(),
+            res4: host(self.res4),
+            out4: self.out4.with_host_conv(),
+            down8: self.down8.with_host_conv(),
+            res8: host(self.res8),
+            ctx8: host(self.ctx8),
+            out8: self.out8.with_host_conv(),
         }
     }
 
@@ -231,6 +253,7 @@ fn widen_block(old: ConvBn2d, fresh: ConvBn2d, old_width: usize) -> ConvBn2d {
         conv,
         bn,
         relu: old.relu,
+        host: None,
     }
 }
 
@@ -288,6 +311,7 @@ fn widen_projection(old: ConvBn2d, fresh: ConvBn2d, old_width: usize, groups: us
         conv,
         bn: None,
         relu: old.relu,
+        host: None,
     }
 }
 
@@ -306,6 +330,10 @@ pub struct PanoConv2d {
     /// Whether a ReLU ends the block.
     #[module(skip)]
     pub relu: bool,
+    /// The same convolution on the host, with the longitude wrap in its addressing
+    /// ([`PanoConv2d::with_host_conv`]: inference on a CPU).
+    #[module(skip)]
+    pub host: Option<Arc<HostConv2d>>,
 }
 
 impl PanoConv2d {
@@ -320,6 +348,7 @@ impl PanoConv2d {
             conv,
             bn: bn_relu.then(|| BatchNormConfig::new(channels[1]).init(device)),
             relu: bn_relu,
+            host: None,
         }
     }
 
@@ -338,6 +367,7 @@ impl PanoConv2d {
             conv,
             bn: None,
             relu: false,
+            host: None,
         }
     }
 
@@ -348,8 +378,25 @@ impl PanoConv2d {
         self
     }
 
+    /// The block with its convolution also on the host ([`HostConv2d`]), used by
+    /// [`PanoConv2d::forward`] from then on: for inference on a CPU, after
+    /// [`PanoConv2d::fold_batch_norm`] (a block that still has its batch norm is returned as
+    /// it is).
+    #[must_use]
+    pub fn with_host_conv(mut self) -> Self {
+        if self.bn.is_none() {
+            self.host = HostConv2d::from_conv(&self.conv, 1, true).map(Arc::new);
+        }
+        self
+    }
+
     /// `[B, C_in, H, W] -> [B, C_out, H', W']`.
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        if let Some(host) = &self.host
+            && let Ok(y) = host_forward(host, x.clone(), None, self.relu)
+        {
+            return y;
+        }
         let [_, _, _, w] = x.dims();
         let first = x.clone().narrow(3, 0, 1);
         let last = x.clone().narrow(3, w - 1, 1);
@@ -424,6 +471,10 @@ fn fold_pano(blocks: Vec<PanoConv2d>) -> Vec<PanoConv2d> {
         .collect()
 }
 
+fn host_pano(blocks: Vec<PanoConv2d>) -> Vec<PanoConv2d> {
+    blocks.into_iter().map(PanoConv2d::with_host_conv).collect()
+}
+
 fn run(blocks: &[PanoConv2d], x: Tensor<4>) -> Tensor<4> {
     blocks.iter().fold(x, |x, b| b.forward(x))
 }
@@ -462,6 +513,18 @@ impl CoarseRegularizer {
             up1: self.up1,
             up0: self.up0,
             out: self.out.fold_batch_norm(),
+        }
+    }
+
+    /// Its 3x3 convolutions also on the host ([`PanoConv2d::with_host_conv`]).
+    #[must_use]
+    pub fn with_host_convs(self) -> Self {
+        Self {
+            c0: host_pano(self.c0),
+            c1: host_pano(self.c1),
+            c2: host_pano(self.c2),
+            out: self.out.with_host_conv(),
+            ..self
         }
     }
 
@@ -523,6 +586,16 @@ impl StageRegularizer {
         }
     }
 
+    /// Its convolutions also on the host ([`PanoConv2d::with_host_conv`]).
+    #[must_use]
+    pub fn with_host_convs(self) -> Self {
+        Self {
+            convs: host_pano(self.convs),
+            out: self.out.with_host_conv(),
+            gate: self.gate.map(PanoConv2d::with_host_conv),
+        }
+    }
+
     /// Folds the batch norms into the convolutions.
     #[must_use]
     pub fn fold_batch_norm(self) -> Self {
@@ -578,6 +651,7 @@ impl CandidateSelector {
                 .init(device),
             bn: None,
             relu: true,
+            host: None,
         };
         let out = Conv2dConfig::new([channels[1], UPSAMPLE_TAPS], [1, 1])
             .with_initializer(Initializer::Zeros)
@@ -597,6 +671,15 @@ impl CandidateSelector {
             ],
             device,
         )
+    }
+
+    /// Its 3x3 convolution also on the host ([`PanoConv2d::with_host_conv`]).
+    #[must_use]
+    pub fn with_host_convs(self) -> Self {
+        Self {
+            hidden: self.hidden.with_host_conv(),
+            out: self.out,
+        }
     }
 
     /// The candidates' evidence `[1, C, H, W]` -> logits `[1, 9, H, W]` (before the prior).
@@ -830,6 +913,23 @@ impl CascadeNet {
             fine: self.fine.fold_batch_norm(),
             up_mid: self.up_mid,
             up_fine: self.up_fine,
+            config: self.config,
+        }
+    }
+
+    /// The network with its convolutions also on the host ([`crate::hostconv`]), which its
+    /// forward pass uses from then on: for inference on a CPU, after
+    /// [`CascadeNet::fold_batch_norm`] (blocks that still have a batch norm keep burn's path).
+    /// The same answers to float rounding; not for training.
+    #[must_use]
+    pub fn with_host_convs(self) -> Self {
+        Self {
+            features: self.features.with_host_convs(),
+            coarse: self.coarse.with_host_convs(),
+            mid: self.mid.with_host_convs(),
+            fine: self.fine.with_host_convs(),
+            up_mid: self.up_mid.map(CandidateSelector::with_host_convs),
+            up_fine: self.up_fine.map(CandidateSelector::with_host_convs),
             config: self.config,
         }
     }

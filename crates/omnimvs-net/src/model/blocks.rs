@@ -1,12 +1,16 @@
 //! Convolution + batch norm + ReLU blocks with an optional residual input, laid out like the
 //! reference `module/basic.py` (`conv`, `bn`) so that PyTorch state dicts load by name.
 
+use std::sync::Arc;
+
 use burn::module::{Module, Param};
 use burn::nn::conv::{
     Conv2d, Conv2dConfig, Conv3d, Conv3dConfig, ConvTranspose3d, ConvTranspose3dConfig,
 };
 use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d, PaddingConfig3d};
 use burn::tensor::{Device, Tensor, activation};
+
+use crate::hostconv::{HostConv2d, host_forward};
 
 /// Applies the batch norm `bn` when there is one, `+ residual` when given, then ReLU when asked.
 /// PyTorch adds the residual after batch norm and before ReLU.
@@ -74,6 +78,9 @@ pub struct ConvBn2d {
     /// Whether a ReLU ends the block.
     #[module(skip)]
     pub relu: bool,
+    /// The same convolution on the host ([`ConvBn2d::with_host_conv`]: inference on a CPU).
+    #[module(skip)]
+    pub host: Option<Arc<HostConv2d>>,
 }
 
 impl ConvBn2d {
@@ -95,11 +102,33 @@ impl ConvBn2d {
             .with_padding(PaddingConfig2d::Explicit(pad, pad, pad, pad))
             .init(device);
         let bn = bn.then(|| BatchNormConfig::new(channels[1]).init(device));
-        Self { conv, bn, relu }
+        Self {
+            conv,
+            bn,
+            relu,
+            host: None,
+        }
+    }
+
+    /// The block with its convolution also on the host ([`HostConv2d`]), used by
+    /// [`ConvBn2d::forward`] from then on: for inference on a CPU, after
+    /// [`ConvBn2d::fold_batch_norm`] (a block that still has its batch norm is returned as it
+    /// is).
+    #[must_use]
+    pub fn with_host_conv(mut self) -> Self {
+        if self.bn.is_none() {
+            self.host = HostConv2d::from_conv(&self.conv, 0, false).map(Arc::new);
+        }
+        self
     }
 
     /// `[B, C_in, H, W] -> [B, C_out, H', W']`, adding `residual` before the ReLU.
     pub fn forward(&self, x: Tensor<4>, residual: Option<Tensor<4>>) -> Tensor<4> {
+        if let Some(host) = &self.host
+            && let Ok(y) = host_forward(host, x.clone(), residual.clone(), self.relu)
+        {
+            return y;
+        }
         let x = self.conv.forward(x); // [B, C_out, H', W']
         finish(x, self.bn.as_ref(), residual, self.relu)
     }

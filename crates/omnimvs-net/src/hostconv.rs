@@ -1,0 +1,442 @@
+//! 2D convolutions on the host, for inference on a CPU.
+//!
+//! burn's `flex` backend runs a 2D convolution as a 3D one: it copies the whole input to
+//! channels-last order on one thread, builds each im2col tile with a bounds check per tap and
+//! channel, multiplies, then scatters the product back element by element. With the few
+//! channels of the cascade (8 to 96) those copies cost more than the multiplication: in a
+//! `perf` profile of `omnimvs infer` (stop 38) the convolution took about 30 % of the samples,
+//! of which the GEMM kernels were under half. Here each im2col row (one input channel and one
+//! kernel tap over a band of output rows) is copied from the channels-first input in runs,
+//! the band's output starts as the bias, the GEMM adds into it, and the residual and ReLU
+//! follow while the band is in cache. The panorama's longitude wrap is part of the
+//! addressing ([`Padding::wrap_cols`]), so it needs no concatenated copy of the input.
+//!
+//! The values are those of the convolution the layer describes, summed in another order: a
+//! test compares them with burn's to 1e-4 relative. No gradient: training keeps burn's
+//! modules ([`HostConv2d::from_conv`] reads a trained, batch-norm-folded layer).
+
+use burn::nn::PaddingConfig2d;
+use burn::nn::conv::Conv2d;
+use burn::tensor::{Tensor, TensorData};
+use rayon::prelude::*;
+
+use crate::cascade::model::read_values;
+use crate::error::NetError;
+
+/// Padding of a host convolution: zero rows above and below; zero columns left and right, or
+/// the columns of the other side when they wrap around (a panorama's longitude).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Padding {
+    /// Rows added above and below.
+    pub rows: usize,
+    /// Columns added left and right.
+    pub cols: usize,
+    /// Whether the added columns come from the other side (circular) instead of zeros.
+    pub wrap_cols: bool,
+}
+
+/// Floats of im2col a band aims at (1 MiB: within a core's L2 cache with the GEMM's packing).
+const BAND_FLOATS: usize = 1 << 18;
+
+/// A 2D convolution (one group) with its weights laid out for the GEMM.
+#[derive(Clone, Debug)]
+pub struct HostConv2d {
+    c_in: usize,
+    c_out: usize,
+    kernel: [usize; 2],
+    stride: [usize; 2],
+    dilation: [usize; 2],
+    padding: Padding,
+    /// `[c_out, c_in * kh * kw]`, row-major: burn's `[O, I, kh, kw]` as it is.
+    weight: Vec<f32>,
+    /// `[c_out]` (zeros without a bias).
+    bias: Vec<f32>,
+}
+
+/// Sizes of one call: input `[batch, c_in, h, w]`, output `[batch, c_out, oh, ow]`.
+#[derive(Clone, Copy, Debug)]
+struct Sizes {
+    h: usize,
+    w: usize,
+    oh: usize,
+    ow: usize,
+}
+
+impl HostConv2d {
+    /// The host form of a burn convolution `conv` (its batch norm, if any, folded in first),
+    /// with its own padding; `extra_cols` more columns each side, wrapping around when
+    /// `wrap_cols` (the panorama's circular padding, applied before `conv` in the tensor
+    /// path). `None` when the layer is of a kind this kernel does not run (groups, uneven
+    /// padding, `Same`): the caller keeps burn's path.
+    pub fn from_conv(conv: &Conv2d, extra_cols: usize, wrap_cols: bool) -> Option<Self> {
+        if conv.groups != 1 {
+            return None;
+        }
+        let (rows, cols) = match conv.padding {
+            PaddingConfig2d::Valid => (0, 0),
+            PaddingConfig2d::Explicit(top, left, bottom, right)
+                if top == bottom && left == right =>
+            {
+                (top, left)
+            }
+            _ => return None,
+        };
+        // Zero columns inside wrapped ones would need a second padding stage.
+        if wrap_cols && cols != 0 {
+            return None;
+        }
+        let [c_out, c_in, kh, kw] = conv.weight.val().dims();
+        let weight = read_values(conv.weight.val(), "weights").ok()?;
+        let bias = match &conv.bias {
+            Some(b) => read_values(b.val(), "bias").ok()?,
+            None => vec![0.0; c_out],
+        };
+        Self::new(
+            [c_in, c_out],
+            [kh, kw],
+            conv.stride,
+            conv.dilation,
+            Padding {
+                rows,
+                cols: cols + extra_cols,
+                wrap_cols,
+            },
+            weight,
+            bias,
+        )
+        .ok()
+    }
+
+    /// A convolution from its weights `[c_out, c_in, kh, kw]` (row-major) and bias.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when the weights or the bias do not have the sizes given, or a
+    /// size, stride or dilation is zero.
+    pub fn new(
+        channels: [usize; 2],
+        kernel: [usize; 2],
+        stride: [usize; 2],
+        dilation: [usize; 2],
+        padding: Padding,
+        weight: Vec<f32>,
+        bias: Vec<f32>,
+    ) -> Result<Self, NetError> {
+        let [c_in, c_out] = channels;
+        let shape_error = |what: &str, expected: Vec<usize>, actual: Vec<usize>| NetError::Shape {
+            what: format!("{what} (host convolution)"),
+            expected,
+            actual,
+        };
+        if [c_in, c_out, kernel[0], kernel[1], stride[0], stride[1]].contains(&0)
+            || dilation.contains(&0)
+        {
+            return Err(shape_error(
+                "channels, kernel, stride and dilation (none zero)",
+                vec![c_in, c_out, kernel[0], kernel[1]],
+                vec![stride[0], stride[1], dilation[0], dilation[1]],
+            ));
+        }
+        if weight.len() != c_out * c_in * kernel[0] * kernel[1] {
+            return Err(shape_error(
+                "weights",
+                vec![c_out, c_in, kernel[0], kernel[1]],
+                vec![weight.len()],
+            ));
+        }
+        if bias.len() != c_out {
+            return Err(shape_error("bias", vec![c_out], vec![bias.len()]));
+        }
+        Ok(Self {
+            c_in,
+            c_out,
+            kernel,
+            stride,
+            dilation,
+            padding,
+            weight,
+            bias,
+        })
+    }
+
+    /// Output channels.
+    pub fn out_channels(&self) -> usize {
+        self.c_out
+    }
+
+    /// The output's rows and columns for an input of `h x w`, `None` when the kernel does not
+    /// fit (or a wrap is wider than the input).
+    pub fn output_size(&self, h: usize, w: usize) -> Option<[usize; 2]> {
+        let span = |size: usize, pad: usize, k: usize, s: usize, d: usize| {
+            let padded = size + 2 * pad;
+            let reach = d * (k - 1) + 1;
+            (padded >= reach).then(|| (padded - reach) / s + 1)
+        };
+        if self.padding.wrap_cols && self.padding.cols > w {
+            return None;
+        }
+        Some([
+            span(
+                h,
+                self.padding.rows,
+                self.kernel[0],
+                self.stride[0],
+                self.dilation[0],
+            )?,
+            span(
+                w,
+                self.padding.cols,
+                self.kernel[1],
+                self.stride[1],
+                self.dilation[1],
+            )?,
+        ])
+    }
+
+    /// Runs the convolution on `input` `[batch, c_in, h, w]` (row-major), adds `residual`
+    /// (`[batch, c_out, oh, ow]`) when given, then a ReLU when `relu`: `[batch, c_out, oh,
+    /// ow]` and `[oh, ow]`.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when the input or the residual do not have the sizes given, or the
+    /// kernel does not fit the input.
+    pub fn forward(
+        &self,
+        input: &[f32],
+        dims: [usize; 4],
+        residual: Option<&[f32]>,
+        relu: bool,
+    ) -> Result<(Vec<f32>, [usize; 2]), NetError> {
+        let [batch, c_in, h, w] = dims;
+        let shape_error = |what: &str, expected: Vec<usize>, actual: Vec<usize>| NetError::Shape {
+            what: format!("{what} (host convolution)"),
+            expected,
+            actual,
+        };
+        if c_in != self.c_in || input.len() != batch * c_in * h * w {
+            return Err(shape_error(
+                "input",
+                vec![batch, self.c_in, h, w],
+                vec![input.len()],
+            ));
+        }
+        let Some([oh, ow]) = self.output_size(h, w) else {
+            return Err(shape_error(
+                "input size for the kernel",
+                self.kernel.to_vec(),
+                vec![h, w],
+            ));
+        };
+        let plane = oh * ow;
+        if let Some(r) = residual
+            && r.len() != batch * self.c_out * plane
+        {
+            return Err(shape_error(
+                "residual",
+                vec![batch, self.c_out, oh, ow],
+                vec![r.len()],
+            ));
+        }
+        let sizes = Sizes { h, w, oh, ow };
+        let k = self.c_in * self.kernel[0] * self.kernel[1];
+        let band_rows = (BAND_FLOATS / (k * ow).max(1)).clamp(1, oh);
+        let bands_per_image = oh.div_ceil(band_rows);
+        let in_image = c_in * h * w;
+        let out_image = self.c_out * plane;
+        // Every band of every image on its own, its output `[c_out, rows * ow]`.
+        let bands: Vec<(usize, usize, Vec<f32>)> = (0..batch * bands_per_image)
+            .into_par_iter()
+            .map(|i| {
+                let (b, band) = (i / bands_per_image, i % bands_per_image);
+                let row0 = band * band_rows;
+                let rows = band_rows.min(oh - row0);
+                let image = &input[b * in_image..(b + 1) * in_image];
+                let res = residual.map(|r| &r[b * out_image..(b + 1) * out_image]);
+                (b, row0, self.band(image, sizes, row0, rows, res, relu))
+            })
+            .collect();
+        let mut out = vec![0.0f32; batch * out_image];
+        for (b, row0, values) in bands {
+            let n = values.len() / self.c_out;
+            for (o, chunk) in values.chunks_exact(n).enumerate() {
+                let at = b * out_image + o * plane + row0 * ow;
+                out[at..at + n].copy_from_slice(chunk);
+            }
+        }
+        Ok((out, [oh, ow]))
+    }
+
+    /// Output rows `row0 .. row0 + rows` of one image: `[c_out, rows * ow]`.
+    fn band(
+        &self,
+        image: &[f32],
+        s: Sizes,
+        row0: usize,
+        rows: usize,
+        residual: Option<&[f32]>,
+        relu: bool,
+    ) -> Vec<f32> {
+        let n = rows * s.ow;
+        let direct = self.kernel == [1, 1]
+            && self.stride == [1, 1]
+            && self.padding.rows == 0
+            && self.padding.cols == 0;
+        let mut out = Vec::with_capacity(self.c_out * n);
+        for &b in &self.bias {
+            out.extend(std::iter::repeat_n(b, n));
+        }
+        if direct {
+            // A 1x1 convolution reads the input's rows as they are: one copy per channel.
+            let mut col = Vec::with_capacity(self.c_in * n);
+            for c in 0..self.c_in {
+                let at = c * s.h * s.w + row0 * s.w;
+                col.extend_from_slice(&image[at..at + n]);
+            }
+            gemm_add(self.c_out, n, self.c_in, &self.weight, &col, &mut out);
+        } else {
+            let col = self.im2col(image, s, row0, rows);
+            let k = self.c_in * self.kernel[0] * self.kernel[1];
+            gemm_add(self.c_out, n, k, &self.weight, &col, &mut out);
+        }
+        if let Some(r) = residual {
+            let plane = s.oh * s.ow;
+            for (o, chunk) in out.chunks_exact_mut(n).enumerate() {
+                let at = o * plane + row0 * s.ow;
+                for (v, r) in chunk.iter_mut().zip(&r[at..at + n]) {
+                    *v += r;
+                }
+            }
+        }
+        if relu {
+            for v in &mut out {
+                *v = v.max(0.0);
+            }
+        }
+        out
+    }
+
+    /// The im2col matrix of output rows `row0 .. row0 + rows`: `[c_in * kh * kw, rows * ow]`,
+    /// a row per input channel and tap.
+    fn im2col(&self, image: &[f32], s: Sizes, row0: usize, rows: usize) -> Vec<f32> {
+        let [kh, kw] = self.kernel;
+        let [sh, sw] = self.stride;
+        let [dh, dw] = self.dilation;
+        let (ph, pw) = (self.padding.rows, self.padding.cols);
+        let n = rows * s.ow;
+        let mut col = vec![0.0f32; self.c_in * kh * kw * n];
+        let mut at = 0;
+        for c in 0..self.c_in {
+            let channel = &image[c * s.h * s.w..(c + 1) * s.h * s.w];
+            for ky in 0..kh {
+                for kx in 0..kw {
+                    let dst_row = &mut col[at..at + n];
+                    at += n;
+                    for r in 0..rows {
+                        let iy = ((row0 + r) * sh + ky * dh) as isize - ph as isize;
+                        if iy < 0 || iy >= s.h as isize {
+                            continue; // zero rows (already zero)
+                        }
+                        let src = &channel[iy as usize * s.w..(iy as usize + 1) * s.w];
+                        let dst = &mut dst_row[r * s.ow..(r + 1) * s.ow];
+                        // Input column of output column `ox`: `ox * sw + offset - pw`.
+                        let offset = kx * dw;
+                        self.copy_columns(src, dst, offset, sw, pw);
+                    }
+                }
+            }
+        }
+        col
+    }
+
+    /// `dst[ox] = src[ox * stride + offset - pad]`, zero or wrapped outside `src`.
+    fn copy_columns(&self, src: &[f32], dst: &mut [f32], offset: usize, stride: usize, pad: usize) {
+        let w = src.len() as isize;
+        let shift = offset as isize - pad as isize;
+        if stride == 1 {
+            // Output columns whose input lies inside `src`: one run.
+            let first = (-shift).clamp(0, dst.len() as isize) as usize;
+            let end = (w - shift).clamp(first as isize, dst.len() as isize) as usize;
+            if end > first {
+                let from = (first as isize + shift) as usize;
+                dst[first..end].copy_from_slice(&src[from..from + (end - first)]);
+            }
+            if self.padding.wrap_cols {
+                let len = dst.len();
+                for ox in (0..first).chain(end..len) {
+                    dst[ox] = src[(ox as isize + shift).rem_euclid(w) as usize];
+                }
+            }
+        } else {
+            for (ox, v) in dst.iter_mut().enumerate() {
+                let ix = (ox * stride) as isize + shift;
+                if (0..w).contains(&ix) {
+                    *v = src[ix as usize];
+                } else if self.padding.wrap_cols {
+                    *v = src[ix.rem_euclid(w) as usize];
+                }
+            }
+        }
+    }
+}
+
+/// `c[m, n] += a[m, k] b[k, n]`, all row-major and contiguous, on this thread.
+fn gemm_add(m: usize, n: usize, k: usize, a: &[f32], b: &[f32], c: &mut [f32]) {
+    assert!(
+        a.len() >= m * k && b.len() >= k * n && c.len() >= m * n,
+        "gemm_add: slices shorter than {m}x{k}, {k}x{n}, {m}x{n}"
+    );
+    if m == 0 || n == 0 || k == 0 {
+        return;
+    }
+    // SAFETY: the assertion above keeps every element `gemm` reads (`a`: m x k, row stride k;
+    // `b`: k x n, row stride n) and writes (`c`: m x n, row stride n) inside its slice; `c`
+    // is borrowed mutably, so it aliases neither input; one thread (`Parallelism::None`).
+    #[allow(unsafe_code)]
+    unsafe {
+        gemm::gemm(
+            m,
+            n,
+            k,
+            c.as_mut_ptr(),
+            1,
+            n as isize,
+            true,
+            a.as_ptr(),
+            1,
+            k as isize,
+            b.as_ptr(),
+            1,
+            n as isize,
+            1.0f32,
+            1.0f32,
+            false,
+            false,
+            false,
+            gemm::Parallelism::None,
+        );
+    }
+}
+
+/// `host` on a tensor `[B, C_in, H, W]`, plus `residual` `[B, C_out, H', W']` when given, then
+/// a ReLU when `relu`: `[B, C_out, H', W']` on the input's device.
+///
+/// # Errors
+/// [`NetError::Shape`] when the values do not read as `f32` or do not fit the kernel (the
+/// callers then take burn's path).
+pub fn host_forward(
+    host: &HostConv2d,
+    x: Tensor<4>,
+    residual: Option<Tensor<4>>,
+    relu: bool,
+) -> Result<Tensor<4>, NetError> {
+    let device = x.device();
+    let dims = x.dims();
+    let input = read_values(x, "host convolution input")?;
+    let residual = residual
+        .map(|r| read_values(r, "host convolution residual"))
+        .transpose()?;
+    let (out, [oh, ow]) = host.forward(&input, dims, residual.as_deref(), relu)?;
+    Ok(Tensor::from_data(
+        TensorData::new(out, [dims[0], host.out_channels(), oh, ow]),
+        &device,
+    ))
+}
