@@ -83,6 +83,9 @@ pub struct ForwardOptions {
     pub fold_batch_norm: bool,
     /// Sweep (the cascade: its correlation) on the device (GPU backends) instead of the host.
     pub device_sweep: bool,
+    /// The cascade's convolutions on the host (`omnimvs_net::hostconv`, what `infer` does on a
+    /// CPU) once the batch norms are folded; burn's otherwise.
+    pub host_convs: bool,
 }
 
 impl Default for ForwardOptions {
@@ -92,6 +95,7 @@ impl Default for ForwardOptions {
             repeats: 3,
             fold_batch_norm: true,
             device_sweep: false,
+            host_convs: true,
         }
     }
 }
@@ -111,6 +115,7 @@ pub fn bench_forward(
         repeats,
         fold_batch_norm,
         device_sweep,
+        host_convs: _,
     } = *options;
     let net = OmniMvsNet::new(config, device)?;
     let net = if fold_batch_norm {
@@ -189,6 +194,8 @@ pub struct CascadeBenchReport {
     pub params: usize,
     /// Whether batch norms were folded into the convolutions (as `infer` runs it).
     pub folded_batch_norm: bool,
+    /// Whether the convolutions ran on the host kernels (as `infer` runs them on a CPU).
+    pub host_convs: bool,
     /// Timings of every measured run (warm-up runs excluded).
     pub runs: Vec<CascadeRow>,
     /// Peak resident memory of the process after the runs, bytes (Linux only).
@@ -230,11 +237,13 @@ pub fn bench_cascade_forward(
         repeats,
         fold_batch_norm,
         device_sweep,
+        host_convs,
     } = options;
-    let net = if fold_batch_norm {
-        net.fold_batch_norm()
-    } else {
-        net
+    let host_convs = host_convs && fold_batch_norm;
+    let net = match (fold_batch_norm, host_convs) {
+        (true, true) => net.fold_batch_norm().with_host_convs(),
+        (true, false) => net.fold_batch_norm(),
+        _ => net,
     };
     let hypotheses = InvDepthHypotheses::new(config.num_invdepth, min_depth_m)?;
     let geometry =
@@ -251,6 +260,7 @@ pub fn bench_cascade_forward(
         config: config.clone(),
         params,
         folded_batch_norm: fold_batch_norm,
+        host_convs,
         runs,
         peak_rss_bytes: peak_rss_bytes(),
     })

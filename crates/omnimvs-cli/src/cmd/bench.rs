@@ -47,6 +47,10 @@ pub struct Args {
     /// convolutions.
     #[arg(long)]
     pub no_fold: bool,
+    /// The cascade's convolutions through burn's backend instead of the host kernels that
+    /// `infer` uses on a CPU (`omnimvs_net::hostconv`): the reference for a comparison.
+    #[arg(long)]
+    pub burn_convs: bool,
     /// Where the sweep runs: the backend's best (host on CPU backends, device on GPUs).
     #[arg(long, value_enum, default_value_t = SweepPlace::Auto)]
     pub sweep: SweepPlace,
@@ -144,6 +148,7 @@ fn bench_omnimvs(
         repeats: args.repeats,
         fold_batch_norm: !args.no_fold,
         device_sweep,
+        host_convs: false,
     };
     let forward = bench_forward(config, &options, device).context("forward benchmark")?;
     print_stage_table(
@@ -181,17 +186,23 @@ fn bench_cascade(
             repeats: args.repeats,
             fold_batch_norm: !args.no_fold,
             device_sweep: args.backend.is_gpu(),
+            host_convs: !args.burn_convs && !args.backend.is_gpu(),
         },
         device,
     )
     .context("forward benchmark")?;
     outln!(
-        "{} parameters, batch norms {}",
+        "{} parameters, batch norms {}, convolutions {}",
         forward.params,
         if forward.folded_batch_norm {
             "folded"
         } else {
             "as separate layers"
+        },
+        if forward.host_convs {
+            "on the host"
+        } else {
+            "through burn"
         }
     );
     print_stage_table(
