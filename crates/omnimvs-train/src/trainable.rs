@@ -62,6 +62,29 @@ pub trait Trainable: Module + Sized {
         parts: TrainParts,
     ) -> Result<Tensor<1>, TrainError>;
 
+    /// The inference network (from [`crate::Learner::inference_net`]) on the family's host
+    /// path for a CPU backend, as `omnimvs infer` runs it there: the same answers to float
+    /// rounding, in less time. The default: the network as it is.
+    #[must_use]
+    fn on_host(self) -> Self {
+        self
+    }
+
+    /// The geometry of `source`'s rig (identity rotation) for validation on `device`, on the
+    /// family's host path when `host` ([`Trainable::on_host`]). The default: [`Trainable::geometry`].
+    ///
+    /// # Errors
+    /// [`TrainError`] when the rig does not fit the network.
+    fn validation_geometry(
+        &self,
+        source: &SampleSource,
+        device: &Device,
+        host: bool,
+    ) -> Result<Self::Geometry, TrainError> {
+        let _ = host;
+        self.geometry(source, 0, device)
+    }
+
     /// The inference-mode index map `[1, H, W]` on the output grid, for validation
     /// (`geometry` of the identity rotation, on the inference device).
     ///
@@ -203,6 +226,25 @@ impl Trainable for CascadeNet {
             &self.config,
             &source.hypotheses,
             device,
+        )?)
+    }
+
+    fn on_host(self) -> Self {
+        self.fold_batch_norm().with_host_convs()
+    }
+
+    fn validation_geometry(
+        &self,
+        source: &SampleSource,
+        device: &Device,
+        host: bool,
+    ) -> Result<Self::Geometry, TrainError> {
+        Ok(CascadeGeometry::with_host_correlation(
+            &source.rotated_rig(0),
+            &self.config,
+            &source.hypotheses,
+            device,
+            host,
         )?)
     }
 

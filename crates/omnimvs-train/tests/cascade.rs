@@ -378,3 +378,59 @@ fn training_only_the_full_stage_moves_its_weights_and_nothing_else() {
     // The paper's network has no full stage to train alone.
     assert_the_paper_network_refuses(TrainParts::Fine, &device);
 }
+
+/// Validation on a CPU runs the cascade's host path (`Trainable::on_host`: batch norms folded,
+/// convolutions and correlation on the host, as `omnimvs infer`): the index map is the device
+/// path's to float rounding, for a network whose batch norms hold statistics of their own.
+#[test]
+fn validation_on_the_host_path_predicts_as_the_device_path() {
+    use burn::module::Param;
+    use burn::tensor::{Distribution, Tensor};
+    use omnimvs_train::{RotationSet, SampleSource, Trainable};
+
+    let mut config = micro_config();
+    config.cascade.zncc_cue = true;
+    config.cascade.stage_gates = true;
+    let device = Device::flex();
+    let mut net = seeded(|| CascadeNet::new(&config, &device).unwrap());
+    // Batch-norm statistics other than the identity, so that folding them matters.
+    let c = net.features.conv2.bn.as_mut().unwrap();
+    let n = c.gamma.val().dims()[0];
+    c.gamma = Param::from_tensor(Tensor::random(
+        [n],
+        Distribution::Uniform(0.5, 1.5),
+        &device,
+    ));
+    c.beta = Param::from_tensor(Tensor::random(
+        [n],
+        Distribution::Uniform(-0.2, 0.2),
+        &device,
+    ));
+    let net = net.valid();
+    let source = SampleSource::open(
+        &sample_dir("sunny_single"),
+        &config,
+        RotationSet::new(1, 0.0, 1),
+    )
+    .unwrap();
+    let images: Vec<Tensor<4>> = micro_images(&config)
+        .into_iter()
+        .map(|img| {
+            Tensor::from_data(
+                burn::tensor::TensorData::new(img, [1, 1, config.input_height, config.input_width]),
+                &device,
+            )
+        })
+        .collect();
+    let device_geometry = net.validation_geometry(&source, &device, false).unwrap();
+    let on_device = net.predict(&images, &device_geometry, &source).unwrap();
+    let host = net.clone().on_host();
+    assert!(host.features.conv2.host.is_some(), "the host path is taken");
+    let host_geometry = host.validation_geometry(&source, &device, true).unwrap();
+    assert!(host_geometry.host_correlation);
+    let on_host = host.predict(&images, &host_geometry, &source).unwrap();
+    let a = read_values(on_device, "device").unwrap();
+    let b = read_values(on_host, "host").unwrap();
+    let d = micro_cascade::max_difference(&a, &b);
+    assert!(d < 1e-3, "index maps differ by {d}");
+}
