@@ -28,7 +28,8 @@ impl NetEstimator {
     /// Prepares `net` for `dataset` on `device`: batch norms folded (both families), the
     /// paper's network's lookup table from `cache` (its status is returned), and its sweep or
     /// the cascade's correlation on the device when `sweep_on_device` (GPU backends), on the
-    /// host otherwise.
+    /// host otherwise; on burn flex, the cascade's convolutions on the host kernels too
+    /// ([`crate::hostconv`]).
     ///
     /// # Errors
     /// [`NetError`] when the rig does not fit the network or a table cannot be built.
@@ -50,10 +51,12 @@ impl NetEstimator {
             }
             AnyNet::Cascade(net) => (
                 Self::Cascade(Box::new(CascadeInference::new(
-                    if sweep_on_device {
-                        (*net).fold_batch_norm()
-                    } else {
+                    // burn flex's own convolutions are slower than the host kernels;
+                    // other backends keep theirs.
+                    if !sweep_on_device && device == Device::flex() {
                         (*net).fold_batch_norm().with_host_convs()
+                    } else {
+                        (*net).fold_batch_norm()
                     },
                     dataset,
                     device,
