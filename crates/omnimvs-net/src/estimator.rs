@@ -28,7 +28,7 @@ impl NetEstimator {
     /// Prepares `net` for `dataset` on `device`: batch norms folded (both families), the
     /// paper's network's lookup table from `cache` (its status is returned), and its sweep or
     /// the cascade's correlation on the device when `sweep_on_device` (GPU backends), on the
-    /// host otherwise; on burn flex, the cascade's convolutions on the host kernels too
+    /// host otherwise; on burn flex, the 2D convolutions on the host kernels too
     /// ([`crate::hostconv`]).
     ///
     /// # Errors
@@ -42,8 +42,12 @@ impl NetEstimator {
     ) -> Result<(Self, Option<CacheStatus>), NetError> {
         Ok(match net {
             AnyNet::OmniMvs(net) => {
-                let (mut inference, status) =
-                    Inference::new((*net).fold_batch_norm(), dataset, cache, device)?;
+                let net = if !sweep_on_device && device == Device::flex() {
+                    (*net).fold_batch_norm().with_host_convs()
+                } else {
+                    (*net).fold_batch_norm()
+                };
+                let (mut inference, status) = Inference::new(net, dataset, cache, device)?;
                 if sweep_on_device {
                     inference.sweep_on_device();
                 }

@@ -13,7 +13,7 @@ use omnimvs_data::Dataset;
 use omnimvs_net::cascade::CascadeGeometry;
 use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::hostconv::{HostConv2d, Padding};
-use omnimvs_net::{CascadeNet, NetError};
+use omnimvs_net::{CascadeNet, NetConfig, NetError};
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]
 mod samples;
@@ -293,4 +293,52 @@ fn bad_sizes_are_refused() {
         .with_padding(PaddingConfig2d::Same)
         .init(&Device::flex());
     assert!(HostConv2d::from_conv(&same, 0, false).is_none());
+}
+
+/// The paper's network (tiny preset, both layouts) with its 2D convolutions on the host
+/// (features, transference) answers as with burn's: cost volumes and index maps.
+#[test]
+fn the_papers_network_with_its_2d_convolutions_on_the_host_answers_as_with_burns() {
+    use omnimvs_net::{Layout, OmniMvsNet, SweepGrid, SweepTaps};
+    let device = Device::flex();
+    for layout in [Layout::Published, Layout::Iccv] {
+        let config = NetConfig::tiny().with_layout(layout);
+        let net = OmniMvsNet::new(&config, &device).unwrap().fold_batch_norm();
+        let [fh, fw] = config.feature_size();
+        let (n2, h, w) = (config.num_spheres(), config.out_height, config.out_width);
+        // Every sphere pixel looks at a point of a circle in the feature map.
+        let coords: Vec<f32> = (0..n2 * h * w)
+            .flat_map(|i| {
+                let a = std::f32::consts::TAU * (i % w) as f32 / w as f32;
+                let r = 0.2 + 0.7 * ((i / w) % h) as f32 / h as f32 + 0.01 * (i / (h * w)) as f32;
+                [r * a.cos(), r * a.sin()]
+            })
+            .collect();
+        let grid = SweepGrid::new(n2, h, w, coords).unwrap();
+        let taps = SweepTaps::new(&grid, [fh, fw], &device);
+        let image = Tensor::<4>::random(
+            [1, 1, config.input_height, config.input_width],
+            Distribution::Normal(0.0, 1.0),
+            &device,
+        );
+        let images = vec![image; config.num_cameras];
+        let all_taps = vec![taps; config.num_cameras];
+        let order: Vec<usize> = (0..config.num_cameras).collect();
+        let burn = net.forward(&images, &all_taps, &order).unwrap();
+        let host_net = net.with_host_convs();
+        assert!(host_net.feature_layers.layers[0].host.is_some());
+        assert!(host_net.spherical_sweep.transfer_conv.host.is_some());
+        let host = host_net.forward(&images, &all_taps, &order).unwrap();
+        let cost = |t: Tensor<4>| read_values(t, "cost").unwrap();
+        let (a, b) = (cost(burn.cost), cost(host.cost));
+        let scale = a.iter().fold(1f32, |m, v| m.max(v.abs()));
+        let d = max_difference(&a, &b) / scale;
+        assert!(
+            d < 1e-4,
+            "{layout:?}: cost volumes differ by {d} (relative)"
+        );
+        let index = |t: Tensor<3>| read_values(t, "index").unwrap();
+        let d = max_difference(&index(burn.index), &index(host.index));
+        assert!(d < 1e-2, "{layout:?}: index maps differ by {d}");
+    }
 }

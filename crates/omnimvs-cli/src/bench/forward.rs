@@ -115,13 +115,13 @@ pub fn bench_forward(
         repeats,
         fold_batch_norm,
         device_sweep,
-        host_convs: _,
+        host_convs,
     } = *options;
     let net = OmniMvsNet::new(config, device)?;
-    let net = if fold_batch_norm {
-        net.fold_batch_norm()
-    } else {
-        net
+    let net = match (fold_batch_norm, host_convs) {
+        (true, true) => net.fold_batch_norm().with_host_convs(),
+        (true, false) => net.fold_batch_norm(),
+        _ => net,
     };
     let grids = synthetic_grids(config);
     let valid = grids

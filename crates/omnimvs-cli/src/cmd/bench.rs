@@ -47,7 +47,7 @@ pub struct Args {
     /// convolutions.
     #[arg(long)]
     pub no_fold: bool,
-    /// The cascade's convolutions through burn's backend instead of the host kernels that
+    /// The 2D convolutions through burn's backend instead of the host kernels that
     /// `infer` uses on a CPU (`omnimvs_net::hostconv`): the reference for a comparison.
     #[arg(long)]
     pub burn_convs: bool,
@@ -148,7 +148,7 @@ fn bench_omnimvs(
         repeats: args.repeats,
         fold_batch_norm: !args.no_fold,
         device_sweep,
-        host_convs: false,
+        host_convs: !args.burn_convs && args.backend == Backend::Cpu,
     };
     let forward = bench_forward(config, &options, device).context("forward benchmark")?;
     print_stage_table(
@@ -186,7 +186,7 @@ fn bench_cascade(
             repeats: args.repeats,
             fold_batch_norm: !args.no_fold,
             device_sweep: args.backend.is_gpu(),
-            host_convs: !args.burn_convs && !args.backend.is_gpu(),
+            host_convs: !args.burn_convs && args.backend == Backend::Cpu,
         },
         device,
     )

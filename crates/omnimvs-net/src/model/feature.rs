@@ -75,6 +75,18 @@ impl FeatureLayers {
         x
     }
 
+    /// The layers also on the host ([`ConvBn2d::with_host_conv`]; after folding).
+    #[must_use]
+    pub fn with_host_convs(self) -> Self {
+        Self {
+            layers: self
+                .layers
+                .into_iter()
+                .map(ConvBn2d::with_host_conv)
+                .collect(),
+        }
+    }
+
     /// Folds the batch norms into the convolutions (inference only).
     pub fn fold_batch_norm(self) -> Self {
         Self {

@@ -356,6 +356,19 @@ impl OmniMvsNet {
         }
     }
 
+    /// The network with its 2D convolutions (features, transference) also on the host
+    /// ([`crate::hostconv`]), which its forward pass uses from then on: for inference on burn
+    /// flex, after [`OmniMvsNet::fold_batch_norm`]. The 3D cost regularisation keeps burn's.
+    #[must_use]
+    pub fn with_host_convs(self) -> Self {
+        Self {
+            feature_layers: self.feature_layers.with_host_convs(),
+            spherical_sweep: self.spherical_sweep.with_host_convs(),
+            cost_computes: self.cost_computes,
+            config: self.config,
+        }
+    }
+
     /// Multiplies the final cost (3Ddeconv5's weights and bias) by `factor`, the inverse of a
     /// softmax temperature. A randomly initialised network has nearly equal costs, so its
     /// softargmin is almost flat and hides kernel differences; a sharpened one makes a

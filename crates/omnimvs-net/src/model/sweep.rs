@@ -119,6 +119,14 @@ impl SphericalSweep {
         }
     }
 
+    /// The transference convolution also on the host ([`ConvBn2d::with_host_conv`]).
+    #[must_use]
+    pub fn with_host_convs(self) -> Self {
+        Self {
+            transfer_conv: self.transfer_conv.with_host_conv(),
+        }
+    }
+
     /// Transference of warped features `[B, n, C, H, W]` -> `[B, C, n, H/2, W/2]`.
     pub fn transfer(&self, warped: Tensor<5>) -> Tensor<5> {
         let [batch, n, channels, height, width] = warped.dims();
