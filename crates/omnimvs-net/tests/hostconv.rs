@@ -2,7 +2,8 @@
 //! cascade has (kernels 1, 3 and 5; strides 1 and 2; dilations 1, 2 and 4; zero padding, or
 //! columns wrapping around as on the panorama; a residual; a ReLU; several images; maps wide
 //! enough to be cut into bands) answers as burn's convolution does, to float rounding; a
-//! cascade with its convolutions on the host answers as with burn's; bad sizes are refused.
+//! cascade, and the paper's network, with their convolutions on the host answer as with
+//! burn's; bad sizes are refused.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use burn::nn::PaddingConfig2d;
