@@ -91,42 +91,33 @@ impl CascadeFeatures {
         x
     }
 
+    /// Every block of the pyramid passed through `f`.
+    fn map_blocks(self, f: impl Fn(ConvBn2d) -> ConvBn2d) -> Self {
+        let all = |blocks: Vec<ConvBn2d>| blocks.into_iter().map(&f).collect();
+        Self {
+            res4: all(self.res4),
+            res8: all(self.res8),
+            ctx8: all(self.ctx8),
+            conv0: f(self.conv0),
+            conv2: f(self.conv2),
+            out2: f(self.out2),
+            down4: f(self.down4),
+            out4: f(self.out4),
+            down8: f(self.down8),
+            out8: f(self.out8),
+        }
+    }
+
     /// Folds the inference-mode batch norms into the convolutions.
     #[must_use]
     pub fn fold_batch_norm(self) -> Self {
-        let fold =
-            |blocks: Vec<ConvBn2d>| blocks.into_iter().map(ConvBn2d::fold_batch_norm).collect();
-        Self {
-            conv0: self.conv0.fold_batch_norm(),
-            conv2: self.conv2.fold_batch_norm(),
-            out2: self.out2.fold_batch_norm(),
-            down4: self.down4.fold_batch_norm(),
-            res4: fold(self.res4),
-            out4: self.out4.fold_batch_norm(),
-            down8: self.down8.fold_batch_norm(),
-            res8: fold(self.res8),
-            ctx8: fold(self.ctx8),
-            out8: self.out8.fold_batch_norm(),
-        }
+        self.map_blocks(ConvBn2d::fold_batch_norm)
     }
 
     /// The features with every convolution also on the host ([`ConvBn2d::with_host_conv`]).
     #[must_use]
     pub fn with_host_convs(self) -> Self {
-        let host =
-            |blocks: Vec<ConvBn2d>| blocks.into_iter().map(ConvBn2d::with_host_conv).collect();
-        Self {
-            conv0: self.conv0.with_host_conv(),
-            conv2: self.conv2.with_host_conv(),
-            out2: self.out2.with_host_conv(),
-            down4: self.down4.with_host_conv(),
-            res4: host(self.res4),
-            out4: self.out4.with_host_conv(),
-            down8: self.down8.with_host_conv(),
-            res8: host(self.res8),
-            ctx8: host(self.ctx8),
-            out8: self.out8.with_host_conv(),
-        }
+        self.map_blocks(ConvBn2d::with_host_conv)
     }
 
     /// The features with the stride-8 branch widened to `c8` channels (`down8`, the residual
