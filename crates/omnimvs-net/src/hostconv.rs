@@ -1,4 +1,4 @@
-//! 2D convolutions on the host, for inference on a CPU.
+//! 2D and 3D convolutions on the host, for inference on a CPU.
 //!
 //! burn's `flex` backend runs a 2D convolution as a 3D one: it copies the whole input to
 //! channels-last order on one thread, builds each im2col tile with a bounds check per tap and
@@ -13,10 +13,10 @@
 //!
 //! The values are those of the convolution the layer describes, summed in another order: a
 //! test compares them with burn's to 1e-4 relative. No gradient: training keeps burn's
-//! modules ([`HostConv2d::from_conv`] reads a trained, batch-norm-folded layer).
+//! modules ([`HostConv::from_conv`] reads a trained, batch-norm-folded layer).
 
-use burn::nn::PaddingConfig2d;
-use burn::nn::conv::Conv2d;
+use burn::nn::conv::{Conv2d, Conv3d};
+use burn::nn::{PaddingConfig2d, PaddingConfig3d};
 use burn::tensor::{Tensor, TensorData};
 use rayon::prelude::*;
 
@@ -38,31 +38,41 @@ pub struct Padding {
 /// Floats of im2col a band aims at (1 MiB: within a core's L2 cache with the GEMM's packing).
 const BAND_FLOATS: usize = 1 << 18;
 
-/// A 2D convolution (one group) with its weights laid out for the GEMM.
+/// Floats of band outputs computed before they are copied into the output (64 MiB).
+const IN_FLIGHT_FLOATS: usize = 1 << 24;
+
+/// A 2D or 3D convolution (one group) with its weights laid out for the GEMM. A 2D one is a
+/// 3D one of depth 1: its sizes are `[depth, rows, columns]` with depth 1 throughout.
 #[derive(Clone, Debug)]
-pub struct HostConv2d {
+pub struct HostConv {
     c_in: usize,
     c_out: usize,
-    kernel: [usize; 2],
-    stride: [usize; 2],
-    dilation: [usize; 2],
+    /// `[kd, kh, kw]`.
+    kernel: [usize; 3],
+    /// Along depth, rows, columns.
+    stride: [usize; 3],
+    /// Along depth, rows, columns.
+    dilation: [usize; 3],
+    /// Zero planes added before and after along depth.
+    depth_pad: usize,
     padding: Padding,
-    /// `[c_out, c_in * kh * kw]`, row-major: burn's `[O, I, kh, kw]` as it is.
+    /// `[c_out, c_in * kd * kh * kw]`, row-major: burn's `[O, I, (kd,) kh, kw]` as it is.
     weight: Vec<f32>,
     /// `[c_out]` (zeros without a bias).
     bias: Vec<f32>,
 }
 
-/// Sizes of one call: input `[batch, c_in, h, w]`, output `[batch, c_out, oh, ow]`.
+/// Sizes of one call: input `[batch, c_in, d, h, w]`, output `[batch, c_out, od, oh, ow]`.
 #[derive(Clone, Copy, Debug)]
 struct Sizes {
+    d: usize,
     h: usize,
     w: usize,
     oh: usize,
     ow: usize,
 }
 
-impl HostConv2d {
+impl HostConv {
     /// The host form of a burn convolution `conv` (its batch norm, if any, folded in first),
     /// with its own padding; `extra_cols` more columns each side, wrapping around when
     /// `wrap_cols` (the panorama's circular padding, applied before `conv` in the tensor
@@ -107,7 +117,41 @@ impl HostConv2d {
         .ok()
     }
 
-    /// A convolution from its weights `[c_out, c_in, kh, kw]` (row-major) and bias.
+    /// The host form of a burn 3D convolution `conv` (its batch norm, if any, folded in
+    /// first), with its own zero padding. `None` for groups or `Same` padding (burn's path).
+    pub fn from_conv3d(conv: &Conv3d) -> Option<Self> {
+        if conv.groups != 1 {
+            return None;
+        }
+        let [pd, ph, pw] = match conv.padding {
+            PaddingConfig3d::Valid => [0; 3],
+            PaddingConfig3d::Explicit(d, h, w) => [d, h, w],
+            _ => return None,
+        };
+        let [c_out, c_in, kd, kh, kw] = conv.weight.val().dims();
+        let weight = read_values(conv.weight.val(), "weights").ok()?;
+        let bias = match &conv.bias {
+            Some(b) => read_values(b.val(), "bias").ok()?,
+            None => vec![0.0; c_out],
+        };
+        Self::build(
+            [c_in, c_out],
+            [kd, kh, kw],
+            conv.stride,
+            conv.dilation,
+            pd,
+            Padding {
+                rows: ph,
+                cols: pw,
+                wrap_cols: false,
+            },
+            weight,
+            bias,
+        )
+        .ok()
+    }
+
+    /// A 2D convolution from its weights `[c_out, c_in, kh, kw]` (row-major) and bias.
     ///
     /// # Errors
     /// [`NetError::Shape`] when the weights or the bias do not have the sizes given, or a
@@ -121,25 +165,51 @@ impl HostConv2d {
         weight: Vec<f32>,
         bias: Vec<f32>,
     ) -> Result<Self, NetError> {
+        Self::build(
+            channels,
+            [1, kernel[0], kernel[1]],
+            [1, stride[0], stride[1]],
+            [1, dilation[0], dilation[1]],
+            0,
+            padding,
+            weight,
+            bias,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn build(
+        channels: [usize; 2],
+        kernel: [usize; 3],
+        stride: [usize; 3],
+        dilation: [usize; 3],
+        depth_pad: usize,
+        padding: Padding,
+        weight: Vec<f32>,
+        bias: Vec<f32>,
+    ) -> Result<Self, NetError> {
         let [c_in, c_out] = channels;
         let shape_error = |what: &str, expected: Vec<usize>, actual: Vec<usize>| NetError::Shape {
             what: format!("{what} (host convolution)"),
             expected,
             actual,
         };
-        if [c_in, c_out, kernel[0], kernel[1], stride[0], stride[1]].contains(&0)
+        if [c_in, c_out].contains(&0)
+            || kernel.contains(&0)
+            || stride.contains(&0)
             || dilation.contains(&0)
         {
             return Err(shape_error(
                 "channels, kernel, stride and dilation (none zero)",
-                vec![c_in, c_out, kernel[0], kernel[1]],
-                vec![stride[0], stride[1], dilation[0], dilation[1]],
+                [&channels[..], &kernel[..]].concat(),
+                [&stride[..], &dilation[..]].concat(),
             ));
         }
-        if weight.len() != c_out * c_in * kernel[0] * kernel[1] {
+        let taps: usize = kernel.iter().product();
+        if weight.len() != c_out * c_in * taps {
             return Err(shape_error(
                 "weights",
-                vec![c_out, c_in, kernel[0], kernel[1]],
+                [&[c_out, c_in][..], &kernel[..]].concat(),
                 vec![weight.len()],
             ));
         }
@@ -152,6 +222,7 @@ impl HostConv2d {
             kernel,
             stride,
             dilation,
+            depth_pad,
             padding,
             weight,
             bias,
@@ -163,36 +234,31 @@ impl HostConv2d {
         self.c_out
     }
 
-    /// The output's rows and columns for an input of `h x w`, `None` when the kernel does not
-    /// fit (or a wrap is wider than the input).
-    pub fn output_size(&self, h: usize, w: usize) -> Option<[usize; 2]> {
-        let span = |size: usize, pad: usize, k: usize, s: usize, d: usize| {
+    /// The output's depth, rows and columns for an input of `d x h x w`, `None` when the
+    /// kernel does not fit (or a wrap is wider than the input).
+    fn output_size3(&self, d: usize, h: usize, w: usize) -> Option<[usize; 3]> {
+        let span = |axis: usize, size: usize, pad: usize| {
             let padded = size + 2 * pad;
-            let reach = d * (k - 1) + 1;
-            (padded >= reach).then(|| (padded - reach) / s + 1)
+            let reach = self.dilation[axis] * (self.kernel[axis] - 1) + 1;
+            (padded >= reach).then(|| (padded - reach) / self.stride[axis] + 1)
         };
         if self.padding.wrap_cols && self.padding.cols > w {
             return None;
         }
         Some([
-            span(
-                h,
-                self.padding.rows,
-                self.kernel[0],
-                self.stride[0],
-                self.dilation[0],
-            )?,
-            span(
-                w,
-                self.padding.cols,
-                self.kernel[1],
-                self.stride[1],
-                self.dilation[1],
-            )?,
+            span(0, d, self.depth_pad)?,
+            span(1, h, self.padding.rows)?,
+            span(2, w, self.padding.cols)?,
         ])
     }
 
-    /// Runs the convolution on `input` `[batch, c_in, h, w]` (row-major), adds `residual`
+    /// The output's rows and columns for an input of `h x w` (a 2D convolution), `None` when
+    /// the kernel does not fit (or a wrap is wider than the input).
+    pub fn output_size(&self, h: usize, w: usize) -> Option<[usize; 2]> {
+        self.output_size3(1, h, w).map(|[_, oh, ow]| [oh, ow])
+    }
+
+    /// Runs a 2D convolution on `input` `[batch, c_in, h, w]` (row-major), adds `residual`
     /// (`[batch, c_out, oh, ow]`) when given, then a ReLU when `relu`: `[batch, c_out, oh,
     /// ow]` and `[oh, ow]`.
     ///
@@ -207,65 +273,93 @@ impl HostConv2d {
         relu: bool,
     ) -> Result<(Vec<f32>, [usize; 2]), NetError> {
         let [batch, c_in, h, w] = dims;
+        let (out, [_, oh, ow]) = self.forward3d(input, [batch, c_in, 1, h, w], residual, relu)?;
+        Ok((out, [oh, ow]))
+    }
+
+    /// [`HostConv::forward`] for a 3D convolution: `input` `[batch, c_in, d, h, w]`, output
+    /// `[batch, c_out, od, oh, ow]` and `[od, oh, ow]`.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when the input or the residual do not have the sizes given, or the
+    /// kernel does not fit the input.
+    pub fn forward3d(
+        &self,
+        input: &[f32],
+        dims: [usize; 5],
+        residual: Option<&[f32]>,
+        relu: bool,
+    ) -> Result<(Vec<f32>, [usize; 3]), NetError> {
+        let [batch, c_in, d, h, w] = dims;
         let shape_error = |what: &str, expected: Vec<usize>, actual: Vec<usize>| NetError::Shape {
             what: format!("{what} (host convolution)"),
             expected,
             actual,
         };
-        if c_in != self.c_in || input.len() != batch * c_in * h * w {
+        if c_in != self.c_in || input.len() != batch * c_in * d * h * w {
             return Err(shape_error(
                 "input",
-                vec![batch, self.c_in, h, w],
+                vec![batch, self.c_in, d, h, w],
                 vec![input.len()],
             ));
         }
-        let Some([oh, ow]) = self.output_size(h, w) else {
+        let Some([od, oh, ow]) = self.output_size3(d, h, w) else {
             return Err(shape_error(
                 "input size for the kernel",
                 self.kernel.to_vec(),
-                vec![h, w],
+                vec![d, h, w],
             ));
         };
-        let plane = oh * ow;
+        let plane = od * oh * ow;
         if let Some(r) = residual
             && r.len() != batch * self.c_out * plane
         {
             return Err(shape_error(
                 "residual",
-                vec![batch, self.c_out, oh, ow],
+                vec![batch, self.c_out, od, oh, ow],
                 vec![r.len()],
             ));
         }
-        let sizes = Sizes { h, w, oh, ow };
-        let k = self.c_in * self.kernel[0] * self.kernel[1];
-        let band_rows = (BAND_FLOATS / (k * ow).max(1)).clamp(1, oh);
-        let bands_per_image = oh.div_ceil(band_rows);
-        let in_image = c_in * h * w;
+        let sizes = Sizes { d, h, w, oh, ow };
+        // Output rows of all depths in one run: row `r` is depth `r / oh`, row `r % oh`.
+        let out_rows = od * oh;
+        let k = self.c_in * self.kernel.iter().product::<usize>();
+        let band_rows = (BAND_FLOATS / (k * ow).max(1)).clamp(1, out_rows);
+        let bands_per_image = out_rows.div_ceil(band_rows);
+        let in_image = c_in * d * h * w;
         let out_image = self.c_out * plane;
-        // Every band of every image on its own, its output `[c_out, rows * ow]`.
-        let bands: Vec<(usize, usize, Vec<f32>)> = (0..batch * bands_per_image)
-            .into_par_iter()
-            .map(|i| {
-                let (b, band) = (i / bands_per_image, i % bands_per_image);
-                let row0 = band * band_rows;
-                let rows = band_rows.min(oh - row0);
-                let image = &input[b * in_image..(b + 1) * in_image];
-                let res = residual.map(|r| &r[b * out_image..(b + 1) * out_image]);
-                (b, row0, self.band(image, sizes, row0, rows, res, relu))
-            })
-            .collect();
         let mut out = vec![0.0f32; batch * out_image];
-        for (b, row0, values) in bands {
-            let n = values.len() / self.c_out;
-            for (o, chunk) in values.chunks_exact(n).enumerate() {
-                let at = b * out_image + o * plane + row0 * ow;
-                out[at..at + n].copy_from_slice(chunk);
+        // Every band of every image on its own, its output `[c_out, rows * ow]`, up to
+        // `IN_FLIGHT_FLOATS` of them at a time (so that a large output is not held twice),
+        // and at least a few per thread.
+        let total = batch * bands_per_image;
+        let band_floats = (self.c_out * band_rows * ow).max(1);
+        let in_flight =
+            (IN_FLIGHT_FLOATS / band_floats).max(4 * rayon::current_num_threads().max(1));
+        for first in (0..total).step_by(in_flight) {
+            let bands: Vec<(usize, usize, Vec<f32>)> = (first..total.min(first + in_flight))
+                .into_par_iter()
+                .map(|i| {
+                    let (b, band) = (i / bands_per_image, i % bands_per_image);
+                    let row0 = band * band_rows;
+                    let rows = band_rows.min(out_rows - row0);
+                    let image = &input[b * in_image..(b + 1) * in_image];
+                    let res = residual.map(|r| &r[b * out_image..(b + 1) * out_image]);
+                    (b, row0, self.band(image, sizes, row0, rows, res, relu))
+                })
+                .collect();
+            for (b, row0, values) in bands {
+                let n = values.len() / self.c_out;
+                for (o, chunk) in values.chunks_exact(n).enumerate() {
+                    let at = b * out_image + o * plane + row0 * ow;
+                    out[at..at + n].copy_from_slice(chunk);
+                }
             }
         }
-        Ok((out, [oh, ow]))
+        Ok((out, [od, oh, ow]))
     }
 
-    /// Output rows `row0 .. row0 + rows` of one image: `[c_out, rows * ow]`.
+    /// Output rows `row0 .. row0 + rows` (over all depths) of one image: `[c_out, rows * ow]`.
     fn band(
         &self,
         image: &[f32],
@@ -276,8 +370,9 @@ impl HostConv2d {
         relu: bool,
     ) -> Vec<f32> {
         let n = rows * s.ow;
-        let direct = self.kernel == [1, 1]
-            && self.stride == [1, 1]
+        let direct = self.kernel == [1, 1, 1]
+            && self.stride == [1, 1, 1]
+            && self.depth_pad == 0
             && self.padding.rows == 0
             && self.padding.cols == 0;
         let mut out = Vec::with_capacity(self.c_out * n);
@@ -287,18 +382,19 @@ impl HostConv2d {
         if direct {
             // A 1x1 convolution reads the input's rows as they are: one copy per channel.
             let mut col = Vec::with_capacity(self.c_in * n);
+            let volume = s.d * s.h * s.w;
             for c in 0..self.c_in {
-                let at = c * s.h * s.w + row0 * s.w;
+                let at = c * volume + row0 * s.w;
                 col.extend_from_slice(&image[at..at + n]);
             }
             gemm_add(self.c_out, n, self.c_in, &self.weight, &col, &mut out);
         } else {
             let col = self.im2col(image, s, row0, rows);
-            let k = self.c_in * self.kernel[0] * self.kernel[1];
+            let k = self.c_in * self.kernel.iter().product::<usize>();
             gemm_add(self.c_out, n, k, &self.weight, &col, &mut out);
         }
         if let Some(r) = residual {
-            let plane = s.oh * s.ow;
+            let plane = r.len() / self.c_out;
             for (o, chunk) in out.chunks_exact_mut(n).enumerate() {
                 let at = o * plane + row0 * s.ow;
                 for (v, r) in chunk.iter_mut().zip(&r[at..at + n]) {
@@ -314,32 +410,37 @@ impl HostConv2d {
         out
     }
 
-    /// The im2col matrix of output rows `row0 .. row0 + rows`: `[c_in * kh * kw, rows * ow]`,
-    /// a row per input channel and tap.
+    /// The im2col matrix of output rows `row0 .. row0 + rows` (over all depths):
+    /// `[c_in * kd * kh * kw, rows * ow]`, a row per input channel and tap.
     fn im2col(&self, image: &[f32], s: Sizes, row0: usize, rows: usize) -> Vec<f32> {
-        let [kh, kw] = self.kernel;
-        let [sh, sw] = self.stride;
-        let [dh, dw] = self.dilation;
-        let (ph, pw) = (self.padding.rows, self.padding.cols);
+        let [kd, kh, kw] = self.kernel;
+        let [sd, sh, sw] = self.stride;
+        let [dd, dh, dw] = self.dilation;
+        let (pd, ph, pw) = (self.depth_pad, self.padding.rows, self.padding.cols);
         let n = rows * s.ow;
-        let mut col = vec![0.0f32; self.c_in * kh * kw * n];
+        let mut col = vec![0.0f32; self.c_in * kd * kh * kw * n];
+        let volume = s.d * s.h * s.w;
         let mut at = 0;
         for c in 0..self.c_in {
-            let channel = &image[c * s.h * s.w..(c + 1) * s.h * s.w];
-            for ky in 0..kh {
-                for kx in 0..kw {
-                    let dst_row = &mut col[at..at + n];
-                    at += n;
-                    for r in 0..rows {
-                        let iy = ((row0 + r) * sh + ky * dh) as isize - ph as isize;
-                        if iy < 0 || iy >= s.h as isize {
-                            continue; // zero rows (already zero)
+            let channel = &image[c * volume..(c + 1) * volume];
+            for kz in 0..kd {
+                for ky in 0..kh {
+                    for kx in 0..kw {
+                        let dst_row = &mut col[at..at + n];
+                        at += n;
+                        for r in 0..rows {
+                            let (oz, oy) = ((row0 + r) / s.oh, (row0 + r) % s.oh);
+                            let iz = (oz * sd + kz * dd) as isize - pd as isize;
+                            let iy = (oy * sh + ky * dh) as isize - ph as isize;
+                            if iz < 0 || iz >= s.d as isize || iy < 0 || iy >= s.h as isize {
+                                continue; // zero rows (already zero)
+                            }
+                            let from = (iz as usize * s.h + iy as usize) * s.w;
+                            let src = &channel[from..from + s.w];
+                            let dst = &mut dst_row[r * s.ow..(r + 1) * s.ow];
+                            // Input column of output column `ox`: `ox * sw + offset - pw`.
+                            self.copy_columns(src, dst, kx * dw, sw, pw);
                         }
-                        let src = &channel[iy as usize * s.w..(iy as usize + 1) * s.w];
-                        let dst = &mut dst_row[r * s.ow..(r + 1) * s.ow];
-                        // Input column of output column `ox`: `ox * sw + offset - pw`.
-                        let offset = kx * dw;
-                        self.copy_columns(src, dst, offset, sw, pw);
                     }
                 }
             }
@@ -423,7 +524,7 @@ fn gemm_add(m: usize, n: usize, k: usize, a: &[f32], b: &[f32], c: &mut [f32]) {
 /// [`NetError::Shape`] when the values do not read as `f32` or do not fit the kernel (the
 /// callers then take burn's path).
 pub fn host_forward(
-    host: &HostConv2d,
+    host: &HostConv,
     x: Tensor<4>,
     residual: Option<Tensor<4>>,
     relu: bool,
@@ -437,6 +538,30 @@ pub fn host_forward(
     let (out, [oh, ow]) = host.forward(&input, dims, residual.as_deref(), relu)?;
     Ok(Tensor::from_data(
         TensorData::new(out, [dims[0], host.out_channels(), oh, ow]),
+        &device,
+    ))
+}
+
+/// [`host_forward`] for a 3D convolution: `[B, C_in, D, H, W]` -> `[B, C_out, D', H', W']`.
+///
+/// # Errors
+/// [`NetError::Shape`] when the values do not read as `f32` or do not fit the kernel (the
+/// callers then take burn's path).
+pub fn host_forward3d(
+    host: &HostConv,
+    x: Tensor<5>,
+    residual: Option<Tensor<5>>,
+    relu: bool,
+) -> Result<Tensor<5>, NetError> {
+    let device = x.device();
+    let dims = x.dims();
+    let input = read_values(x, "host convolution input")?;
+    let residual = residual
+        .map(|r| read_values(r, "host convolution residual"))
+        .transpose()?;
+    let (out, [od, oh, ow]) = host.forward3d(&input, dims, residual.as_deref(), relu)?;
+    Ok(Tensor::from_data(
+        TensorData::new(out, [dims[0], host.out_channels(), od, oh, ow]),
         &device,
     ))
 }

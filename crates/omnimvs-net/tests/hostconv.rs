@@ -13,7 +13,7 @@ use burn::tensor::{Device, Distribution, Tensor};
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::CascadeGeometry;
 use omnimvs_net::cascade::model::read_values;
-use omnimvs_net::hostconv::{HostConv2d, Padding};
+use omnimvs_net::hostconv::{HostConv, Padding};
 use omnimvs_net::{CascadeNet, NetConfig, NetError};
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]
@@ -80,7 +80,7 @@ fn run_case(case: &Case, device: &Device) -> f32 {
     };
     let expected = if case.relu { relu(expected) } else { expected };
 
-    let host = HostConv2d::from_conv(&conv, case.wrap, case.wrap > 0).expect("a host kernel");
+    let host = HostConv::from_conv(&conv, case.wrap, case.wrap > 0).expect("a host kernel");
     let input = read_values(x, "input").unwrap();
     let residual = residual.map(|r| read_values(r, "residual").unwrap());
     let (got, [oh, ow]) = host
@@ -203,7 +203,7 @@ fn bad_sizes_are_refused() {
         cols: 1,
         wrap_cols: false,
     };
-    let short = HostConv2d::new(
+    let short = HostConv::new(
         [2, 3],
         [3, 3],
         [1, 1],
@@ -213,9 +213,9 @@ fn bad_sizes_are_refused() {
         vec![0.0; 3],
     );
     assert!(matches!(short, Err(NetError::Shape { .. })));
-    let no_bias = HostConv2d::new([2, 3], [3, 3], [1, 1], [1, 1], pad, vec![0.0; 54], vec![]);
+    let no_bias = HostConv::new([2, 3], [3, 3], [1, 1], [1, 1], pad, vec![0.0; 54], vec![]);
     assert!(matches!(no_bias, Err(NetError::Shape { .. })));
-    let zero_stride = HostConv2d::new(
+    let zero_stride = HostConv::new(
         [2, 3],
         [3, 3],
         [0, 1],
@@ -226,7 +226,7 @@ fn bad_sizes_are_refused() {
     );
     assert!(matches!(zero_stride, Err(NetError::Shape { .. })));
 
-    let conv = HostConv2d::new(
+    let conv = HostConv::new(
         [2, 3],
         [3, 3],
         [1, 1],
@@ -248,7 +248,7 @@ fn bad_sizes_are_refused() {
         cols: 0,
         wrap_cols: false,
     };
-    let big = HostConv2d::new(
+    let big = HostConv::new(
         [1, 1],
         [5, 5],
         [1, 1],
@@ -265,7 +265,7 @@ fn bad_sizes_are_refused() {
         cols: 3,
         wrap_cols: true,
     };
-    let wrapping = HostConv2d::new(
+    let wrapping = HostConv::new(
         [1, 1],
         [1, 7],
         [1, 1],
@@ -289,11 +289,11 @@ fn bad_sizes_are_refused() {
     let grouped = Conv2dConfig::new([4, 4], [3, 3])
         .with_groups(2)
         .init(&Device::flex());
-    assert!(HostConv2d::from_conv(&grouped, 0, false).is_none());
+    assert!(HostConv::from_conv(&grouped, 0, false).is_none());
     let same = Conv2dConfig::new([1, 1], [3, 3])
         .with_padding(PaddingConfig2d::Same)
         .init(&Device::flex());
-    assert!(HostConv2d::from_conv(&same, 0, false).is_none());
+    assert!(HostConv::from_conv(&same, 0, false).is_none());
 }
 
 /// The paper's network (tiny preset, both layouts) with its 2D convolutions on the host
@@ -342,4 +342,70 @@ fn the_papers_network_with_its_2d_convolutions_on_the_host_answers_as_with_burns
         let d = max_difference(&index(burn.index), &index(host.index));
         assert!(d < 1e-2, "{layout:?}: index maps differ by {d}");
     }
+}
+
+/// 3D convolutions (the paper's cost regularisation: 3x3x3, strides 1 and 2, padding 1; and a
+/// 1x1x1 and an uneven one) answer as burn's.
+#[test]
+fn three_d_convolutions_answer_as_burns() {
+    use burn::nn::PaddingConfig3d;
+    use burn::nn::conv::Conv3dConfig;
+    let device = Device::flex();
+    device.seed(83);
+    // channels, kernel, stride, padding (d, h, w), input (d, h, w), batch, residual, relu
+    let cases = [
+        ([4, 6], [3, 3, 3], 1, [1, 1, 1], [5, 6, 7], 1, true, true),
+        ([6, 8], [3, 3, 3], 2, [1, 1, 1], [6, 7, 9], 2, false, true),
+        ([5, 3], [1, 1, 1], 1, [0, 0, 0], [3, 4, 5], 1, false, false),
+        ([3, 4], [2, 3, 1], 1, [1, 0, 2], [4, 5, 6], 1, false, false),
+        // Wide enough to be cut into bands.
+        (
+            [32, 4],
+            [3, 3, 3],
+            1,
+            [1, 1, 1],
+            [4, 6, 300],
+            1,
+            true,
+            false,
+        ),
+    ];
+    for (i, (channels, kernel, stride, pad, size, batch, residual, relu)) in
+        cases.into_iter().enumerate()
+    {
+        let conv = Conv3dConfig::new(channels, kernel)
+            .with_stride([stride; 3])
+            .with_padding(PaddingConfig3d::Explicit(pad[0], pad[1], pad[2]))
+            .init(&device);
+        let [d, h, w] = size;
+        let x = Tensor::<5>::random(
+            [batch, channels[0], d, h, w],
+            Distribution::Normal(0.0, 1.0),
+            &device,
+        );
+        let expected = conv.forward(x.clone());
+        let dims = expected.dims();
+        let res =
+            residual.then(|| Tensor::<5>::random(dims, Distribution::Normal(0.0, 1.0), &device));
+        let expected = match &res {
+            Some(r) => expected + r.clone(),
+            None => expected,
+        };
+        let expected = if relu { relu_5(expected) } else { expected };
+        let host = HostConv::from_conv3d(&conv).expect("a host kernel");
+        let input = read_values(x, "input").unwrap();
+        let res = res.map(|r| read_values(r, "residual").unwrap());
+        let (got, out) = host
+            .forward3d(&input, [batch, channels[0], d, h, w], res.as_deref(), relu)
+            .unwrap();
+        assert_eq!(out, [dims[2], dims[3], dims[4]], "case {i}: output size");
+        let expected = read_values(expected, "expected").unwrap();
+        let scale = expected.iter().fold(1f32, |m, v| m.max(v.abs()));
+        let error = max_difference(&got, &expected) / scale;
+        assert!(error < 1e-5, "case {i}: relative difference {error}");
+    }
+}
+
+fn relu_5(x: Tensor<5>) -> Tensor<5> {
+    burn::tensor::activation::relu(x)
 }

@@ -16,7 +16,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use super::geometry::StageTaps;
 use crate::config::{CascadeParams, Family, NetConfig};
 use crate::error::NetError;
-use crate::hostconv::{HostConv2d, host_forward};
+use crate::hostconv::{HostConv, host_forward};
 use crate::model::blocks::{ConvBn2d, fold_into_conv2d};
 use crate::model::softargmin::entropy;
 
@@ -324,7 +324,7 @@ pub struct PanoConv2d {
     /// The same convolution on the host, with the longitude wrap in its addressing
     /// ([`PanoConv2d::with_host_conv`]: inference on a CPU).
     #[module(skip)]
-    pub host: Option<Arc<HostConv2d>>,
+    pub host: Option<Arc<HostConv>>,
 }
 
 impl PanoConv2d {
@@ -369,14 +369,14 @@ impl PanoConv2d {
         self
     }
 
-    /// The block with its convolution also on the host ([`HostConv2d`]), used by
+    /// The block with its convolution also on the host ([`HostConv`]), used by
     /// [`PanoConv2d::forward`] from then on: for inference on a CPU, after
     /// [`PanoConv2d::fold_batch_norm`] (a block that still has its batch norm is returned as
     /// it is).
     #[must_use]
     pub fn with_host_conv(mut self) -> Self {
         if self.bn.is_none() {
-            self.host = HostConv2d::from_conv(&self.conv, 1, true).map(Arc::new);
+            self.host = HostConv::from_conv(&self.conv, 1, true).map(Arc::new);
         }
         self
     }

@@ -10,7 +10,7 @@ use burn::nn::conv::{
 use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d, PaddingConfig3d};
 use burn::tensor::{Device, Tensor, activation};
 
-use crate::hostconv::{HostConv2d, host_forward};
+use crate::hostconv::{HostConv, host_forward, host_forward3d};
 
 /// Applies the batch norm `bn` when there is one, `+ residual` when given, then ReLU when asked.
 /// PyTorch adds the residual after batch norm and before ReLU.
@@ -80,7 +80,7 @@ pub struct ConvBn2d {
     pub relu: bool,
     /// The same convolution on the host ([`ConvBn2d::with_host_conv`]: inference on a CPU).
     #[module(skip)]
-    pub host: Option<Arc<HostConv2d>>,
+    pub host: Option<Arc<HostConv>>,
 }
 
 impl ConvBn2d {
@@ -110,14 +110,14 @@ impl ConvBn2d {
         }
     }
 
-    /// The block with its convolution also on the host ([`HostConv2d`]), used by
+    /// The block with its convolution also on the host ([`HostConv`]), used by
     /// [`ConvBn2d::forward`] from then on: for inference on a CPU, after
     /// [`ConvBn2d::fold_batch_norm`] (a block that still has its batch norm is returned as it
     /// is).
     #[must_use]
     pub fn with_host_conv(mut self) -> Self {
         if self.bn.is_none() {
-            self.host = HostConv2d::from_conv(&self.conv, 0, false).map(Arc::new);
+            self.host = HostConv::from_conv(&self.conv, 0, false).map(Arc::new);
         }
         self
     }
@@ -162,6 +162,9 @@ pub struct ConvBn3d {
     /// Whether a ReLU ends the block.
     #[module(skip)]
     pub relu: bool,
+    /// The same convolution on the host ([`ConvBn3d::with_host_conv`]: inference on a CPU).
+    #[module(skip)]
+    pub host: Option<Arc<HostConv>>,
 }
 
 impl ConvBn3d {
@@ -180,11 +183,33 @@ impl ConvBn3d {
             .with_padding(PaddingConfig3d::Explicit(pad, pad, pad))
             .init(device);
         let bn = bn.then(|| BatchNormConfig::new(channels[1]).init(device));
-        Self { conv, bn, relu }
+        Self {
+            conv,
+            bn,
+            relu,
+            host: None,
+        }
+    }
+
+    /// The block with its convolution also on the host ([`HostConv`]), used by
+    /// [`ConvBn3d::forward`] from then on: for inference on a CPU, after
+    /// [`ConvBn3d::fold_batch_norm`] (a block that still has its batch norm is returned as it
+    /// is).
+    #[must_use]
+    pub fn with_host_conv(mut self) -> Self {
+        if self.bn.is_none() {
+            self.host = HostConv::from_conv3d(&self.conv).map(Arc::new);
+        }
+        self
     }
 
     /// `[B, C_in, D, H, W] -> [B, C_out, D', H', W']`.
     pub fn forward(&self, x: Tensor<5>, residual: Option<Tensor<5>>) -> Tensor<5> {
+        if let Some(host) = &self.host
+            && let Ok(y) = host_forward3d(host, x.clone(), residual.clone(), self.relu)
+        {
+            return y;
+        }
         let x = self.conv.forward(x); // [B, C_out, D', H', W']
         self.finish(x, residual)
     }

@@ -105,6 +105,20 @@ impl CostCompute {
         fused // [B, 2CH, N/2, H/2, W/2]
     }
 
+    /// Its 3D convolutions (3Dconv1-15) also on the host ([`ConvBn3d::with_host_conv`]);
+    /// the fusion and the transposed convolutions keep burn's.
+    #[must_use]
+    pub fn with_host_convs(self) -> Self {
+        Self {
+            convs: self
+                .convs
+                .into_iter()
+                .map(ConvBn3d::with_host_conv)
+                .collect(),
+            ..self
+        }
+    }
+
     /// Encoder-decoder from the fused volume `[B, 2CH, N/2, H/2, W/2]` to `[B, 1, N, H, W]`.
     pub fn regularize(&self, fused: Tensor<5>) -> Tensor<5> {
         let (bottom, skips) = self.encode(fused);

@@ -356,15 +356,16 @@ impl OmniMvsNet {
         }
     }
 
-    /// The network with its 2D convolutions (features, transference) also on the host
-    /// ([`crate::hostconv`]), which its forward pass uses from then on: for inference on burn
-    /// flex, after [`OmniMvsNet::fold_batch_norm`]. The 3D cost regularisation keeps burn's.
+    /// The network with its convolutions (features, transference, 3Dconv1-15) also on the
+    /// host ([`crate::hostconv`]), which its forward pass uses from then on: for inference on
+    /// burn flex, after [`OmniMvsNet::fold_batch_norm`]. The fusion and the transposed
+    /// convolutions keep burn's.
     #[must_use]
     pub fn with_host_convs(self) -> Self {
         Self {
             feature_layers: self.feature_layers.with_host_convs(),
             spherical_sweep: self.spherical_sweep.with_host_convs(),
-            cost_computes: self.cost_computes,
+            cost_computes: self.cost_computes.with_host_convs(),
             config: self.config,
         }
     }
