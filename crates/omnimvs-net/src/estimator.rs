@@ -28,7 +28,7 @@ impl NetEstimator {
     /// Prepares `net` for `dataset` on `device`: batch norms folded (both families), the
     /// paper's network's lookup table from `cache` (its status is returned), and its sweep or
     /// the cascade's correlation on the device when `sweep_on_device` (GPU backends), on the
-    /// host otherwise; on burn flex, the 2D convolutions on the host kernels too
+    /// host otherwise; on burn flex, the convolutions on the host kernels too
     /// ([`crate::hostconv`]).
     ///
     /// # Errors

@@ -83,8 +83,8 @@ pub struct ForwardOptions {
     pub fold_batch_norm: bool,
     /// Sweep (the cascade: its correlation) on the device (GPU backends) instead of the host.
     pub device_sweep: bool,
-    /// The cascade's convolutions on the host (`omnimvs_net::hostconv`, what `infer` does on a
-    /// CPU) once the batch norms are folded; burn's otherwise.
+    /// The convolutions on the host kernels (`omnimvs_net::hostconv`, what `infer` does on
+    /// burn flex) once the batch norms are folded; burn's otherwise.
     pub host_convs: bool,
 }
 

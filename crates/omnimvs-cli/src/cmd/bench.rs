@@ -47,8 +47,8 @@ pub struct Args {
     /// convolutions.
     #[arg(long)]
     pub no_fold: bool,
-    /// The 2D convolutions through burn's backend instead of the host kernels that
-    /// `infer` uses on a CPU (`omnimvs_net::hostconv`): the reference for a comparison.
+    /// The convolutions through burn's backend instead of the host kernels that `infer`
+    /// uses on the `cpu` backend (`omnimvs_net::hostconv`): the reference for a comparison.
     #[arg(long)]
     pub burn_convs: bool,
     /// Where the sweep runs: the backend's best (host on CPU backends, device on GPUs).
