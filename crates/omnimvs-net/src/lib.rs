@@ -16,7 +16,7 @@
 //! - [`learned_sgm`]: SGM on ZNCC or a learned cost, by name.
 //! - [`sweepnet`]: the SweepNet-style matching-cost head for `omnimvs-stereo`'s SGM (issue 15).
 //! - [`synthetic`]: a lookup table without a rig, for benchmarks and tests.
-//! - [`hostconv`]: 2D convolutions on the host for inference on a CPU.
+//! - [`hostconv`]: 2D and 3D convolutions on the host for inference on a CPU (burn flex).
 //! - [`backend`]: run-time choice of the compute backend (`cpu`, `libtorch`, `wgpu`, ...).
 //!
 //! Training is the crate `omnimvs-train`; the benchmarks of `omnimvs bench` are the CLI's.
