@@ -15,9 +15,10 @@
 //! test compares them with burn's to 1e-4 relative. No gradient: training keeps burn's
 //! modules ([`HostConv::from_conv`] reads a trained, batch-norm-folded layer).
 
+use burn::module::Param;
 use burn::nn::conv::{Conv2d, Conv3d};
 use burn::nn::{PaddingConfig2d, PaddingConfig3d};
-use burn::tensor::{Tensor, TensorData};
+use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 
 use crate::cascade::model::read_values;
@@ -96,11 +97,7 @@ impl HostConv {
             return None;
         }
         let [c_out, c_in, kh, kw] = conv.weight.val().dims();
-        let weight = read_values(conv.weight.val(), "weights").ok()?;
-        let bias = match &conv.bias {
-            Some(b) => read_values(b.val(), "bias").ok()?,
-            None => vec![0.0; c_out],
-        };
+        let (weight, bias) = weights_and_bias(conv.weight.val(), conv.bias.as_ref(), c_out)?;
         Self::new(
             [c_in, c_out],
             [kh, kw],
@@ -129,11 +126,7 @@ impl HostConv {
             _ => return None,
         };
         let [c_out, c_in, kd, kh, kw] = conv.weight.val().dims();
-        let weight = read_values(conv.weight.val(), "weights").ok()?;
-        let bias = match &conv.bias {
-            Some(b) => read_values(b.val(), "bias").ok()?,
-            None => vec![0.0; c_out],
-        };
+        let (weight, bias) = weights_and_bias(conv.weight.val(), conv.bias.as_ref(), c_out)?;
         Self::build(
             [c_in, c_out],
             [kd, kh, kw],
@@ -189,11 +182,6 @@ impl HostConv {
         bias: Vec<f32>,
     ) -> Result<Self, NetError> {
         let [c_in, c_out] = channels;
-        let shape_error = |what: &str, expected: Vec<usize>, actual: Vec<usize>| NetError::Shape {
-            what: format!("{what} (host convolution)"),
-            expected,
-            actual,
-        };
         if [c_in, c_out].contains(&0)
             || kernel.contains(&0)
             || stride.contains(&0)
@@ -291,11 +279,6 @@ impl HostConv {
         relu: bool,
     ) -> Result<(Vec<f32>, [usize; 3]), NetError> {
         let [batch, c_in, d, h, w] = dims;
-        let shape_error = |what: &str, expected: Vec<usize>, actual: Vec<usize>| NetError::Shape {
-            what: format!("{what} (host convolution)"),
-            expected,
-            actual,
-        };
         if c_in != self.c_in || input.len() != batch * c_in * d * h * w {
             return Err(shape_error(
                 "input",
@@ -517,51 +500,68 @@ fn gemm_add(m: usize, n: usize, k: usize, a: &[f32], b: &[f32], c: &mut [f32]) {
     }
 }
 
-/// `host` on a tensor `[B, C_in, H, W]`, plus `residual` `[B, C_out, H', W']` when given, then
-/// a ReLU when `relu`: `[B, C_out, H', W']` on the input's device.
+/// `host` on a tensor `[B, C_in, H, W]` (a 2D convolution) or `[B, C_in, D, H, W]` (3D), plus
+/// `residual` of the output's shape when given, then a ReLU when `relu`: the output on the
+/// input's device.
 ///
 /// # Errors
-/// [`NetError::Shape`] when the values do not read as `f32` or do not fit the kernel (the
-/// callers then take burn's path).
-pub fn host_forward(
+/// [`NetError::Shape`] when the tensor has another rank, or its values do not read as `f32`
+/// or do not fit the kernel (the callers then take burn's path).
+pub fn host_forward<const D: usize>(
     host: &HostConv,
-    x: Tensor<4>,
-    residual: Option<Tensor<4>>,
+    x: Tensor<D>,
+    residual: Option<Tensor<D>>,
     relu: bool,
-) -> Result<Tensor<4>, NetError> {
+) -> Result<Tensor<D>, NetError> {
     let device = x.device();
     let dims = x.dims();
+    // A 2D map is a volume of depth 1.
+    let volume = match *dims.as_slice() {
+        [b, c, h, w] => [b, c, 1, h, w],
+        [b, c, d, h, w] => [b, c, d, h, w],
+        _ => return Err(shape_error("input rank", vec![4, 5], vec![D])),
+    };
     let input = read_values(x, "host convolution input")?;
     let residual = residual
         .map(|r| read_values(r, "host convolution residual"))
         .transpose()?;
-    let (out, [oh, ow]) = host.forward(&input, dims, residual.as_deref(), relu)?;
-    Ok(Tensor::from_data(
-        TensorData::new(out, [dims[0], host.out_channels(), oh, ow]),
-        &device,
-    ))
+    let (out, [od, oh, ow]) = host.forward3d(&input, volume, residual.as_deref(), relu)?;
+    let mut shape = dims;
+    shape[1] = host.out_channels();
+    shape[D - 2] = oh;
+    shape[D - 1] = ow;
+    if D == 5 {
+        shape[2] = od;
+    }
+    Ok(Tensor::from_data(TensorData::new(out, shape), &device))
 }
 
-/// [`host_forward`] for a 3D convolution: `[B, C_in, D, H, W]` -> `[B, C_out, D', H', W']`.
-///
-/// # Errors
-/// [`NetError::Shape`] when the values do not read as `f32` or do not fit the kernel (the
-/// callers then take burn's path).
-pub fn host_forward3d(
-    host: &HostConv,
-    x: Tensor<5>,
-    residual: Option<Tensor<5>>,
-    relu: bool,
-) -> Result<Tensor<5>, NetError> {
-    let device = x.device();
-    let dims = x.dims();
-    let input = read_values(x, "host convolution input")?;
-    let residual = residual
-        .map(|r| read_values(r, "host convolution residual"))
-        .transpose()?;
-    let (out, [od, oh, ow]) = host.forward3d(&input, dims, residual.as_deref(), relu)?;
-    Ok(Tensor::from_data(
-        TensorData::new(out, [dims[0], host.out_channels(), od, oh, ow]),
-        &device,
-    ))
+/// Whether the host kernels are the better path on `device`: burn flex, whose own
+/// convolutions copy more than they multiply. libtorch (oneDNN) and GPUs keep theirs.
+pub fn pays_on(device: &Device) -> bool {
+    *device == Device::flex()
+}
+
+/// A layer's weights and its bias (zeros without one) as values; `None` when they do not read
+/// as `f32`.
+fn weights_and_bias<const D: usize>(
+    weight: Tensor<D>,
+    bias: Option<&Param<Tensor<1>>>,
+    c_out: usize,
+) -> Option<(Vec<f32>, Vec<f32>)> {
+    let weight = read_values(weight, "weights").ok()?;
+    let bias = match bias {
+        Some(b) => read_values(b.val(), "bias").ok()?,
+        None => vec![0.0; c_out],
+    };
+    Some((weight, bias))
+}
+
+/// A shape error of the host convolution.
+fn shape_error(what: &str, expected: Vec<usize>, actual: Vec<usize>) -> NetError {
+    NetError::Shape {
+        what: format!("{what} (host convolution)"),
+        expected,
+        actual,
+    }
 }

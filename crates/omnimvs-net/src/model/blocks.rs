@@ -10,7 +10,7 @@ use burn::nn::conv::{
 use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d, PaddingConfig3d};
 use burn::tensor::{Device, Tensor, activation};
 
-use crate::hostconv::{HostConv, host_forward, host_forward3d};
+use crate::hostconv::{HostConv, host_forward};
 
 /// Applies the batch norm `bn` when there is one, `+ residual` when given, then ReLU when asked.
 /// PyTorch adds the residual after batch norm and before ReLU.
@@ -206,7 +206,7 @@ impl ConvBn3d {
     /// `[B, C_in, D, H, W] -> [B, C_out, D', H', W']`.
     pub fn forward(&self, x: Tensor<5>, residual: Option<Tensor<5>>) -> Tensor<5> {
         if let Some(host) = &self.host
-            && let Ok(y) = host_forward3d(host, x.clone(), residual.clone(), self.relu)
+            && let Ok(y) = host_forward(host, x.clone(), residual.clone(), self.relu)
         {
             return y;
         }
