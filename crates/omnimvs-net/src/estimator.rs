@@ -13,6 +13,7 @@ use omnimvs_sweep::{
 use crate::cascade::CascadeInference;
 use crate::config::NetConfig;
 use crate::error::NetError;
+use crate::hostconv;
 use crate::infer::Inference;
 use crate::weights::AnyNet;
 
@@ -40,9 +41,10 @@ impl NetEstimator {
         device: Device,
         sweep_on_device: bool,
     ) -> Result<(Self, Option<CacheStatus>), NetError> {
+        let host_convs = !sweep_on_device && hostconv::pays_on(&device);
         Ok(match net {
             AnyNet::OmniMvs(net) => {
-                let net = if !sweep_on_device && device == Device::flex() {
+                let net = if host_convs {
                     (*net).fold_batch_norm().with_host_convs()
                 } else {
                     (*net).fold_batch_norm()
@@ -55,9 +57,7 @@ impl NetEstimator {
             }
             AnyNet::Cascade(net) => (
                 Self::Cascade(Box::new(CascadeInference::new(
-                    // burn flex's own convolutions are slower than the host kernels;
-                    // other backends keep theirs.
-                    if !sweep_on_device && device == Device::flex() {
+                    if host_convs {
                         (*net).fold_batch_norm().with_host_convs()
                     } else {
                         (*net).fold_batch_norm()

@@ -200,8 +200,6 @@ pub struct Trainer<M: Trainable = OmniMvsNet> {
     geometries: HashMap<(usize, usize), M::Geometry>,
     /// Geometry of every source's identity rotation on the inference device.
     val_geometries: HashMap<usize, M::Geometry>,
-    /// Whether validation runs the family's host path ([`Trainable::on_host`]: CPU backends).
-    host_validation: bool,
 }
 
 /// Reads the configuration of the run in `run_dir` (to choose the network family before
@@ -303,18 +301,7 @@ impl<M: Trainable> Trainer<M> {
             state: RunState::default(),
             geometries: HashMap::new(),
             val_geometries: HashMap::new(),
-            host_validation: false,
         })
-    }
-
-    /// Validation on the family's host path ([`Trainable::on_host`]) when `on`: for a CPU
-    /// backend, where it gives the same figures to float rounding in less time. Off by default
-    /// (the device path, which GPU backends need).
-    pub fn set_host_validation(&mut self, on: bool) {
-        if on != self.host_validation {
-            self.val_geometries.clear();
-        }
-        self.host_validation = on;
     }
 
     /// The samples of `epoch` in order: a shuffle of every training frame with a random
@@ -541,13 +528,11 @@ impl<M: Trainable> Trainer<M> {
     /// # Errors
     /// [`TrainError`] when a frame cannot be read.
     pub fn validate(&mut self) -> Result<Validation, TrainError> {
-        let net = self.learner.inference_net();
-        let net = if self.host_validation {
-            net.on_host()
-        } else {
-            net
-        };
         let device = self.learner.device.clone().without_autodiff();
+        // On burn flex, validation runs the host path, as `omnimvs infer` does there.
+        let host = omnimvs_net::hostconv::pays_on(&device);
+        let net = self.learner.inference_net();
+        let net = if host { net.on_host() } else { net };
         let c = net.config().clone();
         let mut losses = Vec::new();
         let mut metrics = Vec::new();
@@ -570,7 +555,7 @@ impl<M: Trainable> Trainer<M> {
             let geometry = match self.val_geometries.get(&s) {
                 Some(g) => g.clone(),
                 None => {
-                    let g = net.validation_geometry(source, &device, self.host_validation)?;
+                    let g = net.validation_geometry(source, &device, host)?;
                     self.val_geometries.insert(s, g.clone());
                     g
                 }

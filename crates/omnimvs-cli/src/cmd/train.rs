@@ -764,8 +764,6 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
         }
     };
     record_backend(&trainer.run_dir, backend)?;
-    // Validation as `infer` runs the network on burn flex: on the host kernels.
-    trainer.set_host_validation(backend == Backend::Cpu);
     let config = trainer.config.clone();
     let (train, val): (usize, usize) = trainer
         .splits
