@@ -6,7 +6,8 @@
 #
 # Defaults: target/release/omnimvs, ../data/test-things-s7001 (made by `omnimvs synth`), 1..4,
 # 5 rounds after one unmeasured warm-up round; WEIGHTS=FILE times other cascade weights than
-# the bundled `cascade`. Prints wall, user and system seconds and peak
+# the bundled `cascade`; PICK=off leaves out the learnt pick after the bundled cascade (`infer
+# --pick`, stop 39; binaries before it have no such option). Prints wall, user and system seconds and peak
 # resident memory of every run, then the medians and the ratio of the medians.
 set -euo pipefail
 BIN=${1:-target/release/omnimvs}
@@ -14,12 +15,13 @@ DATA=${2:-../data/test-things-s7001}
 FRAMES=${3:-1..4}
 ROUNDS=${4:-5}
 WEIGHTS=${WEIGHTS:-cascade}
+PICK=${PICK:-auto}
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 command -v /usr/bin/time >/dev/null || { echo "needs /usr/bin/time (GNU time)" >&2; exit 1; }
 run() { # METHOD -> "wall user sys peak_kb"
   local args=(sgm "$DATA" --frames "$FRAMES" --out "$OUT/$1")
-  [ "$1" = cascade ] && args=(infer "$DATA" --frames "$FRAMES" --weights "$WEIGHTS" --out "$OUT/$1")
+  [ "$1" = cascade ] && args=(infer "$DATA" --frames "$FRAMES" --weights "$WEIGHTS" --pick "$PICK" --out "$OUT/$1")
   rm -rf "${OUT:?}/$1"
   /usr/bin/time -f "%e %U %S %M" -o "$OUT/time" "$BIN" "${args[@]}" >/dev/null 2>"$OUT/err" ||
     { cat "$OUT/err" >&2; exit 1; }

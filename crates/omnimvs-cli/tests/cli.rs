@@ -2,6 +2,7 @@
 //! The `omnimvs` binary end to end: outputs on the real samples, and clear
 //! errors with a non-zero exit for bad input.
 
+use std::path::Path;
 use std::process::{Command, Output};
 
 #[path = "../../omnimvs-sweep/tests/support/golden.rs"]
@@ -97,6 +98,13 @@ fn bad_input_gives_clear_errors_and_non_zero_exit() {
     let itbt = itbt.to_str().unwrap();
     let out = dir.path().join("x.png");
     let out = out.to_str().unwrap();
+    let one_camera_pick: &'static str = Box::leak(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../omnimvs-net/tests/fixtures/pick/pick_tiny.safetensors")
+            .to_string_lossy()
+            .into_owned()
+            .into_boxed_str(),
+    );
     // `infer` on frame 1 of itbt with `extra` options.
     let infer = |extra: &[&'static str]| {
         let mut args = vec!["infer", itbt, "--frames", "1", "--out", out];
@@ -163,6 +171,20 @@ fn bad_input_gives_clear_errors_and_non_zero_exit() {
         (
             infer(&["--max-spread", "many"]),
             "expected a spread in index units, 0 or more",
+        ),
+        (
+            infer(&["--pick", "/nonexistent/p.safetensors"]),
+            "/nonexistent/p.safetensors",
+        ),
+        // A pick made for one camera, on a rig of four.
+        (
+            infer(&["--pick", one_camera_pick]),
+            "pick: cameras of the rig",
+        ),
+        // A pick after the paper's network.
+        (
+            infer(&["--weights", "tiny", "--pick", one_camera_pick]),
+            "the learnt pick runs after the cascade network only",
         ),
     ];
     for (args, needle) in cases {
@@ -358,4 +380,46 @@ fn parity_compares_backends_on_a_real_frame() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("backends disagree"), "{}", stderr(&o));
+}
+
+#[test]
+fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
+    let dir = tempfile::tempdir().unwrap();
+    let itbt = samples().join("itbt_sample");
+    let run = |pick: &str| {
+        let out = dir.path().join(format!("pick-{pick}"));
+        let o = omnimvs(&[
+            "infer",
+            itbt.to_str().unwrap(),
+            "--frames",
+            "1",
+            "--pick",
+            pick,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let settings: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("infer.json")).unwrap()).unwrap();
+        let index = omnimvs_data::gt::read_inv_depth(&out.join("00001_index.tiff")).unwrap();
+        (settings["pick"].as_bool().unwrap(), index)
+    };
+    let (picked, with) = run("auto");
+    let (not_picked, without) = run("off");
+    assert!(picked && !not_picked);
+    let size = [without.height, without.width];
+    assert_eq!(size, [160, 640]);
+    // Every answer is one of the candidates' blend: within the 9 x 9 extremes of the network's.
+    let (low, high) = omnimvs_data::edges::neighbour_min_max(&without.data, size, true, 4);
+    let mut moved = 0;
+    for (p, (&a, &b)) in with.data.iter().zip(&without.data).enumerate() {
+        assert!(a >= low[p] - 1e-3 && a <= high[p] + 1e-3, "pixel {p}: {a}");
+        moved += usize::from((a - b).abs() > 0.5);
+    }
+    // It acts where the answers around disagree, not everywhere.
+    let pixels = with.data.len();
+    assert!(
+        moved > pixels / 200 && moved < pixels / 2,
+        "{moved} of {pixels} moved"
+    );
 }

@@ -12,6 +12,7 @@ use std::path::Path;
 use burn::tensor::Device;
 
 use crate::error::NetError;
+use crate::pick::PickRefiner;
 use crate::weights::{AnyNet, load_any_bytes};
 
 /// A model compiled into the library.
@@ -64,6 +65,18 @@ impl BundledModel {
         match self {
             Self::Tiny => include_bytes!("../../../models/omnimvs-tiny.safetensors"),
             Self::Cascade => include_bytes!("../../../models/omnimvs-cascade.safetensors"),
+        }
+    }
+
+    /// The learnt pick trained on this model's answers, which runs after it unless left out
+    /// ([`crate::pick`]): the cascade's; `None` for `tiny`.
+    ///
+    /// # Errors
+    /// [`NetError`] if the compiled-in file does not match the pick (a build defect).
+    pub fn pick(self) -> Result<Option<PickRefiner>, NetError> {
+        match self {
+            Self::Cascade => PickRefiner::bundled().map(Some),
+            Self::Tiny => Ok(None),
         }
     }
 

@@ -15,6 +15,7 @@ use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::hostconv;
 use crate::infer::Inference;
+use crate::pick::PickRefiner;
 use crate::weights::AnyNet;
 
 /// A network of either family, prepared for one rig.
@@ -69,6 +70,26 @@ impl NetEstimator {
                 None,
             ),
         })
+    }
+
+    /// Runs the learnt `pick` after the network ([`crate::pick`]; the cascade only).
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] for the paper's network, [`NetError::Shape`] for a pick made
+    /// for another number of cameras.
+    pub fn with_pick(self, pick: PickRefiner) -> Result<Self, NetError> {
+        match self {
+            Self::Cascade(i) => Ok(Self::Cascade(Box::new(i.with_pick(pick)?))),
+            Self::OmniMvs(_) => Err(NetError::InvalidConfig {
+                field: "pick",
+                message: "the learnt pick runs after the cascade network only".into(),
+            }),
+        }
+    }
+
+    /// Whether the learnt pick runs after the network.
+    pub fn has_pick(&self) -> bool {
+        matches!(self, Self::Cascade(i) if i.has_pick())
     }
 
     /// The network's configuration.

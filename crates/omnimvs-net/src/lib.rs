@@ -32,6 +32,7 @@ pub mod infer;
 pub mod learned_sgm;
 pub mod mccnn;
 pub mod model;
+pub mod pick;
 pub mod sweepnet;
 pub mod synthetic;
 pub mod taps;

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use numpy::PyArray2;
 use omnimvs_data::{DepthEstimator, Finishing};
 use omnimvs_net::bundled::BundledModel;
+use omnimvs_net::pick::PickRefiner;
 use omnimvs_net::weights::{AnyNet, common_image_size, load_family};
 use omnimvs_net::{Backend, NetConfig, NetEstimator};
 use omnimvs_sweep::LutCache;
@@ -14,6 +15,29 @@ use pyo3::types::PyDict;
 use crate::dataset::PyRig;
 use crate::error::{IntoPyResult, bad_argument, detached, with_context};
 use crate::images::{frame_source, map_to_array};
+
+/// The bundled model `weights` names (`None`: the default one), if any.
+fn bundled_model(weights: Option<&Path>) -> Option<BundledModel> {
+    match weights {
+        None => Some(BundledModel::DEFAULT),
+        Some(path) => path.to_str().and_then(BundledModel::from_name),
+    }
+}
+
+/// The learnt pick after the cascade as `omnimvs infer --pick` chooses it: `"auto"` the bundled
+/// model's own (the bundled cascade's), `"off"` none, or a pick's `.safetensors`.
+fn load_pick(pick: &str, weights: Option<&Path>) -> PyResult<Option<PickRefiner>> {
+    match pick {
+        "auto" => match bundled_model(weights) {
+            Some(model) => model.pick().py_err(),
+            None => Ok(None),
+        },
+        "off" => Ok(None),
+        path => PickRefiner::load(Path::new(path))
+            .map(Some)
+            .map_err(|e| with_context(format!("pick {path}: "), &e)),
+    }
+}
 
 /// Loads the network as `omnimvs infer --weights` does: a bundled model (the default one, the
 /// cascade, for `None`, or by name: `"cascade"`, `"tiny"`), or a file of either family (our
@@ -60,6 +84,10 @@ fn load_network(
 ///     max_spread: `None` (the default) or a spread in index units of N: the same by the
 ///         standard deviation of the network's distribution, a sharper filter (`omnimvs infer
 ///         --max-spread`; applied after `max_entropy`).
+///     pick: the learnt pick after the cascade network (`omnimvs infer --pick`): `"auto"`
+///         (the default: the bundled cascade's own pick after the bundled cascade, none after
+///         other weights), `"off"`, or a pick's `.safetensors` trained on the answers of the
+///         `weights` network.
 ///     maps: `False` (the default) for the inverse-depth array alone; `True` for a dict of
 ///         every map of the estimate, each `numpy.float32` `(height, width)` or `None` where
 ///         the network has none: `inv_depth`, `index` (hypothesis index, N units), `entropy`
@@ -70,7 +98,7 @@ fn load_network(
 ///     FileNotFoundError: the weights file or an image of the frame is missing.
 ///     ValueError: a bad argument or array, or a rig that does not fit the network.
 #[pyfunction]
-#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None, max_entropy=None, max_spread=None, maps=false))]
+#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None, max_entropy=None, max_spread=None, pick="auto", maps=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn infer<'py>(
     py: Python<'py>,
@@ -83,6 +111,7 @@ pub fn infer<'py>(
     snap_edges: Option<f64>,
     max_entropy: Option<f32>,
     max_spread: Option<f32>,
+    pick: &str,
     maps: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let finishing = Finishing {
@@ -114,6 +143,10 @@ pub fn infer<'py>(
             backend.is_gpu(),
         )
         .py_err()?;
+        let estimator = match load_pick(pick, weights.as_deref())? {
+            Some(pick) => estimator.with_pick(pick).py_err()?,
+            None => estimator,
+        };
         let images = images.load(&ds)?;
         let mut estimate = estimator.estimate(&images).py_err()?;
         finishing.apply(&mut estimate);

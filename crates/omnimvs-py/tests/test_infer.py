@@ -143,3 +143,22 @@ def test_maps(itbt_path, itbt, itbt_net, cli, tmp_path):
     # The paper's network has an entropy and no spread.
     tiny = omnimvs.infer(itbt, 1, weights="tiny", maps=True)
     assert tiny["spread"] is None and tiny["entropy"].shape == (32, 128)
+
+
+def test_pick(itbt_path, itbt, itbt_net, cli, tmp_path):
+    # "auto" (the default) runs the bundled cascade's learnt pick after it, as the command line does.
+    without = omnimvs.infer(itbt, 1, pick="off")
+    cli("infer", itbt_path, "--frames", 1, "--pick", "off", "--out", tmp_path)
+    np.testing.assert_allclose(without, tifffile.imread(tmp_path / "00001.tiff"), rtol=1e-5, atol=1e-6)
+    moved = np.abs(without - itbt_net) > 1e-4
+    assert 0.005 < moved.mean() < 0.5
+    # A pick file: the bundled one by path is the default's.
+    bundled = Path(__file__).resolve().parents[3] / "models" / "omnimvs-cascade-pick.safetensors"
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, pick=str(bundled)), itbt_net)
+    with pytest.raises(FileNotFoundError, match="nonexistent"):
+        omnimvs.infer(itbt, 1, pick="/nonexistent/pick.safetensors")
+    # No pick after the paper's network: "auto" leaves it out, a file is refused.
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, weights="tiny", pick="auto"),
+                                  omnimvs.infer(itbt, 1, weights="tiny", pick="off"))
+    with pytest.raises(ValueError, match="cascade network only"):
+        omnimvs.infer(itbt, 1, weights="tiny", pick=str(bundled))

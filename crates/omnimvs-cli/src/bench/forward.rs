@@ -4,11 +4,13 @@ use anyhow::Result;
 use burn::module::Module;
 use burn::tensor::Device;
 use omnimvs_camera::Rig;
+use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet, CascadeTimings};
 use omnimvs_net::config::NetConfig;
 use omnimvs_net::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
+use omnimvs_net::pick::{PickProjectors, PickRefiner};
 use omnimvs_net::synthetic::synthetic_grids;
-use omnimvs_sweep::InvDepthHypotheses;
+use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
 use serde::Serialize;
 
 use super::{median_row, peak_rss_bytes, random_images};
@@ -169,7 +171,9 @@ pub struct CascadeRow {
     pub mid: f64,
     /// Full-resolution stage (likewise).
     pub fine: f64,
-    /// Whole forward pass.
+    /// The learnt pick after the network (its inputs included; 0 without it).
+    pub pick: f64,
+    /// Whole forward pass, the pick included.
     pub total: f64,
 }
 
@@ -180,6 +184,7 @@ impl From<CascadeTimings> for CascadeRow {
             coarse: t.coarse,
             mid: t.mid,
             fine: t.fine,
+            pick: 0.0,
             total: t.total,
         }
     }
@@ -196,6 +201,8 @@ pub struct CascadeBenchReport {
     pub folded_batch_norm: bool,
     /// Whether the convolutions ran on the host kernels (as `infer` runs them on a CPU).
     pub host_convs: bool,
+    /// Whether the learnt pick ran after the network.
+    pub pick: bool,
     /// Timings of every measured run (warm-up runs excluded).
     pub runs: Vec<CascadeRow>,
     /// Peak resident memory of the process after the runs, bytes (Linux only).
@@ -210,6 +217,7 @@ impl CascadeBenchReport {
             coarse: med(|r| r.coarse),
             mid: med(|r| r.mid),
             fine: med(|r| r.fine),
+            pick: med(|r| r.pick),
             total: med(|r| r.total),
         })
     }
@@ -218,7 +226,8 @@ impl CascadeBenchReport {
 /// Times the cascade's forward pass per stage on random images for `rig` (random weights,
 /// inference mode, `options.warmup` unmeasured runs first). `options` say whether the batch
 /// norms are folded and the correlation runs on the device; `infer` folds them and correlates
-/// on the host on a CPU.
+/// on the host on a CPU. With `pick`, the learnt pick runs after each pass on its answer (random
+/// images of the rig's sizes, the spread at 0), as `infer` runs it after the bundled cascade.
 ///
 /// # Errors
 /// For a configuration that is not a cascade or a rig that does not fit it.
@@ -227,6 +236,7 @@ pub fn bench_cascade_forward(
     rig: &Rig,
     min_depth_m: f64,
     options: ForwardOptions,
+    pick: Option<&PickRefiner>,
     device: &Device,
 ) -> Result<CascadeBenchReport> {
     let net = CascadeNet::new(config, device)?.valid();
@@ -249,11 +259,42 @@ pub fn bench_cascade_forward(
     let geometry =
         CascadeGeometry::with_host_correlation(rig, config, &hypotheses, device, !device_sweep)?;
     let images = random_images(config, device);
+    let grid = EquirectGrid::new(config.out_height, config.out_width, config.phi_deg)?;
+    let projectors = PickProjectors::new(rig, &grid)?;
+    let gray: Vec<GrayImage> = rig
+        .cameras
+        .iter()
+        .enumerate()
+        .map(|(c, camera)| {
+            let (w, h) = (
+                camera.model.width() as usize,
+                camera.model.height() as usize,
+            );
+            let data = (0..w * h)
+                .map(|i| ((i * 7919 + c * 104_729) % 251) as f32 / 250.0)
+                .collect();
+            GrayImage {
+                width: w,
+                height: h,
+                data,
+            }
+        })
+        .collect();
     let mut runs = Vec::new();
     for run in 0..warmup + repeats {
-        let (_, timings) = net.forward_timed(&images, &geometry, true)?;
+        let (out, timings) = net.forward_timed(&images, &geometry, true)?;
+        let mut row = CascadeRow::from(timings);
+        if let Some(pick) = pick {
+            let [_, _, fine] = out.stages;
+            let index = read_values(fine.index, "index map")?;
+            let spread = vec![0f32; index.len()];
+            let start = std::time::Instant::now();
+            pick.refine(&index, &spread, &projectors, &hypotheses, &gray)?;
+            row.pick = start.elapsed().as_secs_f64();
+            row.total += row.pick;
+        }
         if run >= warmup {
-            runs.push(timings.into());
+            runs.push(row);
         }
     }
     Ok(CascadeBenchReport {
@@ -261,6 +302,7 @@ pub fn bench_cascade_forward(
         params,
         folded_batch_norm: fold_batch_norm,
         host_convs,
+        pick: pick.is_some(),
         runs,
         peak_rss_bytes: peak_rss_bytes(),
     })

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use omnimvs_camera::fs::write_atomic;
+use omnimvs_net::pick::PickRefiner;
 use omnimvs_net::{Backend, Family, NetConfig};
 use omnimvs_synth::rig::preset_rig;
 use serde::Serialize;
@@ -51,6 +52,10 @@ pub struct Args {
     /// uses on the `cpu` backend (`omnimvs_net::hostconv`): the reference for a comparison.
     #[arg(long)]
     pub burn_convs: bool,
+    /// Leave out the learnt pick after the cascade (`omnimvs_net::pick`), which `infer` runs
+    /// after the bundled cascade; the bundled pick is timed on each pass's answer otherwise.
+    #[arg(long)]
+    pub no_pick: bool,
     /// Where the sweep runs: the backend's best (host on CPU backends, device on GPUs).
     #[arg(long, value_enum, default_value_t = SweepPlace::Auto)]
     pub sweep: SweepPlace,
@@ -177,6 +182,11 @@ fn bench_cascade(
     device: &burn::tensor::Device,
 ) -> Result<(Forward, Option<TrainStepReport>)> {
     let rig = preset_rig()?;
+    let pick = if args.no_pick {
+        None
+    } else {
+        Some(PickRefiner::bundled()?)
+    };
     let forward = bench_cascade_forward(
         config,
         &rig.rig,
@@ -188,6 +198,7 @@ fn bench_cascade(
             device_sweep: args.backend.is_gpu(),
             host_convs: !args.burn_convs && args.backend == Backend::Cpu,
         },
+        pick.as_ref(),
         device,
     )
     .context("forward benchmark")?;
@@ -211,11 +222,12 @@ fn bench_cascade(
             ("coarse", 9),
             ("half", 9),
             ("full", 9),
+            ("pick", 9),
             ("total", 9),
         ],
         &forward.runs,
         forward.median().as_ref(),
-        |r| vec![r.features, r.coarse, r.mid, r.fine, r.total],
+        |r| vec![r.features, r.coarse, r.mid, r.fine, r.pick, r.total],
     );
     print_peak("after the forward passes", forward.peak_rss_bytes);
     let train_step = train_steps(args, || {

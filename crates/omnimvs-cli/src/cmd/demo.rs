@@ -26,7 +26,7 @@ use omnimvs_synth::{DatasetWriter, SceneKind, Shard, SynthOptions};
 
 use crate::args::Size;
 use crate::cmd::{eval, infer, sgm};
-use crate::weights::Weights;
+use crate::weights::{Pick, Weights};
 
 /// Run the whole pipeline on a rendered scene (no data needed) and print its metrics.
 ///
@@ -88,6 +88,7 @@ fn networks(ds: &Dataset) -> Result<Vec<Network>> {
                 false,
             )?;
             infer::report_cache(status);
+            let estimator = Pick::Auto.apply(&weights, estimator)?;
             Ok(Network { weights, estimator })
         })
         .collect()

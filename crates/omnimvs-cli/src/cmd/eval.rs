@@ -14,7 +14,7 @@ use omnimvs_stereo::{SgmEstimator, SgmParams};
 use omnimvs_sweep::{LutCache, SweepSpec};
 
 use crate::args::{BACKEND_HELP, Method, Preset, SweepArgs, parse_backend};
-use crate::weights::{BUNDLED, Weights};
+use crate::weights::{BUNDLED, Pick, Weights};
 
 /// Evaluate methods against ground truth with the paper's metrics.
 ///
@@ -50,6 +50,10 @@ pub struct Args {
     /// tiny or cascade (our .safetensors files and the bundled models carry their own).
     #[arg(long, value_enum, default_value_t = Preset::Paper)]
     pub preset: Preset,
+    /// The learnt pick after the cascade, as `infer --pick`: `auto` (the bundled cascade's own
+    /// after the bundled cascade), `off`, or a pick's .safetensors (after every cascade row).
+    #[arg(long, value_name = "auto|off|FILE", default_value = "auto", value_parser = Pick::parse)]
+    pub pick: Pick,
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
     pub frames: FrameRange,
@@ -75,14 +79,17 @@ pub struct Row {
 }
 
 /// The network rows of `weights` (named `net`, or `net (STEM)` when there are several) and
-/// the classical method's at the evaluation sweep, in the order of `methods`.
+/// the classical method's at the evaluation sweep, in the order of `methods`; each cascade
+/// row with the learnt pick `pick` gives it.
 ///
 /// # Errors
 /// Weights that cannot be loaded or a rig that does not fit a method.
+#[allow(clippy::too_many_arguments)]
 pub fn rows(
     ds: &Dataset,
     methods: &[Method],
     weights: &[Weights],
+    pick: &Pick,
     preset: Preset,
     backend: &omnimvs_net::Backend,
     spec: SweepSpec,
@@ -101,6 +108,7 @@ pub fn rows(
                         device.clone(),
                         backend.is_gpu(),
                     )?;
+                    let estimator = pick.apply(w, estimator)?;
                     let stem = w.stem();
                     rows.push(Row {
                         name: if weights.len() > 1 {
@@ -180,6 +188,7 @@ pub fn run(args: &Args) -> Result<()> {
         &ds,
         &args.method,
         &args.weights,
+        &args.pick,
         args.preset,
         &args.backend,
         spec,

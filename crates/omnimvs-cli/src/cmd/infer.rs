@@ -12,7 +12,7 @@ use omnimvs_net::{Backend, NetEstimator};
 use omnimvs_sweep::{CacheStatus, GrayImage, LutCache};
 
 use crate::args::{BACKEND_HELP, Preset, Size, parse_backend};
-use crate::weights::{BUNDLED, Weights};
+use crate::weights::{BUNDLED, Pick, Weights};
 
 /// Estimate 360-degree inverse depth with the OmniMVS network.
 ///
@@ -70,6 +70,13 @@ pub struct Args {
     #[arg(long, value_name = "PCT", num_args = 0..=1, default_missing_value = "8",
           value_parser = parse_snap_pct)]
     pub snap_edges: Option<f64>,
+    /// The learnt pick after the cascade: where a depth edge lies, it chooses among the answer
+    /// and the nearest and farthest answers around each pixel, reading the cameras' colours
+    /// there (`omnimvs_net::pick`). `auto` (the default): the bundled cascade's own pick after
+    /// the bundled cascade, none after other weights; `off`; or a pick's .safetensors trained
+    /// on the answers of the --weights network. infer.json records whether one ran.
+    #[arg(long, value_name = "auto|off|FILE", default_value = "auto", value_parser = Pick::parse)]
+    pub pick: Pick,
     /// Leave the pixels whose uncertainty (the entropy written to %05d_entropy.tiff, nats) is
     /// above this without an answer: NaN in the maps, left out of the point cloud; the
     /// metrics score the others and report their share as coverage (as `sgm
@@ -278,7 +285,7 @@ pub fn run(args: &Args) -> Result<()> {
         net.set_input_size(size)
             .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
     }
-    let (mut inference, status) = NetEstimator::new(
+    let (inference, status) = NetEstimator::new(
         net,
         &ds,
         &LutCache::default_location(),
@@ -286,6 +293,7 @@ pub fn run(args: &Args) -> Result<()> {
         args.backend.is_gpu(),
     )?;
     report_cache(status);
+    let mut inference = args.pick.apply(&args.weights, inference)?;
     if let Some(order) = &args.order {
         inference.set_order(order)?;
     }
@@ -298,6 +306,7 @@ pub fn run(args: &Args) -> Result<()> {
     settings["snap_edges_pct"] = serde_json::json!(finishing.snap_edges_pct);
     settings["max_entropy"] = serde_json::json!(finishing.max_entropy);
     settings["max_spread"] = serde_json::json!(finishing.max_spread);
+    settings["pick"] = serde_json::json!(inference.has_pick());
     let mut run = DepthRun::new(&args.out, "infer.json", &settings, args.ply)?;
 
     let frames: Vec<u32> = args.frames.indices();

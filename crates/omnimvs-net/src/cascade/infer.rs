@@ -3,8 +3,10 @@
 //! final stage's index map and the coarse stage's entropy and spread as the estimate's
 //! uncertainty.
 
+use std::time::Instant;
+
 use burn::tensor::Device;
-use omnimvs_camera::ValidityMask;
+use omnimvs_camera::{Rig, ValidityMask};
 use omnimvs_data::{Dataset, DepthEstimate, StageObserver};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec, resample_map};
 
@@ -12,6 +14,7 @@ use super::geometry::CascadeGeometry;
 use super::model::{CascadeNet, read_values};
 use crate::error::NetError;
 use crate::infer::{input_tensors, sweep_spec};
+use crate::pick::{PickProjectors, PickRefiner};
 
 /// A cascade network ready to run on the frames of one rig.
 pub struct CascadeInference {
@@ -20,6 +23,9 @@ pub struct CascadeInference {
     spec: SweepSpec,
     masks: Vec<ValidityMask>,
     device: Device,
+    rig: Rig,
+    /// The learnt pick after the network ([`crate::pick`]) and its projections, when set.
+    pick: Option<(PickRefiner, PickProjectors)>,
 }
 
 impl CascadeInference {
@@ -51,7 +57,33 @@ impl CascadeInference {
             spec,
             masks: dataset.masks()?,
             device,
+            rig: dataset.rig.clone(),
+            pick: None,
         })
+    }
+
+    /// Runs `pick` after the network on every frame ([`crate::pick`]; it was trained on one
+    /// network's answers: the bundled pick on the bundled cascade's).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when the pick was made for another number of cameras than the rig's,
+    /// [`NetError::Stereo`] for a camera without a tabulated projection.
+    pub fn with_pick(mut self, pick: PickRefiner) -> Result<Self, NetError> {
+        if pick.cameras() != self.rig.len() {
+            return Err(NetError::Shape {
+                what: "pick: cameras of the rig".into(),
+                expected: vec![pick.cameras()],
+                actual: vec![self.rig.len()],
+            });
+        }
+        let projectors = PickProjectors::new(&self.rig, &self.spec.grid)?;
+        self.pick = Some((pick, projectors));
+        Ok(self)
+    }
+
+    /// Whether the learnt pick runs after the network.
+    pub fn has_pick(&self) -> bool {
+        self.pick.is_some()
     }
 
     /// The network.
@@ -100,13 +132,6 @@ impl CascadeInference {
         let timed = observer.wants_timings();
         let (out, t) = self.net.forward_timed(&inputs, &self.geometry, timed)?;
         let [coarse, _, fine] = out.stages;
-        observer.stages(&[
-            ("features", t.features),
-            ("coarse", t.coarse),
-            ("mid", t.mid),
-            ("fine", t.fine),
-            ("total", t.total),
-        ]);
         let coarse_grid = *self.geometry.samplers[0].grid();
         let on_grid = |map: Vec<f32>| resample_map(&map, &coarse_grid, &self.spec.grid);
         let entropy = on_grid(read_values(coarse.entropy(), "coarse entropy map")?);
@@ -119,10 +144,32 @@ impl CascadeInference {
             variance.clamp_min(0.0).sqrt(),
             "coarse spread map",
         )?);
-        let index = read_values(fine.index, "index map")?;
+        let mut index = read_values(fine.index, "index map")?;
+        let mut total = t.total;
+        let mut stages = vec![
+            ("features", t.features),
+            ("coarse", t.coarse),
+            ("mid", t.mid),
+            ("fine", t.fine),
+        ];
+        if let Some((pick, projectors)) = &self.pick {
+            let start = Instant::now();
+            index = pick.refine(
+                &index,
+                &spread,
+                projectors,
+                &self.geometry.hypotheses,
+                images,
+            )?;
+            let seconds = start.elapsed().as_secs_f64();
+            stages.push(("pick", seconds));
+            total += seconds;
+        }
+        stages.push(("total", total));
+        observer.stages(&stages);
         Ok(DepthEstimate {
             spread: Some(spread),
-            ..DepthEstimate::with_entropy(self.spec, Self::NAME, index, entropy, t.total)
+            ..DepthEstimate::with_entropy(self.spec, Self::NAME, index, entropy, total)
         })
     }
 }

@@ -133,6 +133,8 @@ def infer(
     max_entropy: Optional[float] = None,
     # None, or index units of N: the same by the spread (standard deviation).
     max_spread: Optional[float] = None,
+    # "auto": the bundled cascade's learnt pick after it; "off"; or a pick's .safetensors.
+    pick: str = "auto",
     # True: a dict of every map (Maps) instead of the inverse depth alone.
     maps: Literal[False] = False,
 ) -> FloatMap: ...
@@ -147,6 +149,7 @@ def infer(
     snap_edges: Optional[float] = None,
     max_entropy: Optional[float] = None,
     max_spread: Optional[float] = None,
+    pick: str = "auto",
     maps: Literal[True],
 ) -> Maps: ...
 @overload
@@ -163,6 +166,7 @@ def infer(
     snap_edges: Optional[float] = None,
     max_entropy: Optional[float] = None,
     max_spread: Optional[float] = None,
+    pick: str = "auto",
     maps: Literal[False] = False,
 ) -> FloatMap: ...
 @overload
@@ -177,6 +181,7 @@ def infer(
     snap_edges: Optional[float] = None,
     max_entropy: Optional[float] = None,
     max_spread: Optional[float] = None,
+    pick: str = "auto",
     maps: Literal[True],
 ) -> Maps: ...
 def evaluate(

@@ -1,0 +1,153 @@
+# The learnt pick after the cascade (stop 39, `omnimvs_net::pick`): a small U-Net over
+# pick_inputs.py's inputs scores seven candidates per pixel (the answer and the min / max of the
+# answers over 3x3, 5x5 and 9x9 around, wrapping in longitude); the answer is their
+# softmax-weighted mean, trained by its L1 against the truth (sky left out, as the reference
+# scores) on 64-row bands of the whole width (4 per step, Adam, one-cycle to 1e-3) of frames
+# the network never trained on. Validation: whole panoramas, MAE in percent of N = 192 (the
+# reference's rules) before -> after. Every 1000 steps the weights are written (torch and
+# safetensors with these module names, which `PickRefiner::from_bytes` reads).
+# SKY_WEIGHT (environment, default 0): sky pixels (the truth's index just below 0 under the reference's
+# rules, where nothing is there) also weigh in the loss with this weight, their target index 0 (the
+# protocol that scores sky); pick-1 trained without them, pick-2 with 0.25.
+# Usage: train_pick.py STEPS TRAIN.npz[,..] VAL.npz[,..] [WIDTH] [OUT.pt] [THREADS]
+import json, os, struct, sys, time
+import numpy as np, torch, torch.nn as nn, torch.nn.functional as F
+from scipy import ndimage
+
+K = 7  # candidates
+SKY_WEIGHT = float(os.environ.get("SKY_WEIGHT", "0"))
+
+
+class WrapConv(nn.Conv2d):
+    """3x3 convolution: columns padded circularly (longitude), rows with zeros."""
+    def __init__(s, i, o, st=1):
+        super().__init__(i, o, 3, st, padding=(1, 0))
+
+    def forward(s, x):
+        return super().forward(F.pad(x, (1, 1, 0, 0), mode="circular"))
+
+
+def cbr(i, o, s=1):
+    return nn.Sequential(WrapConv(i, o, s), nn.ReLU(inplace=True))
+
+
+class UNet(nn.Module):
+    def __init__(s, c, w):
+        super().__init__()
+        s.e0 = nn.Sequential(cbr(c, w), cbr(w, w))
+        s.e1 = nn.Sequential(cbr(w, 2 * w, 2), cbr(2 * w, 2 * w))
+        s.e2 = nn.Sequential(cbr(2 * w, 3 * w, 2), cbr(3 * w, 3 * w))
+        s.e3 = nn.Sequential(cbr(3 * w, 4 * w, 2), cbr(4 * w, 4 * w))
+        s.d2 = cbr(4 * w + 3 * w, 3 * w)
+        s.d1 = cbr(3 * w + 2 * w, 2 * w)
+        s.d0 = cbr(2 * w + w, w)
+        s.head = WrapConv(w, K)
+        nn.init.zeros_(s.head.weight)
+        with torch.no_grad():  # starts with about 96 % of the weight on the answer itself
+            s.head.bias.fill_(-5.0); s.head.bias[0] = 0.0
+
+    def forward(s, x):
+        up = lambda a, b: F.interpolate(a, size=b.shape[-2:], mode="bilinear", align_corners=False)
+        e0 = s.e0(x); e1 = s.e1(e0); e2 = s.e2(e1); e3 = s.e3(e2)
+        d2 = s.d2(torch.cat([up(e3, e2), e2], 1))
+        d1 = s.d1(torch.cat([up(d2, e1), e1], 1))
+        d0 = s.d0(torch.cat([up(d1, e0), e0], 1))
+        return s.head(d0)
+
+
+def cands(v):
+    """v (B, H, W) -> (B, K, H, W): v, and the min / max over 3x3, 5x5, 9x9 (wrapping in longitude)."""
+    out = [v]
+    for k in (3, 5, 9):
+        p = k // 2
+        vp = np.concatenate([v[..., -p:], v, v[..., :p]], -1)
+        out.append(ndimage.minimum_filter(vp, size=(1, k, k), mode="nearest")[..., p:-p])
+        out.append(ndimage.maximum_filter(vp, size=(1, k, k), mode="nearest")[..., p:-p])
+    return np.stack(out, 1)
+
+
+def answer(logits, c):
+    return (torch.softmax(logits, 1) * c).sum(1)
+
+
+def save_safetensors(net, path):
+    tensors = {k: v.detach().float().contiguous().numpy() for k, v in net.state_dict().items()}
+    header, off = {}, 0
+    for k, a in tensors.items():
+        header[k] = {"dtype": "F32", "shape": list(a.shape), "data_offsets": [off, off + a.nbytes]}
+        off += a.nbytes
+    h = json.dumps(header).encode()
+    h += b" " * ((8 - len(h) % 8) % 8)
+    with open(path + ".tmp", "wb") as f:
+        f.write(struct.pack("<Q", len(h))); f.write(h)
+        for a in tensors.values():
+            f.write(a.astype("<f4").tobytes())
+    os.replace(path + ".tmp", path)
+
+
+def load(paths):
+    d = [np.load(p) for p in paths.split(",")]
+    d = {k: np.concatenate([x[k] for x in d]) for k in ("feats", "v", "gt", "valid")}
+    d["cand"] = np.concatenate([cands(d["v"][i:i + 8]) for i in range(0, len(d["v"]), 8)])
+    # Sky: pick_inputs.py's truth index is -EPS / step there (holes are -1).
+    d["sky"] = (d["gt"] < 0) & (d["gt"] > -0.5)
+    return d
+
+
+def main():
+    steps, trp, vap = int(sys.argv[1]), sys.argv[2], sys.argv[3]
+    W = int(sys.argv[4]) if len(sys.argv) > 4 else 16
+    out = sys.argv[5] if len(sys.argv) > 5 else None
+    torch.set_num_threads(int(sys.argv[6]) if len(sys.argv) > 6 else 2)
+    torch.manual_seed(0); np.random.seed(0)
+    tr = load(trp)
+    vas = [(p, load(p)) for p in vap.split(",")]
+    net = UNet(tr["feats"].shape[1], W)
+    print("parameters", sum(p.numel() for p in net.parameters()), "inputs", tr["feats"].shape[1],
+          "train frames", len(tr["v"]))
+    opt = torch.optim.Adam(net.parameters(), 1e-3)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, 1e-3, total_steps=steps + 1, pct_start=0.05)
+
+    def evaluate():
+        res = []
+        net.eval()
+        with torch.no_grad():
+            for p, d in vas:
+                before, after, sky_before, sky_after = [], [], [], []
+                for i in range(len(d["v"])):
+                    x = torch.as_tensor(d["feats"][i:i + 1]).float()
+                    v, g, ok = d["v"][i], d["gt"][i], d["valid"][i]
+                    r = answer(net(x), torch.as_tensor(d["cand"][i:i + 1]))[0].numpy()
+                    before.append(np.abs(v - g)[ok].mean() / 1.92); after.append(np.abs(r - g)[ok].mean() / 1.92)
+                    # With sky scored as index 0 (the protocol's other table).
+                    gs, oks = np.where(d["sky"][i], 0.0, g), ok | d["sky"][i]
+                    sky_before.append(np.abs(v - gs)[oks].mean() / 1.92); sky_after.append(np.abs(r - gs)[oks].mean() / 1.92)
+                res.append(f"{os.path.basename(p).replace('.npz', '')} {np.mean(before):.3f}->{np.mean(after):.3f}"
+                           f" (sky {np.mean(sky_before):.3f}->{np.mean(sky_after):.3f})")
+        net.train()
+        return "  ".join(res)
+
+    n, t0, B, losses = len(tr["v"]), time.time(), 4, []
+    print(0, "s", 0, evaluate(), flush=True)
+    for it in range(1, steps + 1):
+        rows = [(np.random.randint(n), np.random.randint(0, 160 - 64 + 1)) for _ in range(B)]
+        pick = lambda k: np.stack([tr[k][i, ..., y0:y0 + 64, :] for i, y0 in rows])
+        x, c = torch.as_tensor(pick("feats")).float(), torch.as_tensor(pick("cand"))
+        g, m = torch.as_tensor(pick("gt")), torch.as_tensor(pick("valid"))
+        sky = torch.as_tensor(pick("sky"))
+        weight = m.float() + SKY_WEIGHT * sky.float()
+        if weight.sum() == 0:
+            continue
+        target = torch.where(sky, torch.zeros_like(g), g)
+        loss = ((answer(net(x), c) - target).abs() * weight).sum() / weight.sum()
+        opt.zero_grad(); loss.backward(); opt.step(); sched.step()
+        losses.append(loss.item())
+        if it % 1000 == 0 or it == steps:
+            print(it, "s", f"{time.time() - t0:.0f}", f"loss {np.mean(losses[-1000:]):.3f}", evaluate(), flush=True)
+            if out:
+                torch.save(net.state_dict(), out)
+                save_safetensors(net, out.replace(".pt", ".safetensors"))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,74 @@
+# Fixtures of crates/omnimvs-net/tests/pick.rs (stop 39): the learnt pick's U-Net and its inputs as
+# the scripts that trained the bundled pick compute them (models/training/pick-1/).
+#   1. pick_tiny.safetensors: a U-Net of width 2 for one camera (11 inputs), seeded random weights
+#      (the head too); io.safetensors: a random input (11, 16, 64), its logits, an index map and
+#      the softmax-weighted candidates (the pick's answer).
+#   2. inputs.safetensors: the 29 inputs on the real itbt_sample frame 1 for a synthetic answer and
+#      spread (formulas below, repeated in the test) at every 97th pixel of 160 x 640.
+# Usage (a venv with torch, numpy, scipy, pillow, tifffile, pyyaml):
+#   make_pick_fixture.py OUT_DIR [SAMPLES_DIR]
+import json, os, struct, sys
+import numpy as np, torch
+
+here = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(here, "../../models/training/pick-1"))
+import train_pick as tp
+import pick_inputs as pi
+
+
+def write(path, tensors):
+    header, off = {}, 0
+    for k, a in tensors.items():
+        a = np.ascontiguousarray(a, dtype="<f4")
+        tensors[k] = a
+        header[k] = {"dtype": "F32", "shape": list(a.shape), "data_offsets": [off, off + a.nbytes]}
+        off += a.nbytes
+    h = json.dumps(header).encode()
+    h += b" " * ((8 - len(h) % 8) % 8)
+    with open(path, "wb") as f:
+        f.write(struct.pack("<Q", len(h))); f.write(h)
+        for a in tensors.values():
+            f.write(a.tobytes())
+
+
+def synthetic_answer(h, w):
+    """An answer with smooth parts and steps (float32), and a spread, as the test builds them."""
+    r, c = np.meshgrid(np.arange(h, dtype=np.float64), np.arange(w, dtype=np.float64), indexing="ij")
+    v = 40.0 + 30.0 * np.sin(c / 50.0) + 10.0 * np.cos(r / 17.0) + np.where((c % 160) >= 80, 50.0, 0.0)
+    spread = 0.1 * r + 0.01 * c
+    return v.astype(np.float32), spread.astype(np.float32)
+
+
+def main():
+    out = sys.argv[1]
+    samples = sys.argv[2] if len(sys.argv) > 2 else os.path.join(here, "../../../shared/data/omnimvs-samples")
+    os.makedirs(out, exist_ok=True)
+    torch.manual_seed(7)
+    net = tp.UNet(11, 2)
+    with torch.no_grad():
+        for p in net.parameters():
+            p.copy_(torch.randn_like(p) * 0.3)
+    tp.save_safetensors(net, os.path.join(out, "pick_tiny.safetensors"))
+    x = torch.randn(1, 11, 16, 64)
+    index = (torch.rand(1, 16, 64) * 191.0).numpy().astype(np.float32)
+    with torch.no_grad():
+        logits = net(x)
+        ans = tp.answer(logits, torch.as_tensor(tp.cands(index)))
+    write(os.path.join(out, "io.safetensors"), {"input": x[0].numpy(), "logits": logits[0].numpy(),
+                                                "index": index[0], "answer": ans[0].numpy()})
+
+    ds = os.path.join(samples, "itbt_sample")
+    cfg, cams, md = pi.o.load(ds)
+    min_inv = 1.0 / (1.0 / pi.o.EPS)
+    step = (1.0 / md - min_inv) / 191.0
+    v, spread = synthetic_answer(160, 640)
+    feats = pi.features(pi.normalised_images(ds, 1, cfg, cams), cams, v.astype(np.float64),
+                        spread.astype(np.float64), min_inv, step)
+    at = np.arange(0, 160 * 640, 97)
+    write(os.path.join(out, "inputs.safetensors"),
+          {"pixels": at.astype(np.float32), "inputs": feats.reshape(feats.shape[0], -1)[:, at]})
+    print("wrote", out)
+
+
+if __name__ == "__main__":
+    main()
