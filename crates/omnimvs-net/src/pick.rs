@@ -270,7 +270,7 @@ impl PickRefiner {
     }
 
     /// The picked answer for `index` (index units of `hypotheses`, row-major on the grid of
-    /// `projectors`, [`projectors`]), with the coarse `spread` on the same grid, from the
+    /// `projectors`, [`PickProjectors`]), with the coarse `spread` on the same grid, from the
     /// frame's `images` (rig order, the cameras' own sizes).
     ///
     /// # Errors

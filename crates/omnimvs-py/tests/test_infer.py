@@ -150,11 +150,11 @@ def test_pick(itbt_path, itbt, itbt_net, cli, tmp_path):
     without = omnimvs.infer(itbt, 1, pick="off")
     cli("infer", itbt_path, "--frames", 1, "--pick", "off", "--out", tmp_path)
     np.testing.assert_allclose(without, tifffile.imread(tmp_path / "00001.tiff"), rtol=1e-5, atol=1e-6)
-    # Moved by more than half an index unit (inverse depth, 1/m): where the answers around
-    # disagree, not everywhere (the softmax leaves every pixel a little of its neighbours).
-    half_index = 0.5 * (1 / itbt.min_depth) / 191
-    moved = np.abs(without - itbt_net) > half_index
-    assert 0.005 < moved.mean() < 0.5
+    # Moved by more than 2 index units (inverse depth, 1/m): some pixels (15 % on this frame),
+    # not most (the softmax leaves every pixel a little of its neighbours).
+    two_indices = 2 * (1 / itbt.min_depth) / 191
+    moved = np.abs(without - itbt_net) > two_indices
+    assert 0.01 < moved.mean() < 0.3
     # A pick file: the bundled one by path is the default's.
     bundled = Path(__file__).resolve().parents[3] / "models" / "omnimvs-cascade-pick.safetensors"
     np.testing.assert_array_equal(omnimvs.infer(itbt, 1, pick=str(bundled)), itbt_net)
