@@ -26,12 +26,11 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use omnimvs_camera::Rig;
 use omnimvs_data::edges::neighbour_min_max;
-use omnimvs_stereo::SphereProjector;
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+use omnimvs_sweep::GrayImage;
 use rayon::prelude::*;
 
+use crate::cascade::PixelSampler;
 use crate::error::NetError;
 use crate::hostconv::{HostConv, Padding};
 
@@ -269,8 +268,9 @@ impl PickRefiner {
         self.cameras
     }
 
-    /// The picked answer for `index` (index units of `hypotheses`, row-major on the grid of
-    /// `projectors`, [`PickProjectors`]), with the coarse `spread` on the same grid, from the
+    /// The picked answer for `index` (index units of the sampler's hypotheses, row-major on
+    /// its grid: the cascade's full-resolution [`PixelSampler`], which projects the output
+    /// grid into the rig's cameras), with the coarse `spread` on the same grid, from the
     /// frame's `images` (rig order, the cameras' own sizes).
     ///
     /// # Errors
@@ -279,12 +279,11 @@ impl PickRefiner {
         &self,
         index: &[f32],
         spread: &[f32],
-        projectors: &PickProjectors,
-        hypotheses: &InvDepthHypotheses,
+        sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
-        let size = projectors.size;
-        let inputs = self.inputs(index, spread, projectors, hypotheses, images)?;
+        let size = [sampler.grid().height, sampler.grid().width];
+        let inputs = self.inputs(index, spread, sampler, images)?;
         let logits = self.scores(&inputs, size)?;
         Ok(combine(&logits, index, size))
     }
@@ -297,11 +296,10 @@ impl PickRefiner {
         &self,
         index: &[f32],
         spread: &[f32],
-        projectors: &PickProjectors,
-        hypotheses: &InvDepthHypotheses,
+        sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
-        let [h, w] = projectors.size;
+        let (h, w) = (sampler.grid().height, sampler.grid().width);
         let plane = h * w;
         if index.len() != plane || spread.len() != plane {
             return Err(NetError::Shape {
@@ -310,7 +308,7 @@ impl PickRefiner {
                 actual: vec![index.len(), spread.len()],
             });
         }
-        let cameras = projectors.cameras.len();
+        let cameras = sampler.num_cameras();
         if cameras != self.cameras || images.len() != self.cameras {
             return Err(NetError::Shape {
                 what: "pick: cameras of the rig and images".into(),
@@ -318,8 +316,10 @@ impl PickRefiner {
                 actual: vec![cameras, images.len()],
             });
         }
-        for (image, size) in images.iter().zip(&projectors.image_sizes) {
-            if *size != [image.height, image.width] {
+        for (camera, image) in images.iter().enumerate() {
+            let (width, height) = sampler.image_size(camera);
+            let size = [height as usize, width as usize];
+            if size != [image.height, image.width] {
                 return Err(NetError::Shape {
                     what: "pick: an image of its camera's size".into(),
                     expected: size.to_vec(),
@@ -338,9 +338,14 @@ impl PickRefiner {
             out[4 * plane + p] = (big_m - v) / 32.0;
         }
         let normalised: Vec<(f64, f64)> = images.iter().map(mean_and_std).collect();
-        let depths: [&[f32]; 3] = [index, &low, &high];
-        for (d, map) in depths.iter().enumerate() {
-            for (c, (projector, image)) in projectors.cameras.iter().zip(images).enumerate() {
+        let hypotheses = sampler.hypotheses();
+        for (d, map) in [index, &low, &high].into_iter().enumerate() {
+            // The depth's inverse depth per pixel, once for every camera.
+            let inv: Vec<f32> = map
+                .iter()
+                .map(|&n| hypotheses.inv_depth(f64::from(n)).max(1e-6) as f32)
+                .collect();
+            for (c, image) in images.iter().enumerate() {
                 let channel = 5 + 2 * (d * self.cameras + c);
                 let (gray, sees) = out[channel * plane..(channel + 2) * plane].split_at_mut(plane);
                 let (mean, std) = normalised[c];
@@ -350,8 +355,7 @@ impl PickRefiner {
                     .for_each(|(row, (gray, sees))| {
                         for col in 0..w {
                             let p = row * w + col;
-                            let inv = hypotheses.inv_depth(f64::from(map[p])).max(1e-6);
-                            if let Some((x, y)) = projector.project(p, inv as f32)
+                            if let Some((x, y)) = sampler.project(c, p, inv[p])
                                 && let Some(value) = bilinear(image, f64::from(x), f64::from(y))
                             {
                                 gray[col] = ((value - mean) / (std + 1e-9)) as f32;
@@ -408,46 +412,6 @@ pub fn combine(logits: &[f32], index: &[f32], [h, w]: [usize; 2]) -> Vec<f32> {
             num / den
         })
         .collect()
-}
-
-/// Where every output pixel sees a sphere in each camera of a rig (ZNCC+SGM's tabulated
-/// projection, within about 1e-3 pixel of the camera model's), made once per rig and grid.
-#[derive(Clone, Debug)]
-pub struct PickProjectors {
-    cameras: Vec<SphereProjector>,
-    /// `[rows, cols]` of each camera's images.
-    image_sizes: Vec<[usize; 2]>,
-    /// `[rows, cols]` of the grid.
-    size: [usize; 2],
-}
-
-impl PickProjectors {
-    /// The projections of `grid`'s pixels into `rig`'s cameras.
-    ///
-    /// # Errors
-    /// [`NetError::Stereo`] for a camera without a tabulated projection (a field of view of
-    /// 360 degrees or more).
-    pub fn new(rig: &Rig, grid: &EquirectGrid) -> Result<Self, NetError> {
-        Ok(Self {
-            cameras: rig
-                .cameras
-                .iter()
-                .enumerate()
-                .map(|(number, camera)| SphereProjector::new(camera, number, grid))
-                .collect::<Result<_, _>>()?,
-            image_sizes: rig
-                .cameras
-                .iter()
-                .map(|c| [c.model.height() as usize, c.model.width() as usize])
-                .collect(),
-            size: [grid.height, grid.width],
-        })
-    }
-
-    /// Cameras.
-    pub fn cameras(&self) -> usize {
-        self.cameras.len()
-    }
 }
 
 /// The candidates `[CANDIDATES, h, w]`: the answer, then the minimum and maximum over each of

@@ -9,6 +9,10 @@ use omnimvs_net::model::DEFAULT_SWEEP_CHUNK;
 use omnimvs_net::taps::warp_features;
 use omnimvs_net::{Layout, NetConfig, OmniMvsNet, SweepGrid, SweepTaps};
 
+#[path = "support/micro_cascade.rs"]
+mod micro_cascade;
+use micro_cascade::max_difference;
+
 /// A grid that sweeps a circle of growing radius per sphere, with a band of invalid
 /// entries and samples that fall partly outside the source.
 fn test_grid(num_spheres: usize, height: usize, width: usize) -> SweepGrid {
@@ -31,14 +35,6 @@ fn test_grid(num_spheres: usize, height: usize, width: usize) -> SweepGrid {
 
 fn to_vec<const D: usize>(t: Tensor<D>) -> Vec<f32> {
     t.into_data().try_into_vec_as::<f32>().unwrap()
-}
-
-fn max_diff(a: &[f32], b: &[f32]) -> f32 {
-    assert_eq!(a.len(), b.len());
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f32::max)
 }
 
 #[test]
@@ -165,7 +161,7 @@ fn sweep_equals_a_direct_bilinear_warp() {
     let taps = SweepTaps::new(&grid, [rows, cols], &device);
     let ours = to_vec(taps.warp(feature.clone(), 0..4)); // [1, 4, C, 8, 12]
     let host = warp_features(&to_vec(feature.clone()), channels, rows, cols, &grid, 0..4).unwrap();
-    assert!(max_diff(&ours, &host) < 1e-6);
+    assert!(max_difference(&ours, &host) < 1e-6);
 
     let options = GridSampleOptions::new(InterpolateMode::Bilinear)
         .with_padding_mode(GridSamplePaddingMode::Zeros)
@@ -180,7 +176,7 @@ fn sweep_equals_a_direct_bilinear_warp() {
         );
         let direct = to_vec(feature.clone().grid_sample_2d(g, options.clone())); // [1, C, 8, 12]
         let n = channels * grid.height * grid.width;
-        let diff = max_diff(&ours[s * n..(s + 1) * n], &direct);
+        let diff = max_difference(&ours[s * n..(s + 1) * n], &direct);
         assert!(diff < 1e-5, "sphere {s}: {diff}");
     }
 }

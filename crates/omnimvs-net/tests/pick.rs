@@ -8,8 +8,13 @@
 use std::path::{Path, PathBuf};
 
 use omnimvs_data::Dataset;
+use omnimvs_net::cascade::PixelSampler;
 use omnimvs_net::error::NetError;
 use omnimvs_net::pick::{self, PickRefiner, Tensors};
+
+#[path = "support/micro_cascade.rs"]
+mod micro_cascade;
+use micro_cascade::max_difference;
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -22,14 +27,6 @@ fn tensors(name: &str) -> Tensors {
     pick::read_safetensors(&std::fs::read(&path).unwrap(), &path).unwrap()
 }
 
-fn max_abs_diff(a: &[f32], b: &[f32]) -> f32 {
-    assert_eq!(a.len(), b.len());
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f32::max)
-}
-
 #[test]
 fn unet_scores_and_pick_match_pytorch() {
     let net = PickRefiner::load(&fixture("pick_tiny.safetensors")).unwrap();
@@ -38,10 +35,10 @@ fn unet_scores_and_pick_match_pytorch() {
     let (shape, input) = &io["input"];
     assert_eq!(shape, &[11, 16, 64]);
     let logits = net.scores(input, [16, 64]).unwrap();
-    let diff = max_abs_diff(&logits, &io["logits"].1);
+    let diff = max_difference(&logits, &io["logits"].1);
     assert!(diff < 1e-4, "logits differ from torch by {diff}");
     let answer = pick::combine(&io["logits"].1, &io["index"].1, [16, 64]);
-    let diff = max_abs_diff(&answer, &io["answer"].1);
+    let diff = max_difference(&answer, &io["answer"].1);
     assert!(diff < 1e-3, "answer differs from torch by {diff}");
     // The pick stays within the candidates: between the 9 x 9 minimum and maximum.
     let cands = pick::candidates(&io["index"].1, [16, 64]);
@@ -85,8 +82,7 @@ fn inputs_match_the_training_script_on_a_real_frame() {
         .inputs(
             &v,
             &spread,
-            &pick::PickProjectors::new(&ds.rig, &grid).unwrap(),
-            &hypotheses,
+            &PixelSampler::new(&ds.rig, &grid, &hypotheses).unwrap(),
             &images,
         )
         .unwrap();

@@ -8,9 +8,9 @@ use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet, CascadeTimings};
 use omnimvs_net::config::NetConfig;
 use omnimvs_net::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
-use omnimvs_net::pick::{PickProjectors, PickRefiner};
+use omnimvs_net::pick::PickRefiner;
 use omnimvs_net::synthetic::synthetic_grids;
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+use omnimvs_sweep::{GrayImage, InvDepthHypotheses};
 use serde::Serialize;
 
 use super::{median_row, peak_rss_bytes, random_images};
@@ -259,8 +259,6 @@ pub fn bench_cascade_forward(
     let geometry =
         CascadeGeometry::with_host_correlation(rig, config, &hypotheses, device, !device_sweep)?;
     let images = random_images(config, device);
-    let grid = EquirectGrid::new(config.out_height, config.out_width, config.phi_deg)?;
-    let projectors = PickProjectors::new(rig, &grid)?;
     let gray: Vec<GrayImage> = rig
         .cameras
         .iter()
@@ -289,7 +287,7 @@ pub fn bench_cascade_forward(
             let index = read_values(fine.index, "index map")?;
             let spread = vec![0f32; index.len()];
             let start = std::time::Instant::now();
-            pick.refine(&index, &spread, &projectors, &hypotheses, &gray)?;
+            pick.refine(&index, &spread, &geometry.samplers[2], &gray)?;
             row.pick = start.elapsed().as_secs_f64();
             row.total += row.pick;
         }

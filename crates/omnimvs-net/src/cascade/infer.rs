@@ -6,15 +6,16 @@
 use std::time::Instant;
 
 use burn::tensor::Device;
-use omnimvs_camera::{Rig, ValidityMask};
+use omnimvs_camera::ValidityMask;
 use omnimvs_data::{Dataset, DepthEstimate, StageObserver};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec, resample_map};
 
 use super::geometry::CascadeGeometry;
 use super::model::{CascadeNet, read_values};
+use super::sampler::PixelSampler;
 use crate::error::NetError;
 use crate::infer::{input_tensors, sweep_spec};
-use crate::pick::{PickProjectors, PickRefiner};
+use crate::pick::PickRefiner;
 
 /// A cascade network ready to run on the frames of one rig.
 pub struct CascadeInference {
@@ -23,9 +24,8 @@ pub struct CascadeInference {
     spec: SweepSpec,
     masks: Vec<ValidityMask>,
     device: Device,
-    rig: Rig,
-    /// The learnt pick after the network ([`crate::pick`]) and its projections, when set.
-    pick: Option<(PickRefiner, PickProjectors)>,
+    /// The learnt pick after the network ([`crate::pick`]), when set.
+    pick: Option<PickRefiner>,
 }
 
 impl CascadeInference {
@@ -57,7 +57,6 @@ impl CascadeInference {
             spec,
             masks: dataset.masks()?,
             device,
-            rig: dataset.rig.clone(),
             pick: None,
         })
     }
@@ -66,19 +65,24 @@ impl CascadeInference {
     /// network's answers: the bundled pick on the bundled cascade's).
     ///
     /// # Errors
-    /// [`NetError::Shape`] when the pick was made for another number of cameras than the rig's,
-    /// [`NetError::Stereo`] for a camera without a tabulated projection.
+    /// [`NetError::Shape`] when the pick was made for another number of cameras than the rig's.
     pub fn with_pick(mut self, pick: PickRefiner) -> Result<Self, NetError> {
-        if pick.cameras() != self.rig.len() {
+        let cameras = self.full_sampler().num_cameras();
+        if pick.cameras() != cameras {
             return Err(NetError::Shape {
                 what: "pick: cameras of the rig".into(),
                 expected: vec![pick.cameras()],
-                actual: vec![self.rig.len()],
+                actual: vec![cameras],
             });
         }
-        let projectors = PickProjectors::new(&self.rig, &self.spec.grid)?;
-        self.pick = Some((pick, projectors));
+        self.pick = Some(pick);
         Ok(self)
+    }
+
+    /// The full-resolution stage's per-pixel sampler: the output grid projected into the
+    /// rig's cameras, which the pick reads the images through too.
+    fn full_sampler(&self) -> &PixelSampler {
+        &self.geometry.samplers[2]
     }
 
     /// Whether the learnt pick runs after the network.
@@ -152,15 +156,9 @@ impl CascadeInference {
             ("mid", t.mid),
             ("fine", t.fine),
         ];
-        if let Some((pick, projectors)) = &self.pick {
+        if let Some(pick) = &self.pick {
             let start = Instant::now();
-            index = pick.refine(
-                &index,
-                &spread,
-                projectors,
-                &self.geometry.hypotheses,
-                images,
-            )?;
+            index = pick.refine(&index, &spread, self.full_sampler(), images)?;
             let seconds = start.elapsed().as_secs_f64();
             stages.push(("pick", seconds));
             total += seconds;

@@ -79,6 +79,28 @@ impl PixelSampler {
         self.cameras.len()
     }
 
+    /// The hypotheses whose fractional indices the grids read.
+    pub fn hypotheses(&self) -> &InvDepthHypotheses {
+        &self.hypotheses
+    }
+
+    /// The image size `(width, height)` of camera `camera`.
+    ///
+    /// # Panics
+    /// For a camera the rig does not have.
+    pub fn image_size(&self, camera: usize) -> (u32, u32) {
+        self.cameras[camera].size
+    }
+
+    /// The fisheye pixel `(col, row)` where camera `camera` sees grid pixel `pixel`
+    /// (row-major) at inverse depth `inv_depth` (1/m); `None` outside its field of view.
+    ///
+    /// # Panics
+    /// For a camera the rig does not have.
+    pub fn project(&self, camera: usize, pixel: usize, inv_depth: f32) -> Option<(f32, f32)> {
+        self.cameras[camera].projector.project(pixel, inv_depth)
+    }
+
     /// One sweep grid per camera for per-pixel hypotheses: `index` holds `K` planes of
     /// fractional hypothesis indices (`N` units), `[K, rows, cols]` row-major; the grids have
     /// `K` "spheres", one per plane.
