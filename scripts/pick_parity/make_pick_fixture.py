@@ -5,6 +5,10 @@
 #      the softmax-weighted candidates (the pick's answer).
 #   2. inputs.safetensors: the 29 inputs on the real itbt_sample frame 1 for a synthetic answer and
 #      spread (formulas below, repeated in the test) at every 97th pixel of 160 x 640.
+#   3. (stop 40, pick-3's layout) pick_tiny3.safetensors / io3.safetensors: as 1. with eleven
+#      candidates (radii 1, 2, 4, 7, 12) and the layout in the metadata, one camera (depth radii
+#      2, 12 and ZNCC: 8 + 10 + 10 = 28 inputs); inputs3.safetensors: as 2. with depth radii 2, 12
+#      and ZNCC over 5 x 5 (58 inputs).
 # Usage (a venv with torch, numpy, scipy, pillow, tifffile, pyyaml):
 #   make_pick_fixture.py OUT_DIR [SAMPLES_DIR]
 import json, os, struct, sys
@@ -57,16 +61,35 @@ def main():
     write(os.path.join(out, "io.safetensors"), {"input": x[0].numpy(), "logits": logits[0].numpy(),
                                                 "index": index[0], "answer": ans[0].numpy()})
 
+    # pick-3's layout.
+    tp.RADII, tp.K = (1, 2, 4, 7, 12), 11
+    torch.manual_seed(8)
+    net = tp.UNet(28, 2)
+    with torch.no_grad():
+        for p in net.parameters():
+            p.copy_(torch.randn_like(p) * 0.3)
+    tp.save_safetensors(net, os.path.join(out, "pick_tiny3.safetensors"),
+                        {"candidate_radii": "1,2,4,7,12", "depth_radii": "2,12", "zncc": "5"})
+    x = torch.randn(1, 28, 32, 64)
+    index = (torch.rand(1, 32, 64) * 191.0).numpy().astype(np.float32)
+    with torch.no_grad():
+        logits = net(x)
+        ans = tp.answer(logits, torch.as_tensor(tp.cands(index)))
+    write(os.path.join(out, "io3.safetensors"), {"input": x[0].numpy(), "logits": logits[0].numpy(),
+                                                 "index": index[0], "answer": ans[0].numpy()})
+
     ds = os.path.join(samples, "itbt_sample")
     cfg, cams, md = pi.o.load(ds)
     min_inv = 1.0 / (1.0 / pi.o.EPS)
     step = (1.0 / md - min_inv) / 191.0
     v, spread = synthetic_answer(160, 640)
-    feats = pi.features(pi.normalised_images(ds, 1, cfg, cams), cams, v.astype(np.float64),
-                        spread.astype(np.float64), min_inv, step)
+    ims = pi.normalised_images(ds, 1, cfg, cams)
     at = np.arange(0, 160 * 640, 97)
-    write(os.path.join(out, "inputs.safetensors"),
-          {"pixels": at.astype(np.float32), "inputs": feats.reshape(feats.shape[0], -1)[:, at]})
+    for name, radii, k in (("inputs.safetensors", (2,), 0), ("inputs3.safetensors", (2, 12), 5)):
+        feats = pi.features(ims, cams, v.astype(np.float64), spread.astype(np.float64), min_inv, step,
+                            depth_radii=radii, zncc_k=k)
+        write(os.path.join(out, name),
+              {"pixels": at.astype(np.float32), "inputs": feats.reshape(feats.shape[0], -1)[:, at]})
     print("wrote", out)
 
 

@@ -4,24 +4,25 @@
 //! the nearest of a pixel's 5 x 5 minimum, maximum and own answer has a third less error).
 //! The cameras' colours at those depths and the shape of the answer around say which one.
 //!
-//! [`PickRefiner`] reads, per output pixel:
+//! [`PickRefiner`] reads, per output pixel ([`PickLayout`] says exactly which):
 //!
-//! - the answer `v` (index units of `N`), the coarse stage's spread, and the 5 x 5 minimum
-//!   `m` and maximum `M` of the answers around (wrapping in longitude), as `v / 192`,
-//!   `spread / 30`, `(M - m) / 32`, `(m - v) / 32`, `(M - v) / 32`;
+//! - the answer `v` (index units of `N`), the coarse stage's spread, and the minimum `m` and
+//!   maximum `M` of the answers around (wrapping in longitude) over one or more windows;
 //! - at each of the depths `v`, `m`, `M`, every camera's gray value there (each image
 //!   normalised by its own mean and standard deviation, bilinear, 0 where the camera does not
 //!   see the point) and whether it sees it;
+//! - optionally (pick-3, stop 40), at each of those depths, the cameras' mean pairwise ZNCC
+//!   over a small window of the output grid;
 //!
 //! and a small U-Net (3x3 convolutions wrapping in longitude, three stride-2 levels, bilinear
 //! upsampling with skip concatenations, `width`, `2 width`, `3 width`, `4 width` channels)
-//! scores seven candidates: `v` and the minimum and maximum over the 3 x 3, 5 x 5 and 9 x 9
-//! pixels around. The answer is their softmax-weighted mean.
+//! scores the candidates: `v` and the minimum and maximum over windows around it (pick-1/2:
+//! 3 x 3, 5 x 5 and 9 x 9). The answer is their softmax-weighted mean.
 //!
 //! It is trained outside the network, on the network's answers on frames it never trained on
 //! (`models/training/pick-1/`, PyTorch; the weights are written as safetensors with the
-//! module names of that script), and runs on the host with the convolution kernel of
-//! [`crate::hostconv`].
+//! module names of that script and the layout in their metadata), and runs on the host with
+//! the convolution kernel of [`crate::hostconv`].
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -34,17 +35,389 @@ use crate::cascade::PixelSampler;
 use crate::error::NetError;
 use crate::hostconv::{HostConv, Padding};
 
-/// Input channels: five of the answer's neighbourhood, then (gray, sees) per camera at each of
-/// the three depths.
-pub fn input_channels(cameras: usize) -> usize {
-    5 + 3 * 2 * cameras
+/// Which candidates a pick scores and which inputs it reads. A pick's safetensors carry it in
+/// their metadata (`candidate_radii`, `depth_radii`, `zncc`: comma-separated integers, as
+/// `models/training/pick-1/train_pick.py` writes them); a file without them has pick-1/2's
+/// layout, [`PickLayout::default`].
+///
+/// Inputs, in order:
+///
+/// - `v / 192` and `spread / 30`, then for each of `depth_radii` with `m` and `M` the minimum
+///   and maximum of the answers over the `(2 r + 1)^2` pixels around: `(M - m) / 32`,
+///   `(m - v) / 32`, `(M - v) / 32`;
+/// - at each sampled depth (`v`, then `m` and `M` of each of `depth_radii`), every camera's
+///   normalised gray value there and whether it sees the point;
+/// - with `zncc = k > 0`, per sampled depth: the mean over the pairs of cameras that count of
+///   the ZNCC of their gray values over the `k x k` pixels of the output grid around (each
+///   pixel at its own depth of that map; columns wrap, rows stop at the border; a pair counts
+///   where both see the centre and both see at least half the window), and the fraction of
+///   the pairs that count.
+///
+/// Candidates: `v`, then the minimum and maximum over each of `candidate_radii`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PickLayout {
+    /// Radii of the candidates' neighbourhoods.
+    pub candidate_radii: Vec<usize>,
+    /// Radii whose minimum and maximum depths are sampled besides the answer.
+    pub depth_radii: Vec<usize>,
+    /// Side of the ZNCC window (odd), 0 for no ZNCC channels.
+    pub zncc: usize,
 }
 
-/// Candidates scored: the answer, then the minimum and maximum over these radii.
-pub const CANDIDATE_RADII: [usize; 3] = [1, 2, 4];
+impl Default for PickLayout {
+    /// pick-1 and pick-2's: candidates over 3 x 3, 5 x 5, 9 x 9; depths at the 5 x 5
+    /// extremes; no ZNCC.
+    fn default() -> Self {
+        Self {
+            candidate_radii: vec![1, 2, 4],
+            depth_radii: vec![2],
+            zncc: 0,
+        }
+    }
+}
 
-/// Number of candidates.
-pub const CANDIDATES: usize = 1 + 2 * CANDIDATE_RADII.len();
+impl PickLayout {
+    /// The layout in a safetensors' metadata (pick-1/2's where it has none of the keys).
+    ///
+    /// # Errors
+    /// A message naming the key whose value is not a list of integers in range.
+    pub fn from_metadata(metadata: &HashMap<String, String>) -> Result<Self, String> {
+        let mut layout = Self::default();
+        let list = |key: &str| -> Result<Option<Vec<usize>>, String> {
+            metadata
+                .get(key)
+                .map(|text| {
+                    text.split(',')
+                        .map(|t| t.trim().parse::<usize>())
+                        .collect::<Result<Vec<_>, _>>()
+                        .map_err(|_| {
+                            format!(
+                                "metadata `{key}` reads {text:?}: expected comma-separated integers"
+                            )
+                        })
+                })
+                .transpose()
+        };
+        if let Some(radii) = list("candidate_radii")? {
+            layout.candidate_radii = radii;
+        }
+        if let Some(radii) = list("depth_radii")? {
+            layout.depth_radii = radii;
+        }
+        if let Some(k) = list("zncc")? {
+            layout.zncc = match k[..] {
+                [k] if k == 0 || (!k.is_multiple_of(2) && k <= 31) => k,
+                _ => {
+                    return Err(format!(
+                        "metadata `zncc` reads {k:?}: expected 0 or an odd window side up to 31"
+                    ));
+                }
+            };
+        }
+        let in_range = |radii: &[usize]| radii.iter().all(|&r| (1..=64).contains(&r));
+        if layout.candidate_radii.is_empty() || !in_range(&layout.candidate_radii) {
+            return Err(format!(
+                "metadata `candidate_radii` reads {:?}: expected radii from 1 to 64",
+                layout.candidate_radii
+            ));
+        }
+        if !in_range(&layout.depth_radii) {
+            return Err(format!(
+                "metadata `depth_radii` reads {:?}: expected radii from 1 to 64",
+                layout.depth_radii
+            ));
+        }
+        Ok(layout)
+    }
+
+    /// Number of candidates scored.
+    pub fn candidates(&self) -> usize {
+        1 + 2 * self.candidate_radii.len()
+    }
+
+    /// Number of depths sampled per pixel.
+    pub fn depths(&self) -> usize {
+        1 + 2 * self.depth_radii.len()
+    }
+
+    /// Channels of the answer's neighbourhood (before the cameras').
+    pub fn answer_channels(&self) -> usize {
+        2 + 3 * self.depth_radii.len()
+    }
+
+    /// Input channels for a rig of `cameras`.
+    pub fn input_channels(&self, cameras: usize) -> usize {
+        self.answer_channels()
+            + 2 * cameras * self.depths()
+            + if self.zncc > 0 { 2 * self.depths() } else { 0 }
+    }
+
+    /// The cameras a first layer of `inputs` channels was trained for, if any.
+    pub fn cameras_for(&self, inputs: usize) -> Option<usize> {
+        let fixed = self.input_channels(0);
+        let per_camera = 2 * self.depths();
+        (inputs > fixed && (inputs - fixed).is_multiple_of(per_camera))
+            .then(|| (inputs - fixed) / per_camera)
+    }
+
+    /// The candidates `[candidates(), h, w]`: the answer, then the minimum and maximum over
+    /// each of `candidate_radii` (wrapping in longitude).
+    pub fn candidate_maps(&self, index: &[f32], [h, w]: [usize; 2]) -> Vec<f32> {
+        let mut out = Vec::with_capacity(self.candidates() * h * w);
+        out.extend_from_slice(index);
+        for &radius in &self.candidate_radii {
+            let (low, high) = neighbour_min_max(index, [h, w], true, radius);
+            out.extend(low);
+            out.extend(high);
+        }
+        out
+    }
+
+    /// The answer: each pixel's candidates ([`Self::candidate_maps`] of `index`) weighted by
+    /// the softmax of their `logits` `[candidates(), h, w]`.
+    pub fn combine(&self, logits: &[f32], index: &[f32], [h, w]: [usize; 2]) -> Vec<f32> {
+        let plane = h * w;
+        let count = self.candidates();
+        let candidates = self.candidate_maps(index, [h, w]);
+        (0..plane)
+            .map(|p| {
+                let mut best = f32::NEG_INFINITY;
+                for k in 0..count {
+                    best = best.max(logits[k * plane + p]);
+                }
+                let (mut num, mut den) = (0f32, 0f32);
+                for k in 0..count {
+                    let e = (logits[k * plane + p] - best).exp();
+                    num += e * candidates[k * plane + p];
+                    den += e;
+                }
+                num / den
+            })
+            .collect()
+    }
+
+    /// The input channels `[input_channels(cameras), h, w]` (the type's docs) for the answer
+    /// `index` and the coarse `spread` (index units of the sampler's hypotheses, on its grid),
+    /// from the frame's `images` (rig order, the cameras' own sizes).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] for maps or images of other sizes.
+    pub fn inputs(
+        &self,
+        index: &[f32],
+        spread: &[f32],
+        sampler: &PixelSampler,
+        images: &[GrayImage],
+    ) -> Result<Vec<f32>, NetError> {
+        let (h, w) = (sampler.grid().height, sampler.grid().width);
+        let plane = h * w;
+        if index.len() != plane || spread.len() != plane {
+            return Err(NetError::Shape {
+                what: "pick: index and spread maps".into(),
+                expected: vec![h, w],
+                actual: vec![index.len(), spread.len()],
+            });
+        }
+        let cameras = sampler.num_cameras();
+        if images.len() != cameras {
+            return Err(NetError::Shape {
+                what: "pick: an image per camera of the rig".into(),
+                expected: vec![cameras],
+                actual: vec![images.len()],
+            });
+        }
+        for (camera, image) in images.iter().enumerate() {
+            let (width, height) = sampler.image_size(camera);
+            let size = [height as usize, width as usize];
+            if size != [image.height, image.width] {
+                return Err(NetError::Shape {
+                    what: "pick: an image of its camera's size".into(),
+                    expected: size.to_vec(),
+                    actual: vec![image.height, image.width],
+                });
+            }
+        }
+        let mut out = vec![0f32; self.input_channels(cameras) * plane];
+        out[..plane]
+            .iter_mut()
+            .zip(index)
+            .for_each(|(o, &v)| *o = v / 192.0);
+        out[plane..2 * plane]
+            .iter_mut()
+            .zip(spread)
+            .for_each(|(o, &s)| *o = s / 30.0);
+        let mut depths: Vec<Vec<f32>> = vec![index.to_vec()];
+        for (i, &radius) in self.depth_radii.iter().enumerate() {
+            let (low, high) = neighbour_min_max(index, [h, w], true, radius);
+            let channel = 2 + 3 * i;
+            for p in 0..plane {
+                let (v, m, big_m) = (index[p], low[p], high[p]);
+                out[channel * plane + p] = (big_m - m) / 32.0;
+                out[(channel + 1) * plane + p] = (m - v) / 32.0;
+                out[(channel + 2) * plane + p] = (big_m - v) / 32.0;
+            }
+            depths.push(low);
+            depths.push(high);
+        }
+        let normalised: Vec<(f64, f64)> = images.iter().map(mean_and_std).collect();
+        let hypotheses = sampler.hypotheses();
+        let first = self.answer_channels();
+        for (d, map) in depths.iter().enumerate() {
+            // The depth's inverse depth per pixel, once for every camera.
+            let inv: Vec<f32> = map
+                .iter()
+                .map(|&n| hypotheses.inv_depth(f64::from(n)).max(1e-6) as f32)
+                .collect();
+            for (c, image) in images.iter().enumerate() {
+                let channel = first + 2 * (d * cameras + c);
+                let (gray, sees) = out[channel * plane..(channel + 2) * plane].split_at_mut(plane);
+                let (mean, std) = normalised[c];
+                gray.par_chunks_mut(w)
+                    .zip(sees.par_chunks_mut(w))
+                    .enumerate()
+                    .for_each(|(row, (gray, sees))| {
+                        for col in 0..w {
+                            let p = row * w + col;
+                            if let Some((x, y)) = sampler.project(c, p, inv[p])
+                                && let Some(value) = bilinear(image, f64::from(x), f64::from(y))
+                            {
+                                gray[col] = ((value - mean) / (std + 1e-9)) as f32;
+                                sees[col] = 1.0;
+                            }
+                        }
+                    });
+            }
+        }
+        if self.zncc > 0 {
+            let sampled = first;
+            let zncc_first = first + 2 * cameras * depths.len();
+            let (head, tail) = out.split_at_mut(zncc_first * plane);
+            let head = &head[sampled * plane..];
+            tail.par_chunks_mut(2 * plane)
+                .enumerate()
+                .for_each(|(d, pair)| {
+                    let channels = &head[2 * d * cameras * plane..2 * (d + 1) * cameras * plane];
+                    let (mean, fraction) = pair.split_at_mut(plane);
+                    zncc_of_cameras(channels, cameras, [h, w], self.zncc, mean, fraction);
+                });
+        }
+        Ok(out)
+    }
+}
+
+/// Mean ZNCC over the camera pairs that count and the fraction that count ([`PickLayout`]'s
+/// docs), from `channels` `[cameras x (gray, sees), h, w]`, into `mean` and `fraction`.
+fn zncc_of_cameras(
+    channels: &[f32],
+    cameras: usize,
+    [h, w]: [usize; 2],
+    k: usize,
+    mean: &mut [f32],
+    fraction: &mut [f32],
+) {
+    let plane = h * w;
+    let pairs: Vec<(usize, usize)> = (0..cameras)
+        .flat_map(|i| (i + 1..cameras).map(move |j| (i, j)))
+        .collect();
+    let window = (k * k) as f64;
+    // Per pair: the sum of ZNCC where it counts, and where it counts.
+    let per_pair: Vec<(Vec<f64>, Vec<f64>)> = pairs
+        .par_iter()
+        .map(|&(i, j)| {
+            let at = |c: usize, which: usize| {
+                &channels[(2 * c + which) * plane..(2 * c + which + 1) * plane]
+            };
+            let (a, b, sa_, sb_) = (at(i, 0), at(j, 0), at(i, 1), at(j, 1));
+            // n, Σa, Σb, Σa², Σb², Σab over the pixels both see.
+            let mut sums: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0f64; plane]);
+            for p in 0..plane {
+                let m = f64::from(sa_[p] * sb_[p]);
+                let (x, y) = (f64::from(a[p]), f64::from(b[p]));
+                sums[0][p] = m;
+                sums[1][p] = m * x;
+                sums[2][p] = m * y;
+                sums[3][p] = m * x * x;
+                sums[4][p] = m * y * y;
+                sums[5][p] = m * x * y;
+            }
+            let mut scratch = vec![0f64; plane];
+            for sum in &mut sums {
+                box_sum(sum, [h, w], k, &mut scratch);
+            }
+            let [n, sa, sb, saa, sbb, sab] = &sums;
+            let mut z_sum = vec![0f64; plane];
+            let mut counted = vec![0f64; plane];
+            for p in 0..plane {
+                if sa_[p] * sb_[p] > 0.0 && 2.0 * n[p] >= window {
+                    let nn = n[p].max(1.0);
+                    let cov = sab[p] - sa[p] * sb[p] / nn;
+                    let va = (saa[p] - sa[p] * sa[p] / nn).max(0.0);
+                    let vb = (sbb[p] - sb[p] * sb[p] / nn).max(0.0);
+                    z_sum[p] = cov / (va * vb + (0.01 * n[p]).powi(2) + 1e-12).sqrt();
+                    counted[p] = 1.0;
+                }
+            }
+            (z_sum, counted)
+        })
+        .collect();
+    let total = pairs.len().max(1) as f64;
+    mean.par_iter_mut()
+        .zip(fraction.par_iter_mut())
+        .enumerate()
+        .for_each(|(p, (mean, fraction))| {
+            let (sum, count) = per_pair
+                .iter()
+                .fold((0f64, 0f64), |(s, c), (z, n)| (s + z[p], c + n[p]));
+            *mean = if count > 0.0 {
+                (sum / count) as f32
+            } else {
+                0.0
+            };
+            *fraction = (count / total) as f32;
+        });
+}
+
+/// In place, the sum over the `k x k` pixels around each pixel of `a` `[h, w]`: columns wrap,
+/// rows stop at the border. `scratch` holds `h * w` values.
+fn box_sum(a: &mut [f64], [h, w]: [usize; 2], k: usize, scratch: &mut [f64]) {
+    let r = k / 2;
+    // Along each row (wrapping), into scratch.
+    let mut line = vec![0f64; w + 2 * r];
+    for y in 0..h {
+        let row = &a[y * w..(y + 1) * w];
+        for (i, v) in line.iter_mut().enumerate() {
+            *v = row[(i + w * (r / w + 1) - r) % w];
+        }
+        let out = &mut scratch[y * w..(y + 1) * w];
+        let mut s: f64 = line[..k].iter().sum();
+        for x in 0..w {
+            out[x] = s;
+            if x + 1 < w {
+                s += line[x + k] - line[x];
+            }
+        }
+    }
+    // Along each column (rows cut at the border), a running sum of whole rows, back into a.
+    let mut acc = vec![0f64; w];
+    for y in 0..=r.min(h - 1) {
+        acc.iter_mut()
+            .zip(&scratch[y * w..(y + 1) * w])
+            .for_each(|(s, v)| *s += v);
+    }
+    for y in 0..h {
+        a[y * w..(y + 1) * w].copy_from_slice(&acc);
+        if y + r + 1 < h {
+            acc.iter_mut()
+                .zip(&scratch[(y + r + 1) * w..(y + r + 2) * w])
+                .for_each(|(s, v)| *s += v);
+        }
+        if y >= r {
+            acc.iter_mut()
+                .zip(&scratch[(y - r) * w..(y - r + 1) * w])
+                .for_each(|(s, v)| *s -= v);
+        }
+    }
+}
 
 /// The bundled pick, trained on the bundled cascade's answers (`models/omnimvs-cascade-pick.safetensors`).
 pub const BUNDLED_PICK: &[u8] = include_bytes!("../../../models/omnimvs-cascade-pick.safetensors");
@@ -74,6 +447,7 @@ impl Layer {
 #[derive(Clone, Debug)]
 pub struct PickRefiner {
     cameras: usize,
+    layout: PickLayout,
     /// Encoder levels, two layers each (the first of levels 1-3 at stride 2).
     encoder: [[Layer; 2]; 4],
     /// Decoder layers from the coarsest: `d2`, `d1`, `d0`.
@@ -89,6 +463,17 @@ pub type Tensors = HashMap<String, (Vec<usize>, Vec<f32>)>;
 /// # Errors
 /// [`NetError::Weights`] for a file that is not safetensors or holds another dtype.
 pub fn read_safetensors(bytes: &[u8], path: &Path) -> Result<Tensors, NetError> {
+    read_safetensors_with_metadata(bytes, path).map(|(tensors, _)| tensors)
+}
+
+/// [`read_safetensors`], with the header's `__metadata__` (string values; empty without one).
+///
+/// # Errors
+/// As [`read_safetensors`], and for metadata that is not an object of strings.
+pub fn read_safetensors_with_metadata(
+    bytes: &[u8],
+    path: &Path,
+) -> Result<(Tensors, HashMap<String, String>), NetError> {
     let bad = |message: String| NetError::Weights {
         path: path.to_path_buf(),
         message,
@@ -109,8 +494,18 @@ pub fn read_safetensors(bytes: &[u8], path: &Path) -> Result<Tensors, NetError> 
         .as_object()
         .ok_or_else(|| bad("header is not a JSON object".into()))?;
     let mut out = HashMap::new();
+    let mut metadata = HashMap::new();
     for (name, entry) in entries {
         if name == "__metadata__" {
+            let object = entry
+                .as_object()
+                .ok_or_else(|| bad("`__metadata__` is not a JSON object".into()))?;
+            for (key, value) in object {
+                let text = value
+                    .as_str()
+                    .ok_or_else(|| bad(format!("`__metadata__` `{key}` is not a string")))?;
+                metadata.insert(key.clone(), text.to_string());
+            }
             continue;
         }
         let field = |key: &str| {
@@ -152,7 +547,7 @@ pub fn read_safetensors(bytes: &[u8], path: &Path) -> Result<Tensors, NetError> 
             .collect();
         out.insert(name.clone(), (shape, values));
     }
-    Ok(out)
+    Ok((out, metadata))
 }
 
 impl PickRefiner {
@@ -184,21 +579,23 @@ impl PickRefiner {
     /// [`NetError::Weights`] for a tensor missing, of another size, or a file that is not
     /// safetensors.
     pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Self, NetError> {
-        let mut tensors = read_safetensors(bytes, path)?;
+        let (mut tensors, metadata) = read_safetensors_with_metadata(bytes, path)?;
         let bad = |message: String| NetError::Weights {
             path: PathBuf::from(path),
             message,
         };
+        let layout = PickLayout::from_metadata(&metadata).map_err(bad)?;
         let inputs = tensors
             .get("e0.0.0.weight")
             .map(|(shape, _)| shape.get(1).copied().unwrap_or(0))
             .ok_or_else(|| bad("no tensor `e0.0.0.weight`: not a pick's weights".into()))?;
-        if inputs < 5 || (inputs - 5) % 6 != 0 {
-            return Err(bad(format!(
-                "`e0.0.0.weight` reads {inputs} channels: expected 5 + 6 per camera"
-            )));
-        }
-        let cameras = (inputs - 5) / 6;
+        let cameras = layout.cameras_for(inputs).ok_or_else(|| {
+            bad(format!(
+                "`e0.0.0.weight` reads {inputs} channels: expected {} + {} per camera for the layout {layout:?}",
+                layout.input_channels(0),
+                2 * layout.depths()
+            ))
+        })?;
         let width = tensors["e0.0.0.weight"].0[0];
         let mut layer = |name: &str, c_in: usize, c_out: usize, stride: usize, relu: bool| {
             let (wshape, weight) = tensors
@@ -251,12 +648,13 @@ impl PickRefiner {
             layer("d1.0", 5 * w, 2 * w, 1, true)?,
             layer("d0.0", 3 * w, w, 1, true)?,
         ];
-        let head = layer("head", w, CANDIDATES, 1, false)?;
+        let head = layer("head", w, layout.candidates(), 1, false)?;
         if let Some(name) = tensors.keys().next() {
             return Err(bad(format!("tensor `{name}` is not a pick's")));
         }
         Ok(Self {
             cameras,
+            layout,
             encoder,
             decoder,
             head,
@@ -266,6 +664,11 @@ impl PickRefiner {
     /// Cameras it was trained for.
     pub fn cameras(&self) -> usize {
         self.cameras
+    }
+
+    /// Its candidates and inputs.
+    pub fn layout(&self) -> &PickLayout {
+        &self.layout
     }
 
     /// The picked answer for `index` (index units of the sampler's hypotheses, row-major on
@@ -285,10 +688,10 @@ impl PickRefiner {
         let size = [sampler.grid().height, sampler.grid().width];
         let inputs = self.inputs(index, spread, sampler, images)?;
         let logits = self.scores(&inputs, size)?;
-        Ok(combine(&logits, index, size))
+        Ok(self.layout.combine(&logits, index, size))
     }
 
-    /// The input channels `[channels, h, w]` (module docs).
+    /// The input channels `[channels, h, w]` ([`PickLayout::inputs`]).
     ///
     /// # Errors
     /// [`NetError::Shape`] for maps or images of other sizes, or another number of cameras.
@@ -299,15 +702,6 @@ impl PickRefiner {
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
-        let (h, w) = (sampler.grid().height, sampler.grid().width);
-        let plane = h * w;
-        if index.len() != plane || spread.len() != plane {
-            return Err(NetError::Shape {
-                what: "pick: index and spread maps".into(),
-                expected: vec![h, w],
-                actual: vec![index.len(), spread.len()],
-            });
-        }
         let cameras = sampler.num_cameras();
         if cameras != self.cameras || images.len() != self.cameras {
             return Err(NetError::Shape {
@@ -316,65 +710,16 @@ impl PickRefiner {
                 actual: vec![cameras, images.len()],
             });
         }
-        for (camera, image) in images.iter().enumerate() {
-            let (width, height) = sampler.image_size(camera);
-            let size = [height as usize, width as usize];
-            if size != [image.height, image.width] {
-                return Err(NetError::Shape {
-                    what: "pick: an image of its camera's size".into(),
-                    expected: size.to_vec(),
-                    actual: vec![image.height, image.width],
-                });
-            }
-        }
-        let (low, high) = neighbour_min_max(index, [h, w], true, 2);
-        let mut out = vec![0f32; input_channels(self.cameras) * plane];
-        for p in 0..plane {
-            let (v, m, big_m) = (index[p], low[p], high[p]);
-            out[p] = v / 192.0;
-            out[plane + p] = spread[p] / 30.0;
-            out[2 * plane + p] = (big_m - m) / 32.0;
-            out[3 * plane + p] = (m - v) / 32.0;
-            out[4 * plane + p] = (big_m - v) / 32.0;
-        }
-        let normalised: Vec<(f64, f64)> = images.iter().map(mean_and_std).collect();
-        let hypotheses = sampler.hypotheses();
-        for (d, map) in [index, &low, &high].into_iter().enumerate() {
-            // The depth's inverse depth per pixel, once for every camera.
-            let inv: Vec<f32> = map
-                .iter()
-                .map(|&n| hypotheses.inv_depth(f64::from(n)).max(1e-6) as f32)
-                .collect();
-            for (c, image) in images.iter().enumerate() {
-                let channel = 5 + 2 * (d * self.cameras + c);
-                let (gray, sees) = out[channel * plane..(channel + 2) * plane].split_at_mut(plane);
-                let (mean, std) = normalised[c];
-                gray.par_chunks_mut(w)
-                    .zip(sees.par_chunks_mut(w))
-                    .enumerate()
-                    .for_each(|(row, (gray, sees))| {
-                        for col in 0..w {
-                            let p = row * w + col;
-                            if let Some((x, y)) = sampler.project(c, p, inv[p])
-                                && let Some(value) = bilinear(image, f64::from(x), f64::from(y))
-                            {
-                                gray[col] = ((value - mean) / (std + 1e-9)) as f32;
-                                sees[col] = 1.0;
-                            }
-                        }
-                    });
-            }
-        }
-        Ok(out)
+        self.layout.inputs(index, spread, sampler, images)
     }
 
-    /// The candidates' logits `[CANDIDATES, h, w]` for `inputs` `[channels, h, w]`.
+    /// The candidates' logits `[candidates, h, w]` for `inputs` `[channels, h, w]`.
     ///
     /// # Errors
     /// [`NetError::Shape`] for inputs of another size.
     pub fn scores(&self, inputs: &[f32], [h, w]: [usize; 2]) -> Result<Vec<f32>, NetError> {
         let [first, second] = &self.encoder[0];
-        let x = first.run(inputs, [input_channels(self.cameras), h, w])?;
+        let x = first.run(inputs, [self.layout.input_channels(self.cameras), h, w])?;
         let mut x = second.run(&x.0, x.1)?;
         // The output of every level but the coarsest, for the decoder's skips.
         let mut skips: Vec<(Vec<f32>, [usize; 3])> = Vec::with_capacity(3);
@@ -390,41 +735,6 @@ impl PickRefiner {
         }
         Ok(self.head.run(&x.0, x.1)?.0)
     }
-}
-
-/// The answer: each pixel's candidates ([`candidates`] of `index`) weighted by the softmax of
-/// their `logits` `[CANDIDATES, h, w]`.
-pub fn combine(logits: &[f32], index: &[f32], [h, w]: [usize; 2]) -> Vec<f32> {
-    let plane = h * w;
-    let candidates = candidates(index, [h, w]);
-    (0..plane)
-        .map(|p| {
-            let mut best = f32::NEG_INFINITY;
-            for k in 0..CANDIDATES {
-                best = best.max(logits[k * plane + p]);
-            }
-            let (mut num, mut den) = (0f32, 0f32);
-            for k in 0..CANDIDATES {
-                let e = (logits[k * plane + p] - best).exp();
-                num += e * candidates[k * plane + p];
-                den += e;
-            }
-            num / den
-        })
-        .collect()
-}
-
-/// The candidates `[CANDIDATES, h, w]`: the answer, then the minimum and maximum over each of
-/// [`CANDIDATE_RADII`] (wrapping in longitude).
-pub fn candidates(index: &[f32], [h, w]: [usize; 2]) -> Vec<f32> {
-    let mut out = Vec::with_capacity(CANDIDATES * h * w);
-    out.extend_from_slice(index);
-    for radius in CANDIDATE_RADII {
-        let (low, high) = neighbour_min_max(index, [h, w], true, radius);
-        out.extend(low);
-        out.extend(high);
-    }
-    out
 }
 
 /// Mean and (population) standard deviation of an image's values.

@@ -9,12 +9,17 @@
 # SKY_WEIGHT (environment, default 0): sky pixels (the truth's index just below 0 under the reference's
 # rules, where nothing is there) also weigh in the loss with this weight, their target index 0 (the
 # protocol that scores sky); pick-1 trained without them, pick-2 with 0.25.
+# pick-3 (stop 40): PICK_RADII (environment, default "1,2,4") sets the candidates' radii (pick-3:
+# "1,2,4,7,12", eleven candidates), and the safetensors carry the layout in their metadata
+# (candidate_radii, and pick_inputs.py's PICK_DEPTH_RADII and PICK_ZNCC as depth_radii and zncc),
+# which `PickRefiner::from_bytes` reads (absent: pick-1/2's layout).
 # Usage: train_pick.py STEPS TRAIN.npz[,..] VAL.npz[,..] [WIDTH] [OUT.pt] [THREADS]
 import json, os, struct, sys, time
 import numpy as np, torch, torch.nn as nn, torch.nn.functional as F
 from scipy import ndimage
 
-K = 7  # candidates
+RADII = tuple(int(r) for r in os.environ.get("PICK_RADII", "1,2,4").split(","))
+K = 1 + 2 * len(RADII)  # candidates
 SKY_WEIGHT = float(os.environ.get("SKY_WEIGHT", "0"))
 
 
@@ -55,11 +60,12 @@ class UNet(nn.Module):
         return s.head(d0)
 
 
-def cands(v):
-    """v (B, H, W) -> (B, K, H, W): v, and the min / max over 3x3, 5x5, 9x9 (wrapping in longitude)."""
+def cands(v, radii=None):
+    """v (B, H, W) -> (B, K, H, W): v, and the min / max over (2 r + 1)^2 for r in RADII (default
+    3x3, 5x5, 9x9; wrapping in longitude)."""
     out = [v]
-    for k in (3, 5, 9):
-        p = k // 2
+    for r in RADII if radii is None else radii:
+        k, p = 2 * r + 1, r
         vp = np.concatenate([v[..., -p:], v, v[..., :p]], -1)
         out.append(ndimage.minimum_filter(vp, size=(1, k, k), mode="nearest")[..., p:-p])
         out.append(ndimage.maximum_filter(vp, size=(1, k, k), mode="nearest")[..., p:-p])
@@ -70,9 +76,15 @@ def answer(logits, c):
     return (torch.softmax(logits, 1) * c).sum(1)
 
 
-def save_safetensors(net, path):
+def layout():
+    """The inputs' and candidates' layout, as the safetensors' metadata."""
+    return {"candidate_radii": ",".join(map(str, RADII)),
+            "depth_radii": os.environ.get("PICK_DEPTH_RADII", "2"), "zncc": os.environ.get("PICK_ZNCC", "0")}
+
+
+def save_safetensors(net, path, metadata=None):
     tensors = {k: v.detach().float().contiguous().numpy() for k, v in net.state_dict().items()}
-    header, off = {}, 0
+    header, off = ({"__metadata__": metadata} if metadata else {}), 0
     for k, a in tensors.items():
         header[k] = {"dtype": "F32", "shape": list(a.shape), "data_offsets": [off, off + a.nbytes]}
         off += a.nbytes
@@ -128,8 +140,19 @@ def main():
         return "  ".join(res)
 
     n, t0, B, losses = len(tr["v"]), time.time(), 4, []
-    print(0, "s", 0, evaluate(), flush=True)
-    for it in range(1, steps + 1):
+    # Resumable (stop 40): OUT.ckpt holds the step, the optimiser, the schedule and both random
+    # states as of the last weights written; a run started again with the same arguments goes on
+    # from there.
+    ckpt, start = (out + ".ckpt") if out else None, 1
+    if ckpt and os.path.exists(ckpt):
+        st = torch.load(ckpt, weights_only=False)
+        net.load_state_dict(st["net"]); opt.load_state_dict(st["opt"]); sched.load_state_dict(st["sched"])
+        np.random.set_state(st["np_rng"]); torch.set_rng_state(st["torch_rng"])
+        start, t0 = st["step"] + 1, time.time() - st["elapsed"]
+        print("resumed after step", st["step"], flush=True)
+    else:
+        print(0, "s", 0, evaluate(), flush=True)
+    for it in range(start, steps + 1):
         rows = [(np.random.randint(n), np.random.randint(0, 160 - 64 + 1)) for _ in range(B)]
         pick = lambda k: np.stack([tr[k][i, ..., y0:y0 + 64, :] for i, y0 in rows])
         x, c = torch.as_tensor(pick("feats")).float(), torch.as_tensor(pick("cand"))
@@ -146,7 +169,11 @@ def main():
             print(it, "s", f"{time.time() - t0:.0f}", f"loss {np.mean(losses[-1000:]):.3f}", evaluate(), flush=True)
             if out:
                 torch.save(net.state_dict(), out)
-                save_safetensors(net, out.replace(".pt", ".safetensors"))
+                torch.save({"net": net.state_dict(), "opt": opt.state_dict(), "sched": sched.state_dict(),
+                            "np_rng": np.random.get_state(), "torch_rng": torch.get_rng_state(),
+                            "step": it, "elapsed": time.time() - t0}, ckpt + ".tmp")
+                os.replace(ckpt + ".tmp", ckpt)
+                save_safetensors(net, out.replace(".pt", ".safetensors"), layout())
 
 
 if __name__ == "__main__":

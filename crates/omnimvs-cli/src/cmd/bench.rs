@@ -54,8 +54,11 @@ pub struct Args {
     pub burn_convs: bool,
     /// Leave out the learnt pick after the cascade (`omnimvs_net::pick`), which `infer` runs
     /// after the bundled cascade; the bundled pick is timed on each pass's answer otherwise.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "pick")]
     pub no_pick: bool,
+    /// Time this pick's `.safetensors` instead of the bundled one (another layout, say).
+    #[arg(long)]
+    pub pick: Option<std::path::PathBuf>,
     /// Where the sweep runs: the backend's best (host on CPU backends, device on GPUs).
     #[arg(long, value_enum, default_value_t = SweepPlace::Auto)]
     pub sweep: SweepPlace,
@@ -182,10 +185,12 @@ fn bench_cascade(
     device: &burn::tensor::Device,
 ) -> Result<(Forward, Option<TrainStepReport>)> {
     let rig = preset_rig()?;
-    let pick = if args.no_pick {
-        None
-    } else {
-        Some(PickRefiner::bundled()?)
+    let pick = match (&args.pick, args.no_pick) {
+        (_, true) => None,
+        (Some(path), false) => {
+            Some(PickRefiner::load(path).with_context(|| format!("--pick {}", path.display()))?)
+        }
+        (None, false) => Some(PickRefiner::bundled()?),
     };
     let forward = bench_cascade_forward(
         config,
