@@ -7,8 +7,7 @@ use anyhow::bail;
 use anyhow::{Context, Result};
 use burn::tensor::Device;
 use omnimvs_net::NetEstimator;
-use omnimvs_net::bundled::BundledModel;
-use omnimvs_net::pick::PickRefiner;
+use omnimvs_net::bundled::{BundledModel, PickChoice};
 use omnimvs_net::weights::{AnyNet, load_any, load_family};
 use omnimvs_net::{CascadeNet, Family};
 use omnimvs_net::{NetConfig, OmniMvsNet};
@@ -110,55 +109,31 @@ impl Weights {
     }
 }
 
-/// A `--pick` value: the learnt pick after the cascade network (`omnimvs_net::pick`).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Pick {
-    /// The bundled model's own pick after it (the bundled cascade's), none after other weights.
-    Auto,
-    /// No pick.
-    Off,
-    /// A pick's `.safetensors`, trained on the answers of the network it runs after.
-    File(PathBuf),
+/// `clap`'s reader of a `--pick` value (the learnt pick after the cascade network,
+/// `omnimvs_net::pick`): `auto`, `off` or a path.
+pub fn parse_pick(text: &str) -> Result<PickChoice, String> {
+    Ok(PickChoice::parse(text))
 }
 
-impl Pick {
-    /// Reads a `--pick` value: `auto`, `off` or a path.
-    pub fn parse(text: &str) -> Result<Self, String> {
-        Ok(match text {
-            "auto" => Self::Auto,
-            "off" => Self::Off,
-            path => Self::File(PathBuf::from(path)),
-        })
-    }
-
-    /// `estimator` with the pick this value gives after `weights`' network.
-    ///
-    /// # Errors
-    /// A pick file that cannot be read or does not fit the rig, or one named after the paper's
-    /// network.
-    pub fn apply(&self, weights: &Weights, estimator: NetEstimator) -> Result<NetEstimator> {
-        let pick = match (self, weights) {
-            (Self::Auto, Weights::Bundled(model)) => model.pick()?,
-            (Self::Auto | Self::Off, _) => None,
-            (Self::File(path), _) => Some(
-                PickRefiner::load(path).with_context(|| format!("--pick {}", path.display()))?,
-            ),
-        };
-        Ok(match pick {
-            Some(pick) => estimator.with_pick(pick).context("--pick")?,
+/// `estimator` with the pick that `pick` gives after `weights`' network.
+///
+/// # Errors
+/// A pick file that cannot be read or does not fit the rig.
+pub fn apply_pick(
+    pick: &PickChoice,
+    weights: &Weights,
+    estimator: NetEstimator,
+) -> Result<NetEstimator> {
+    let model = match weights {
+        Weights::Bundled(model) => Some(*model),
+        _ => None,
+    };
+    Ok(
+        match pick.load(model).with_context(|| format!("--pick {pick}"))? {
+            Some(refiner) => estimator.with_pick(refiner).context("--pick")?,
             None => estimator,
-        })
-    }
-}
-
-impl std::fmt::Display for Pick {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::Auto => f.write_str("auto"),
-            Self::Off => f.write_str("off"),
-            Self::File(path) => write!(f, "{}", path.display()),
-        }
-    }
+        },
+    )
 }
 
 impl std::fmt::Display for Weights {

@@ -124,3 +124,48 @@ mod tests {
         assert_eq!(BundledModel::from_name("paper"), None);
     }
 }
+
+/// Which learnt pick runs after a network (`omnimvs infer --pick`, Python's `pick=`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PickChoice {
+    /// The bundled model's own pick after it (the bundled cascade's), none after other weights.
+    Auto,
+    /// No pick.
+    Off,
+    /// A pick's `.safetensors`, trained on the answers of the network it runs after.
+    File(std::path::PathBuf),
+}
+
+impl PickChoice {
+    /// Reads `auto`, `off` or a path.
+    pub fn parse(text: &str) -> Self {
+        match text {
+            "auto" => Self::Auto,
+            "off" => Self::Off,
+            path => Self::File(path.into()),
+        }
+    }
+
+    /// The pick this choice gives after `model` (`None`: weights that are not a bundled
+    /// model's).
+    ///
+    /// # Errors
+    /// [`NetError`] for a pick file that cannot be read or is not a pick's.
+    pub fn load(&self, model: Option<BundledModel>) -> Result<Option<PickRefiner>, NetError> {
+        match (self, model) {
+            (Self::Auto, Some(model)) => model.pick(),
+            (Self::Auto | Self::Off, _) => Ok(None),
+            (Self::File(path), _) => PickRefiner::load(path).map(Some),
+        }
+    }
+}
+
+impl std::fmt::Display for PickChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Auto => f.write_str("auto"),
+            Self::Off => f.write_str("off"),
+            Self::File(path) => write!(f, "{}", path.display()),
+        }
+    }
+}

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use numpy::PyArray2;
 use omnimvs_data::{DepthEstimator, Finishing};
-use omnimvs_net::bundled::BundledModel;
+use omnimvs_net::bundled::{BundledModel, PickChoice};
 use omnimvs_net::pick::PickRefiner;
 use omnimvs_net::weights::{AnyNet, common_image_size, load_family};
 use omnimvs_net::{Backend, NetConfig, NetEstimator};
@@ -27,16 +27,9 @@ fn bundled_model(weights: Option<&Path>) -> Option<BundledModel> {
 /// The learnt pick after the cascade as `omnimvs infer --pick` chooses it: `"auto"` the bundled
 /// model's own (the bundled cascade's), `"off"` none, or a pick's `.safetensors`.
 fn load_pick(pick: &str, weights: Option<&Path>) -> PyResult<Option<PickRefiner>> {
-    match pick {
-        "auto" => match bundled_model(weights) {
-            Some(model) => model.pick().py_err(),
-            None => Ok(None),
-        },
-        "off" => Ok(None),
-        path => PickRefiner::load(Path::new(path))
-            .map(Some)
-            .map_err(|e| with_context(format!("pick {path}: "), &e)),
-    }
+    PickChoice::parse(pick)
+        .load(bundled_model(weights))
+        .map_err(|e| with_context(format!("pick {pick}: "), &e))
 }
 
 /// Loads the network as `omnimvs infer --weights` does: a bundled model (the default one, the

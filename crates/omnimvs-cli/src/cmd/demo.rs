@@ -26,7 +26,8 @@ use omnimvs_synth::{DatasetWriter, SceneKind, Shard, SynthOptions};
 
 use crate::args::Size;
 use crate::cmd::{eval, infer, sgm};
-use crate::weights::{Pick, Weights};
+use crate::weights::{Weights, apply_pick};
+use omnimvs_net::bundled::PickChoice;
 
 /// Run the whole pipeline on a rendered scene (no data needed) and print its metrics.
 ///
@@ -88,7 +89,7 @@ fn networks(ds: &Dataset) -> Result<Vec<Network>> {
                 false,
             )?;
             infer::report_cache(status);
-            let estimator = Pick::Auto.apply(&weights, estimator)?;
+            let estimator = apply_pick(&PickChoice::Auto, &weights, estimator)?;
             Ok(Network { weights, estimator })
         })
         .collect()

@@ -14,7 +14,8 @@ use omnimvs_stereo::{SgmEstimator, SgmParams};
 use omnimvs_sweep::{LutCache, SweepSpec};
 
 use crate::args::{BACKEND_HELP, Method, Preset, SweepArgs, parse_backend};
-use crate::weights::{BUNDLED, Pick, Weights};
+use crate::weights::{BUNDLED, Weights, apply_pick, parse_pick};
+use omnimvs_net::bundled::PickChoice;
 
 /// Evaluate methods against ground truth with the paper's metrics.
 ///
@@ -52,8 +53,8 @@ pub struct Args {
     pub preset: Preset,
     /// The learnt pick after the cascade, as `infer --pick`: `auto` (the bundled cascade's own
     /// after the bundled cascade), `off`, or a pick's .safetensors (after every cascade row).
-    #[arg(long, value_name = "auto|off|FILE", default_value = "auto", value_parser = Pick::parse)]
-    pub pick: Pick,
+    #[arg(long, value_name = "auto|off|FILE", default_value = "auto", value_parser = parse_pick)]
+    pub pick: PickChoice,
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
     pub frames: FrameRange,
@@ -89,7 +90,7 @@ pub fn rows(
     ds: &Dataset,
     methods: &[Method],
     weights: &[Weights],
-    pick: &Pick,
+    pick: &PickChoice,
     preset: Preset,
     backend: &omnimvs_net::Backend,
     spec: SweepSpec,
@@ -108,7 +109,7 @@ pub fn rows(
                         device.clone(),
                         backend.is_gpu(),
                     )?;
-                    let estimator = pick.apply(w, estimator)?;
+                    let estimator = apply_pick(pick, w, estimator)?;
                     let stem = w.stem();
                     rows.push(Row {
                         name: if weights.len() > 1 {

@@ -12,7 +12,8 @@ use omnimvs_net::{Backend, NetEstimator};
 use omnimvs_sweep::{CacheStatus, GrayImage, LutCache};
 
 use crate::args::{BACKEND_HELP, Preset, Size, parse_backend};
-use crate::weights::{BUNDLED, Pick, Weights};
+use crate::weights::{BUNDLED, Weights, apply_pick, parse_pick};
+use omnimvs_net::bundled::PickChoice;
 
 /// Estimate 360-degree inverse depth with the OmniMVS network.
 ///
@@ -75,8 +76,8 @@ pub struct Args {
     /// there (`omnimvs_net::pick`). `auto` (the default): the bundled cascade's own pick after
     /// the bundled cascade, none after other weights; `off`; or a pick's .safetensors trained
     /// on the answers of the --weights network. infer.json records whether one ran.
-    #[arg(long, value_name = "auto|off|FILE", default_value = "auto", value_parser = Pick::parse)]
-    pub pick: Pick,
+    #[arg(long, value_name = "auto|off|FILE", default_value = "auto", value_parser = parse_pick)]
+    pub pick: PickChoice,
     /// Leave the pixels whose uncertainty (the entropy written to %05d_entropy.tiff, nats) is
     /// above this without an answer: NaN in the maps, left out of the point cloud; the
     /// metrics score the others and report their share as coverage (as `sgm
@@ -293,7 +294,7 @@ pub fn run(args: &Args) -> Result<()> {
         args.backend.is_gpu(),
     )?;
     report_cache(status);
-    let mut inference = args.pick.apply(&args.weights, inference)?;
+    let mut inference = apply_pick(&args.pick, &args.weights, inference)?;
     if let Some(order) = &args.order {
         inference.set_order(order)?;
     }
