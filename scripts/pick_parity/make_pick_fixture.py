@@ -43,40 +43,33 @@ def synthetic_answer(h, w):
     return v.astype(np.float32), spread.astype(np.float32)
 
 
+def random_pick(out, weights_name, io_name, seed, channels, size, metadata=None):
+    """A U-Net of width 2 with seeded random weights (tp.K candidates) and, for a random input of
+    `channels` x `size`, its logits, a random index map and the pick's answer."""
+    torch.manual_seed(seed)
+    net = tp.UNet(channels, 2)
+    with torch.no_grad():
+        for p in net.parameters():
+            p.copy_(torch.randn_like(p) * 0.3)
+    tp.save_safetensors(net, os.path.join(out, weights_name), metadata)
+    x = torch.randn(1, channels, *size)
+    index = (torch.rand(1, *size) * 191.0).numpy().astype(np.float32)
+    with torch.no_grad():
+        logits = net(x)
+        ans = tp.answer(logits, torch.as_tensor(tp.cands(index)))
+    write(os.path.join(out, io_name), {"input": x[0].numpy(), "logits": logits[0].numpy(),
+                                       "index": index[0], "answer": ans[0].numpy()})
+
+
 def main():
     out = sys.argv[1]
     samples = sys.argv[2] if len(sys.argv) > 2 else os.path.join(here, "../../../shared/data/omnimvs-samples")
     os.makedirs(out, exist_ok=True)
-    torch.manual_seed(7)
-    net = tp.UNet(11, 2)
-    with torch.no_grad():
-        for p in net.parameters():
-            p.copy_(torch.randn_like(p) * 0.3)
-    tp.save_safetensors(net, os.path.join(out, "pick_tiny.safetensors"))
-    x = torch.randn(1, 11, 16, 64)
-    index = (torch.rand(1, 16, 64) * 191.0).numpy().astype(np.float32)
-    with torch.no_grad():
-        logits = net(x)
-        ans = tp.answer(logits, torch.as_tensor(tp.cands(index)))
-    write(os.path.join(out, "io.safetensors"), {"input": x[0].numpy(), "logits": logits[0].numpy(),
-                                                "index": index[0], "answer": ans[0].numpy()})
-
+    random_pick(out, "pick_tiny.safetensors", "io.safetensors", 7, 11, (16, 64))
     # pick-3's layout.
     tp.RADII, tp.K = (1, 2, 4, 7, 12), 11
-    torch.manual_seed(8)
-    net = tp.UNet(28, 2)
-    with torch.no_grad():
-        for p in net.parameters():
-            p.copy_(torch.randn_like(p) * 0.3)
-    tp.save_safetensors(net, os.path.join(out, "pick_tiny3.safetensors"),
-                        {"candidate_radii": "1,2,4,7,12", "depth_radii": "2,12", "zncc": "5"})
-    x = torch.randn(1, 28, 32, 64)
-    index = (torch.rand(1, 32, 64) * 191.0).numpy().astype(np.float32)
-    with torch.no_grad():
-        logits = net(x)
-        ans = tp.answer(logits, torch.as_tensor(tp.cands(index)))
-    write(os.path.join(out, "io3.safetensors"), {"input": x[0].numpy(), "logits": logits[0].numpy(),
-                                                 "index": index[0], "answer": ans[0].numpy()})
+    random_pick(out, "pick_tiny3.safetensors", "io3.safetensors", 8, 28, (32, 64),
+                {"candidate_radii": "1,2,4,7,12", "depth_radii": "2,12", "zncc": "5"})
 
     ds = os.path.join(samples, "itbt_sample")
     cfg, cams, md = pi.o.load(ds)

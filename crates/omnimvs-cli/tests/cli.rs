@@ -409,8 +409,11 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
     assert!(picked && !not_picked);
     let size = [without.height, without.width];
     assert_eq!(size, [160, 640]);
-    // Every answer is one of the candidates' blend: within the 9 x 9 extremes of the network's.
-    let (low, high) = omnimvs_data::edges::neighbour_min_max(&without.data, size, true, 4);
+    // Every answer is one of the candidates' blend: within the extremes of the network's over
+    // the bundled pick's widest window.
+    let bundled = omnimvs_net::pick::PickRefiner::bundled().unwrap();
+    let radius = *bundled.layout().candidate_radii.iter().max().unwrap();
+    let (low, high) = omnimvs_data::edges::neighbour_min_max(&without.data, size, true, radius);
     let (mut moved, mut change) = (0, 0.0);
     for (p, (&a, &b)) in with.data.iter().zip(&without.data).enumerate() {
         assert!(a >= low[p] - 1e-3 && a <= high[p] + 1e-3, "pixel {p}: {a}");
