@@ -385,8 +385,14 @@ fn box_sum(a: &mut [f64], [h, w]: [usize; 2], k: usize, scratch: &mut [f64]) {
     let mut line = vec![0f64; w + 2 * r];
     for y in 0..h {
         let row = &a[y * w..(y + 1) * w];
-        for (i, v) in line.iter_mut().enumerate() {
-            *v = row[(i + w * (r / w + 1) - r) % w];
+        if r < w {
+            line[..r].copy_from_slice(&row[w - r..]);
+            line[r..r + w].copy_from_slice(row);
+            line[r + w..].copy_from_slice(&row[..r]);
+        } else {
+            for (i, v) in line.iter_mut().enumerate() {
+                *v = row[(i + w * (r / w + 1) - r) % w];
+            }
         }
         let out = &mut scratch[y * w..(y + 1) * w];
         let mut s: f64 = line[..k].iter().sum();
