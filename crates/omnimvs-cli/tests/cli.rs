@@ -387,7 +387,7 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
     let dir = tempfile::tempdir().unwrap();
     let itbt = samples().join("itbt_sample");
     let run = |pick: &str| {
-        let out = dir.path().join(format!("pick-{pick}"));
+        let out = dir.path().join(format!("pick-{}", pick.replace('/', "_")));
         let o = omnimvs(&[
             "infer",
             itbt.to_str().unwrap(),
@@ -429,4 +429,20 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
         "{moved} of {pixels} moved"
     );
     assert!(change < 3.0, "mean change {change}");
+    // A pick of another layout (stop 40's pick-3: eleven candidates up to the 25 x 25 extremes,
+    // its layout in the file's metadata) by path: within its own widest extremes, and not the
+    // bundled pick's answer.
+    let pick3 = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models/training/pick-3/pick3.safetensors");
+    let (picked3, with3) = run(pick3.to_str().unwrap());
+    assert!(picked3);
+    let (low, high) = omnimvs_data::edges::neighbour_min_max(&without.data, size, true, 12);
+    for (p, &a) in with3.data.iter().enumerate() {
+        assert!(a >= low[p] - 1e-3 && a <= high[p] + 1e-3, "pixel {p}: {a}");
+    }
+    assert!(max_abs_difference(&with3.data, &with.data) > 1.0);
+}
+
+fn max_abs_difference(a: &[f32], b: &[f32]) -> f32 {
+    a.iter().zip(b).fold(0f32, |m, (x, y)| m.max((x - y).abs()))
 }
