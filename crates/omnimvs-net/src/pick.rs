@@ -28,10 +28,12 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use omnimvs_data::edges::neighbour_min_max;
+use omnimvs_stereo::camera_pairs;
 use omnimvs_sweep::GrayImage;
 use rayon::prelude::*;
 
 use crate::cascade::PixelSampler;
+use crate::cascade::photo::box_sum;
 use crate::error::NetError;
 use crate::hostconv::{HostConv, Padding};
 
@@ -162,23 +164,32 @@ impl PickLayout {
 
     /// The candidates `[candidates(), h, w]`: the answer, then the minimum and maximum over
     /// each of `candidate_radii` (wrapping in longitude).
-    pub fn candidate_maps(&self, index: &[f32], [h, w]: [usize; 2]) -> Vec<f32> {
-        let mut out = Vec::with_capacity(self.candidates() * h * w);
+    pub fn candidate_maps(&self, index: &[f32], size: [usize; 2]) -> Vec<f32> {
+        self.candidates_from(index, &extremes(index, size, &self.candidate_radii))
+    }
+
+    /// [`Self::candidate_maps`] from the extremes of every radius it needs.
+    fn candidates_from(&self, index: &[f32], extremes: &Extremes) -> Vec<f32> {
+        let mut out = Vec::with_capacity(self.candidates() * index.len());
         out.extend_from_slice(index);
-        for &radius in &self.candidate_radii {
-            let (low, high) = neighbour_min_max(index, [h, w], true, radius);
-            out.extend(low);
-            out.extend(high);
+        for radius in &self.candidate_radii {
+            let (low, high) = &extremes[radius];
+            out.extend_from_slice(low);
+            out.extend_from_slice(high);
         }
         out
     }
 
     /// The answer: each pixel's candidates ([`Self::candidate_maps`] of `index`) weighted by
     /// the softmax of their `logits` `[candidates(), h, w]`.
-    pub fn combine(&self, logits: &[f32], index: &[f32], [h, w]: [usize; 2]) -> Vec<f32> {
-        let plane = h * w;
+    pub fn combine(&self, logits: &[f32], index: &[f32], size: [usize; 2]) -> Vec<f32> {
+        self.combine_candidates(logits, &self.candidate_maps(index, size))
+    }
+
+    /// [`Self::combine`] of the candidate maps themselves.
+    fn combine_candidates(&self, logits: &[f32], candidates: &[f32]) -> Vec<f32> {
         let count = self.candidates();
-        let candidates = self.candidate_maps(index, [h, w]);
+        let plane = candidates.len() / count;
         (0..plane)
             .map(|p| {
                 let mut best = f32::NEG_INFINITY;
@@ -209,34 +220,24 @@ impl PickLayout {
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
+        let size = check_sizes(index, spread, sampler, images)?;
+        let extremes = extremes(index, size, &self.depth_radii);
+        Ok(self.inputs_from(index, spread, sampler, images, &extremes))
+    }
+
+    /// [`Self::inputs`] of maps and images of the right sizes, from the extremes of every radius
+    /// it needs.
+    fn inputs_from(
+        &self,
+        index: &[f32],
+        spread: &[f32],
+        sampler: &PixelSampler,
+        images: &[GrayImage],
+        extremes: &Extremes,
+    ) -> Vec<f32> {
         let (h, w) = (sampler.grid().height, sampler.grid().width);
         let plane = h * w;
-        if index.len() != plane || spread.len() != plane {
-            return Err(NetError::Shape {
-                what: "pick: index and spread maps".into(),
-                expected: vec![h, w],
-                actual: vec![index.len(), spread.len()],
-            });
-        }
-        let cameras = sampler.num_cameras();
-        if images.len() != cameras {
-            return Err(NetError::Shape {
-                what: "pick: an image per camera of the rig".into(),
-                expected: vec![cameras],
-                actual: vec![images.len()],
-            });
-        }
-        for (camera, image) in images.iter().enumerate() {
-            let (width, height) = sampler.image_size(camera);
-            let size = [height as usize, width as usize];
-            if size != [image.height, image.width] {
-                return Err(NetError::Shape {
-                    what: "pick: an image of its camera's size".into(),
-                    expected: size.to_vec(),
-                    actual: vec![image.height, image.width],
-                });
-            }
-        }
+        let cameras = images.len();
         let mut out = vec![0f32; self.input_channels(cameras) * plane];
         out[..plane]
             .iter_mut()
@@ -246,9 +247,9 @@ impl PickLayout {
             .iter_mut()
             .zip(spread)
             .for_each(|(o, &s)| *o = s / 30.0);
-        let mut depths: Vec<Vec<f32>> = vec![index.to_vec()];
-        for (i, &radius) in self.depth_radii.iter().enumerate() {
-            let (low, high) = neighbour_min_max(index, [h, w], true, radius);
+        let mut depths: Vec<&[f32]> = vec![index];
+        for (i, radius) in self.depth_radii.iter().enumerate() {
+            let (low, high) = &extremes[radius];
             let channel = 2 + 3 * i;
             for p in 0..plane {
                 let (v, m, big_m) = (index[p], low[p], high[p]);
@@ -289,10 +290,9 @@ impl PickLayout {
             }
         }
         if self.zncc > 0 {
-            let sampled = first;
             let zncc_first = first + 2 * cameras * depths.len();
             let (head, tail) = out.split_at_mut(zncc_first * plane);
-            let head = &head[sampled * plane..];
+            let head = &head[first * plane..];
             tail.par_chunks_mut(2 * plane)
                 .enumerate()
                 .for_each(|(d, pair)| {
@@ -301,8 +301,60 @@ impl PickLayout {
                     zncc_of_cameras(channels, cameras, [h, w], self.zncc, mean, fraction);
                 });
         }
-        Ok(out)
+        out
     }
+}
+
+/// The minimum and maximum of the answers around each pixel, by radius (wrapping in longitude).
+type Extremes = HashMap<usize, (Vec<f32>, Vec<f32>)>;
+
+/// [`Extremes`] of `index` for each of `radii`, each radius once.
+fn extremes(index: &[f32], size: [usize; 2], radii: &[usize]) -> Extremes {
+    let mut out = Extremes::new();
+    for &radius in radii {
+        out.entry(radius)
+            .or_insert_with(|| neighbour_min_max(index, size, true, radius));
+    }
+    out
+}
+
+/// The grid's `[h, w]` when `index` and `spread` cover the sampler's grid and `images` are one
+/// per camera of the camera's size.
+fn check_sizes(
+    index: &[f32],
+    spread: &[f32],
+    sampler: &PixelSampler,
+    images: &[GrayImage],
+) -> Result<[usize; 2], NetError> {
+    let (h, w) = (sampler.grid().height, sampler.grid().width);
+    let plane = h * w;
+    if index.len() != plane || spread.len() != plane {
+        return Err(NetError::Shape {
+            what: "pick: index and spread maps".into(),
+            expected: vec![h, w],
+            actual: vec![index.len(), spread.len()],
+        });
+    }
+    let cameras = sampler.num_cameras();
+    if images.len() != cameras {
+        return Err(NetError::Shape {
+            what: "pick: an image per camera of the rig".into(),
+            expected: vec![cameras],
+            actual: vec![images.len()],
+        });
+    }
+    for (camera, image) in images.iter().enumerate() {
+        let (width, height) = sampler.image_size(camera);
+        let size = [height as usize, width as usize];
+        if size != [image.height, image.width] {
+            return Err(NetError::Shape {
+                what: "pick: an image of its camera's size".into(),
+                expected: size.to_vec(),
+                actual: vec![image.height, image.width],
+            });
+        }
+    }
+    Ok([h, w])
 }
 
 /// Mean ZNCC over the camera pairs that count and the fraction that count ([`PickLayout`]'s
@@ -316,9 +368,7 @@ fn zncc_of_cameras(
     fraction: &mut [f32],
 ) {
     let plane = h * w;
-    let pairs: Vec<(usize, usize)> = (0..cameras)
-        .flat_map(|i| (i + 1..cameras).map(move |j| (i, j)))
-        .collect();
+    let pairs = camera_pairs(cameras);
     let window = (k * k) as f64;
     // Per pair: the sum of ZNCC where it counts, and where it counts.
     let per_pair: Vec<(Vec<f64>, Vec<f64>)> = pairs
@@ -340,11 +390,7 @@ fn zncc_of_cameras(
                 sums[4][p] = m * y * y;
                 sums[5][p] = m * x * y;
             }
-            let mut scratch = vec![0f64; plane];
-            for sum in &mut sums {
-                box_sum(sum, [h, w], k, &mut scratch);
-            }
-            let [n, sa, sb, saa, sbb, sab] = &sums;
+            let [n, sa, sb, saa, sbb, sab] = sums.map(|sum| box_sum(&sum, h, w, k / 2));
             let mut z_sum = vec![0f64; plane];
             let mut counted = vec![0f64; plane];
             for p in 0..plane {
@@ -375,54 +421,6 @@ fn zncc_of_cameras(
             };
             *fraction = (count / total) as f32;
         });
-}
-
-/// In place, the sum over the `k x k` pixels around each pixel of `a` `[h, w]`: columns wrap,
-/// rows stop at the border. `scratch` holds `h * w` values.
-fn box_sum(a: &mut [f64], [h, w]: [usize; 2], k: usize, scratch: &mut [f64]) {
-    let r = k / 2;
-    // Along each row (wrapping), into scratch.
-    let mut line = vec![0f64; w + 2 * r];
-    for y in 0..h {
-        let row = &a[y * w..(y + 1) * w];
-        if r < w {
-            line[..r].copy_from_slice(&row[w - r..]);
-            line[r..r + w].copy_from_slice(row);
-            line[r + w..].copy_from_slice(&row[..r]);
-        } else {
-            for (i, v) in line.iter_mut().enumerate() {
-                *v = row[(i + w * (r / w + 1) - r) % w];
-            }
-        }
-        let out = &mut scratch[y * w..(y + 1) * w];
-        let mut s: f64 = line[..k].iter().sum();
-        for x in 0..w {
-            out[x] = s;
-            if x + 1 < w {
-                s += line[x + k] - line[x];
-            }
-        }
-    }
-    // Along each column (rows cut at the border), a running sum of whole rows, back into a.
-    let mut acc = vec![0f64; w];
-    for y in 0..=r.min(h - 1) {
-        acc.iter_mut()
-            .zip(&scratch[y * w..(y + 1) * w])
-            .for_each(|(s, v)| *s += v);
-    }
-    for y in 0..h {
-        a[y * w..(y + 1) * w].copy_from_slice(&acc);
-        if y + r + 1 < h {
-            acc.iter_mut()
-                .zip(&scratch[(y + r + 1) * w..(y + r + 2) * w])
-                .for_each(|(s, v)| *s += v);
-        }
-        if y >= r {
-            acc.iter_mut()
-                .zip(&scratch[(y - r) * w..(y - r + 1) * w])
-                .for_each(|(s, v)| *s -= v);
-        }
-    }
 }
 
 /// The bundled pick, trained on the bundled cascade's answers (`models/omnimvs-cascade-pick.safetensors`).
@@ -691,10 +689,39 @@ impl PickRefiner {
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
-        let size = [sampler.grid().height, sampler.grid().width];
-        let inputs = self.inputs(index, spread, sampler, images)?;
+        let size = self.check(index, spread, sampler, images)?;
+        // Each radius's extremes once, for the inputs and the candidates alike.
+        let layout = &self.layout;
+        let radii: Vec<usize> = layout
+            .candidate_radii
+            .iter()
+            .chain(&layout.depth_radii)
+            .copied()
+            .collect();
+        let extremes = extremes(index, size, &radii);
+        let inputs = layout.inputs_from(index, spread, sampler, images, &extremes);
         let logits = self.scores(&inputs, size)?;
-        Ok(self.layout.combine(&logits, index, size))
+        Ok(layout.combine_candidates(&logits, &layout.candidates_from(index, &extremes)))
+    }
+
+    /// The grid's `[h, w]` when the rig has this pick's cameras and the maps and images fit
+    /// (the errors of [`Self::inputs`]).
+    fn check(
+        &self,
+        index: &[f32],
+        spread: &[f32],
+        sampler: &PixelSampler,
+        images: &[GrayImage],
+    ) -> Result<[usize; 2], NetError> {
+        let cameras = sampler.num_cameras();
+        if cameras != self.cameras || images.len() != self.cameras {
+            return Err(NetError::Shape {
+                what: "pick: cameras of the rig and images".into(),
+                expected: vec![self.cameras],
+                actual: vec![cameras, images.len()],
+            });
+        }
+        check_sizes(index, spread, sampler, images)
     }
 
     /// The input channels `[channels, h, w]` ([`PickLayout::inputs`]).
@@ -708,15 +735,11 @@ impl PickRefiner {
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
-        let cameras = sampler.num_cameras();
-        if cameras != self.cameras || images.len() != self.cameras {
-            return Err(NetError::Shape {
-                what: "pick: cameras of the rig and images".into(),
-                expected: vec![self.cameras],
-                actual: vec![cameras, images.len()],
-            });
-        }
-        self.layout.inputs(index, spread, sampler, images)
+        let size = self.check(index, spread, sampler, images)?;
+        let extremes = extremes(index, size, &self.layout.depth_radii);
+        Ok(self
+            .layout
+            .inputs_from(index, spread, sampler, images, &extremes))
     }
 
     /// The candidates' logits `[candidates, h, w]` for `inputs` `[channels, h, w]`.

@@ -420,9 +420,13 @@ fn sample_plane(coords: &[f32], image: &[f32], rows: usize, cols: usize) -> (Vec
 }
 
 /// Window sums of a `h x w` map over `(2 r + 1)^2` windows: rows beyond the top and bottom
-/// are not there (clipped), columns wrap around (longitude is a ring).
-fn box_sum(map: &[f32], h: usize, w: usize, r: usize) -> Vec<f32> {
-    let mut vertical = vec![0f32; h * w];
+/// are not there (clipped), columns wrap around (longitude is a ring). `f32` here; the learnt
+/// pick's ZNCC (`crate::pick`) sums in `f64`.
+pub(crate) fn box_sum<T>(map: &[T], h: usize, w: usize, r: usize) -> Vec<T>
+where
+    T: Copy + Default + std::ops::AddAssign,
+{
+    let mut vertical = vec![T::default(); h * w];
     for y in 0..h {
         let dst = &mut vertical[y * w..(y + 1) * w];
         for src in y.saturating_sub(r)..(y + r + 1).min(h) {
@@ -434,8 +438,8 @@ fn box_sum(map: &[f32], h: usize, w: usize, r: usize) -> Vec<f32> {
     // Along each row, through a copy with `r` columns of the other end on each side, one
     // offset of the window at a time over the whole row (vectorised): every sum still adds
     // its window's values from left to right, as modulo indexing would.
-    let mut out = vec![0f32; h * w];
-    let mut ring = vec![0f32; w + 2 * r];
+    let mut out = vec![T::default(); h * w];
+    let mut ring = vec![T::default(); w + 2 * r];
     for (row, dst) in vertical.chunks_exact(w).zip(out.chunks_exact_mut(w)) {
         if w >= r {
             ring[..r].copy_from_slice(&row[w - r..]);
