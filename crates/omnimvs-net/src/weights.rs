@@ -258,6 +258,8 @@ pub fn load_cascade_grown(
     shrunk.cascade.zncc_cue = saved.cascade.zncc_cue;
     shrunk.cascade.coarse_cue_sgm = saved.cascade.coarse_cue_sgm;
     shrunk.cascade.mid_cue_sgm = saved.cascade.mid_cue_sgm;
+    // No weight depends on the aggregation of the coarse distribution.
+    shrunk.cascade.coarse_score_sgm = saved.cascade.coarse_score_sgm;
     shrunk.cascade.convex_upsampling = saved.cascade.convex_upsampling;
     shrunk.cascade.convex_upsampling_full = saved.cascade.convex_upsampling_full;
     // The refinement stages' hypothesis spacing: no weight depends on it.

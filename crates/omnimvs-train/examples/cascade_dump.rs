@@ -2,6 +2,7 @@
 //! per frame, `FRAME_<name>.f32` raw little-endian `f32` files and one `FRAME.json` with their
 //! shapes: the coarse, half- and full-resolution index maps (`coarse`, `half`, `full`), the full
 //! stage's hypotheses and its distribution over them (`full_hyp`, `full_prob`, `[K, H, W]`), and
+//! the coarse stage's spheres and distribution (`coarse_hyp`, `coarse_prob`, `[K, H, W]`, stop 41),
 //! the ground truth on the output grid (`gt`, with `valid` as 0 / 1); `full_even` in the JSON is
 //! how many of the full stage's hypotheses are evenly spaced (the first ones).
 //!
@@ -64,17 +65,19 @@ fn main() {
                 vec![h, w],
             );
         }
-        let [_, k, h, w] = full.prob.dims();
-        put(
-            "full_hyp",
-            read_values(full.hypotheses.clone(), "hyp").unwrap(),
-            vec![k, h, w],
-        );
-        put(
-            "full_prob",
-            read_values(full.prob.clone(), "prob").unwrap(),
-            vec![k, h, w],
-        );
+        for (name, stage) in [("coarse", coarse), ("full", full)] {
+            let [_, k, h, w] = stage.prob.dims();
+            put(
+                &format!("{name}_hyp"),
+                read_values(stage.hypotheses.clone(), "hyp").unwrap(),
+                vec![k, h, w],
+            );
+            put(
+                &format!("{name}_prob"),
+                read_values(stage.prob.clone(), "prob").unwrap(),
+                vec![k, h, w],
+            );
+        }
         let gt = &sample.gt;
         put("gt", gt.index.clone(), vec![gt.height, gt.width]);
         put(
