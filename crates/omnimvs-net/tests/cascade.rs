@@ -42,6 +42,22 @@ fn micro_tensors(config: &NetConfig, device: &Device) -> Vec<burn::tensor::Tenso
         .collect()
 }
 
+/// A micro cascade with random weights on the published rig, its geometry and the micro images.
+fn micro_net() -> (
+    NetConfig,
+    CascadeNet,
+    CascadeGeometry,
+    Vec<burn::tensor::Tensor<4>>,
+) {
+    let (rig, hyps) = sunny_rig();
+    let config = micro_config();
+    let device = Device::flex();
+    let net = CascadeNet::new(&config, &device).unwrap();
+    let geometry = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
+    let images = micro_tensors(&config, &device);
+    (config, net, geometry, images)
+}
+
 #[test]
 fn per_pixel_positions_equal_the_lookup_table_on_its_spheres() {
     let (rig, hyps) = sunny_rig();
@@ -83,12 +99,7 @@ fn per_pixel_positions_equal_the_lookup_table_on_its_spheres() {
 
 #[test]
 fn stages_have_the_expected_shapes_and_stay_in_range() {
-    let (rig, hyps) = sunny_rig();
-    let config = micro_config();
-    let device = Device::flex();
-    let net = CascadeNet::new(&config, &device).unwrap();
-    let geometry = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
-    let learner_images = micro_tensors(&config, &device);
+    let (config, net, geometry, learner_images) = micro_net();
     let out = net.forward(&learner_images, &geometry).unwrap();
     let sizes = config.cascade_sizes();
     let ks = [
@@ -115,12 +126,7 @@ fn stages_have_the_expected_shapes_and_stay_in_range() {
 
 #[test]
 fn the_coarse_distribution_is_aggregated_at_inference_only_when_asked() {
-    let (rig, hyps) = sunny_rig();
-    let config = micro_config();
-    let device = Device::flex();
-    let net = CascadeNet::new(&config, &device).unwrap();
-    let geometry = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
-    let images = micro_tensors(&config, &device);
+    let (config, net, geometry, images) = micro_net();
     let plain = net.forward(&images, &geometry).unwrap();
     let mut aggregated_config = config.clone();
     aggregated_config.cascade.coarse_score_sgm = Some(omnimvs_net::config::ScoreSgm {
@@ -325,12 +331,7 @@ fn a_window_of_longitudes_gives_the_same_answer_inside_it() {
     // The refinement stages on a window see the same centres as on the whole panorama (the
     // coarse stage always runs whole), so inside the window, away from its edges (where the
     // convolutions wrap around the window instead of the panorama), the index agrees.
-    let (rig, hyps) = sunny_rig();
-    let config = micro_config();
-    let device = Device::flex();
-    let net = CascadeNet::new(&config, &device).unwrap();
-    let geometry = CascadeGeometry::new(&rig, &config, &hyps, &device).unwrap();
-    let images = micro_tensors(&config, &device);
+    let (config, net, geometry, images) = micro_net();
     let whole = net.forward(&images, &geometry).unwrap();
     let window = ColumnWindow {
         start: 20,

@@ -21,10 +21,11 @@ use std::sync::OnceLock;
 
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_stereo::params::{COST_SCALE, Directions, cost_units};
-use omnimvs_stereo::{CostVolume, SgmParams, ZNCC_VARIANCE_EPS, aggregate, camera_pairs};
+use omnimvs_stereo::{ZNCC_VARIANCE_EPS, camera_pairs};
 use rayon::prelude::*;
 
 use super::model::read_values;
+use super::score_sgm::aggregate_eight;
 use crate::error::NetError;
 use crate::taps::{SweepGrid, bilinear_taps};
 
@@ -262,23 +263,10 @@ impl AggregatedCue {
                 *cost = cost_units((1.0 - zncc) * 0.5);
             }
         }
-        let volume = CostVolume {
-            height: h,
-            width: w,
-            ndepth: planes,
-            data,
-        };
-        let params = SgmParams {
-            p1,
-            p2,
-            directions: Directions::Eight,
-            ..SgmParams::default()
-        };
-        let (summed, _) = aggregate(&volume, &params)?;
+        let summed = aggregate_eight(data, planes, [h, w], [p1, p2])?;
         let unit = 1.0 / (Directions::Eight.count() as f32 * COST_SCALE);
         let mut values = vec![0f32; plane * planes];
         for (sums, out) in summed
-            .data
             .chunks_exact(planes)
             .zip(values.chunks_exact_mut(planes))
         {

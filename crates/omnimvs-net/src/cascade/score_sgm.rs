@@ -62,23 +62,16 @@ pub fn aggregated_scores(
             *cost = cost_units(nats / SCORE_SGM_MAX_COST);
         }
     }
-    let volume = CostVolume {
-        height: h,
-        width: w,
-        ndepth: spheres,
+    let summed = aggregate_eight(
         data,
-    };
-    let params = SgmParams {
-        p1: sgm.p1 / SCORE_SGM_MAX_COST,
-        p2: sgm.p2 / SCORE_SGM_MAX_COST,
-        directions: Directions::Eight,
-        ..SgmParams::default()
-    };
-    let (summed, _) = aggregate(&volume, &params)?;
+        spheres,
+        [h, w],
+        [sgm.p1 / SCORE_SGM_MAX_COST, sgm.p2 / SCORE_SGM_MAX_COST],
+    )?;
     // One unit of the sums is 1 / COST_SCALE of the clamp, in nats.
     let nats_per_unit = SCORE_SGM_MAX_COST / COST_SCALE / sgm.temperature;
     let mut out = vec![0f32; spheres * plane];
-    for (pixel, sums) in summed.data.chunks_exact(spheres).enumerate() {
+    for (pixel, sums) in summed.chunks_exact(spheres).enumerate() {
         let best = sums.iter().copied().min().unwrap_or(0);
         for (k, &sum) in sums.iter().enumerate() {
             let excess = f32::from(sum - best) * nats_per_unit;
@@ -86,6 +79,36 @@ pub fn aggregated_scores(
         }
     }
     Ok(out)
+}
+
+/// Semi-global aggregation along 8 paths (columns wrapping: longitude is a ring) of a cost
+/// volume of `planes` costs per pixel in the 16-bit units of `omnimvs_stereo`
+/// ([`cost_units`], pixel-major, `h x w` pixels), penalties `[p1, p2]` in the same units: the
+/// sums over the paths, pixel-major. What the aggregated photometric cue
+/// ([`super::photo::AggregatedCue`]) and the aggregated coarse distribution share.
+///
+/// # Errors
+/// [`NetError::Stereo`] when the aggregation refuses the penalties or the volume (fewer than 2
+/// planes).
+pub(crate) fn aggregate_eight(
+    data: Vec<u16>,
+    planes: usize,
+    [h, w]: [usize; 2],
+    [p1, p2]: [f32; 2],
+) -> Result<Vec<u16>, NetError> {
+    let volume = CostVolume {
+        height: h,
+        width: w,
+        ndepth: planes,
+        data,
+    };
+    let params = SgmParams {
+        p1,
+        p2,
+        directions: Directions::Eight,
+        ..SgmParams::default()
+    };
+    Ok(aggregate(&volume, &params)?.0.data)
 }
 
 #[cfg(test)]
