@@ -99,9 +99,20 @@ def save_safetensors(net, path, metadata=None):
 
 def load(paths):
     files = [np.load(p) for p in paths.split(",")]
+    sizes = [len(x["valid"]) for x in files]
     d = {}
-    for k in ("feats", "v", "gt", "valid"):  # one key at a time: a single copy in memory
-        d[k] = np.concatenate([x[k] for x in files])
+    for k in ("feats", "v", "gt", "valid"):
+        # Filled file by file: the whole array once in memory, and one file's at a time besides
+        # (stop 41: concatenating a list of them held everything twice).
+        out, at = None, 0
+        for x, size in zip(files, sizes):
+            a = x[k]
+            if out is None:
+                out = np.empty((sum(sizes),) + a.shape[1:], a.dtype)
+            out[at:at + size] = a
+            at += size
+            del a
+        d[k] = out
     # The candidates of frame i are cands(v[i]), computed when a step or an evaluation needs them
     # (stop 41: as an array of all frames they took 11.5 MB a frame; the values are the same).
     # Sky: pick_inputs.py's truth index is -EPS / step there (holes are -1).
@@ -118,10 +129,15 @@ def main():
     tr = load(trp)
     vas = [(p, load(p)) for p in vap.split(",")]
     net = UNet(tr["feats"].shape[1], W)
+    # Stop 41: PICK_INIT starts from a pick's weights (a .pt state dict) instead of the zero head;
+    # PICK_LR is the one-cycle schedule's peak rate (default 1e-3).
+    if os.environ.get("PICK_INIT"):
+        net.load_state_dict(torch.load(os.environ["PICK_INIT"]))
+    LR = float(os.environ.get("PICK_LR", "1e-3"))
     print("parameters", sum(p.numel() for p in net.parameters()), "inputs", tr["feats"].shape[1],
           "train frames", len(tr["v"]))
-    opt = torch.optim.Adam(net.parameters(), 1e-3)
-    sched = torch.optim.lr_scheduler.OneCycleLR(opt, 1e-3, total_steps=steps + 1, pct_start=0.05)
+    opt = torch.optim.Adam(net.parameters(), LR)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, LR, total_steps=steps + 1, pct_start=0.05)
 
     def evaluate():
         res = []
