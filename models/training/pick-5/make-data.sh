@@ -3,14 +3,16 @@
 # 209: 120 hard things frames, 210: 150 house frames), the bundled cascade's answers on them without its pick
 # (`infer --pick off`: the pick reads the network's own answers), and pick-2's inputs
 # (../pick-1/pick_inputs.py, pick-1/2's layout) as f-*.npz beside pick-1's under /work/data2.
-# Resumable: a step whose output exists is skipped.
+# Resumable: a step whose output exists is skipped. SETS (kind:folder:frames:seed:difficulty, space
+# separated) replaces the three sets (../pick-6/make-data.sh).
 set -euo pipefail
 B=${OMNIMVS:-/work/bin/omnimvs-40b}
 P=${PY:-/work/venv-np/bin/python3}
 S=$(cd "$(dirname "$0")/../pick-1" && pwd)/pick_inputs.py
 D=/work/data2
 mkdir -p $D && cd $D
-for s in things:things-s208:300:208: things:things-hard-s209:120:209:hard house:house-s210:150:210:; do
+SETS=${SETS:-"things:things-s208:300:208: things:things-hard-s209:120:209:hard house:house-s210:150:210:"}
+for s in $SETS; do
   IFS=: read -r kind d n seed diff <<< "$s"
   [ -f $d/done ] || { $B synth --kind $kind ${diff:+--difficulty $diff} --frames 1..$n --out $d --seed $seed \
     > $d.synth.log 2>&1 && touch $d/done; }
