@@ -713,6 +713,12 @@ impl PickRefiner {
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<[usize; 2], NetError> {
+        self.check_cameras(sampler, images)?;
+        check_sizes(index, spread, sampler, images)
+    }
+
+    /// Refuses a rig or a frame with another number of cameras than this pick's.
+    fn check_cameras(&self, sampler: &PixelSampler, images: &[GrayImage]) -> Result<(), NetError> {
         let cameras = sampler.num_cameras();
         if cameras != self.cameras || images.len() != self.cameras {
             return Err(NetError::Shape {
@@ -721,7 +727,7 @@ impl PickRefiner {
                 actual: vec![cameras, images.len()],
             });
         }
-        check_sizes(index, spread, sampler, images)
+        Ok(())
     }
 
     /// The input channels `[channels, h, w]` ([`PickLayout::inputs`]).
@@ -735,11 +741,8 @@ impl PickRefiner {
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
-        let size = self.check(index, spread, sampler, images)?;
-        let extremes = extremes(index, size, &self.layout.depth_radii);
-        Ok(self
-            .layout
-            .inputs_from(index, spread, sampler, images, &extremes))
+        self.check_cameras(sampler, images)?;
+        self.layout.inputs(index, spread, sampler, images)
     }
 
     /// The candidates' logits `[candidates, h, w]` for `inputs` `[channels, h, w]`.
