@@ -55,7 +55,13 @@ use crate::hostconv::{HostConv, Padding};
 ///   where both see the centre and both see at least half the window), and the fraction of
 ///   the pairs that count.
 ///
-/// Candidates: `v`, then the minimum and maximum over each of `candidate_radii`.
+/// - with `coarse_modes = k > 0` (stop 42), for each of the coarse stage's `k` most probable
+///   modes ([`CoarseModes`]): `(mode - v) / 32`, its probability mass, and the mean pairwise
+///   ZNCC and fraction of pairs that count (as above, over [`MODE_ZNCC`] x [`MODE_ZNCC`]) with
+///   every camera sampled at the mode's depth; then the same ZNCC and fraction at `v`.
+///
+/// Candidates: `v`, then the minimum and maximum over each of `candidate_radii`, then the
+/// `coarse_modes` modes' depths.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PickLayout {
     /// Radii of the candidates' neighbourhoods.
@@ -64,6 +70,115 @@ pub struct PickLayout {
     pub depth_radii: Vec<usize>,
     /// Side of the ZNCC window (odd), 0 for no ZNCC channels.
     pub zncc: usize,
+    /// How many of the coarse stage's modes are candidates (0: none).
+    pub coarse_modes: usize,
+}
+
+/// Side of the window of the ZNCC read at the coarse modes' depths and at the answer's
+/// ([`PickLayout::coarse_modes`]).
+pub const MODE_ZNCC: usize = 5;
+
+/// Most coarse modes a layout may ask for.
+pub const MAX_COARSE_MODES: usize = 8;
+
+/// The coarse stage's most probable modes, on the output grid (stop 42). Where the network
+/// misses a whole region, its coarse distribution often still holds the right surface as
+/// another mode: on things validation frames 481-490, the truth lay within 6 index units of
+/// one of the three most probable modes at 37 % of the pixels the network missed by more than
+/// 10 (`models/training/pick-7/`).
+///
+/// A mode is a local maximum of a coarse pixel's distribution over its spheres (at least its
+/// lower neighbour's probability, more than its upper's); its mass is the probability of the
+/// sphere and its two neighbours, its depth their probability-weighted mean index. Modes are
+/// ordered by mass (ties: the nearer sphere first); a pixel with fewer modes than asked for
+/// repeats its first mode's depth with mass 0. Each output pixel takes the coarse pixel it
+/// lies in (the grids share their extent).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CoarseModes {
+    /// Modes per pixel.
+    pub count: usize,
+    /// Their depths, `[count, h, w]`, index units of `N`.
+    pub index: Vec<f32>,
+    /// Their probability masses, `[count, h, w]`.
+    pub mass: Vec<f32>,
+}
+
+impl CoarseModes {
+    /// No modes (for a pick whose layout reads none).
+    pub fn none() -> Self {
+        Self::default()
+    }
+
+    /// The `count` most probable modes of the distribution `prob` over the spheres `hyp`
+    /// (both `[k, h, w]` on the coarse grid; index units of `N`), on the output grid `[oh, ow]`.
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when `prob` or `hyp` do not hold `[k, h, w]` values, or the output
+    /// grid is empty.
+    pub fn from_distribution(
+        prob: &[f32],
+        hyp: &[f32],
+        [k, h, w]: [usize; 3],
+        count: usize,
+        [oh, ow]: [usize; 2],
+    ) -> Result<Self, NetError> {
+        let plane = h * w;
+        if prob.len() != k * plane || hyp.len() != k * plane || k == 0 || oh * ow == 0 {
+            return Err(NetError::Shape {
+                what: "coarse modes: distribution and spheres [k, h, w] onto a grid".into(),
+                expected: vec![k, h, w],
+                actual: vec![prob.len(), hyp.len(), oh, ow],
+            });
+        }
+        // Per coarse pixel, its modes' (index, mass).
+        let coarse: Vec<Vec<(f32, f32)>> = (0..plane)
+            .into_par_iter()
+            .map(|p| {
+                let at = |i: usize| prob[i * plane + p];
+                let mut modes: Vec<(usize, f32, f32)> = Vec::new();
+                for i in 0..k {
+                    let lower = if i > 0 { at(i - 1) } else { f32::NEG_INFINITY };
+                    let upper = if i + 1 < k {
+                        at(i + 1)
+                    } else {
+                        f32::NEG_INFINITY
+                    };
+                    if at(i) >= lower && at(i) > upper {
+                        let (mut mass, mut sum) = (0f32, 0f32);
+                        for j in i.saturating_sub(1)..(i + 2).min(k) {
+                            mass += at(j);
+                            sum += at(j) * hyp[j * plane + p];
+                        }
+                        let index = if mass > 0.0 {
+                            sum / mass
+                        } else {
+                            hyp[i * plane + p]
+                        };
+                        modes.push((i, mass, index));
+                    }
+                }
+                modes.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+                let first = modes.first().map_or(hyp[p], |m| m.2);
+                (0..count)
+                    .map(|j| modes.get(j).map_or((first, 0.0), |m| (m.2, m.1)))
+                    .collect()
+            })
+            .collect();
+        let out_plane = oh * ow;
+        let mut index = vec![0f32; count * out_plane];
+        let mut mass = vec![0f32; count * out_plane];
+        for r in 0..oh {
+            let cr = ((2 * r + 1) * h / (2 * oh)).min(h - 1);
+            for c in 0..ow {
+                let cc = ((2 * c + 1) * w / (2 * ow)).min(w - 1);
+                for (j, &(i, m)) in coarse[cr * w + cc].iter().enumerate() {
+                    index[j * out_plane + r * ow + c] = i;
+                    mass[j * out_plane + r * ow + c] = m;
+                }
+            }
+        }
+        Ok(Self { count, index, mass })
+    }
 }
 
 impl Default for PickLayout {
@@ -74,6 +189,7 @@ impl Default for PickLayout {
             candidate_radii: vec![1, 2, 4],
             depth_radii: vec![2],
             zncc: 0,
+            coarse_modes: 0,
         }
     }
 }
@@ -116,6 +232,16 @@ impl PickLayout {
                 }
             };
         }
+        if let Some(k) = list("coarse_modes")? {
+            layout.coarse_modes = match k[..] {
+                [k] if k <= MAX_COARSE_MODES => k,
+                _ => {
+                    return Err(format!(
+                        "metadata `coarse_modes` reads {k:?}: expected one count up to {MAX_COARSE_MODES}"
+                    ));
+                }
+            };
+        }
         let in_range = |radii: &[usize]| radii.iter().all(|&r| (1..=64).contains(&r));
         if layout.candidate_radii.is_empty() || !in_range(&layout.candidate_radii) {
             return Err(format!(
@@ -134,7 +260,7 @@ impl PickLayout {
 
     /// Number of candidates scored.
     pub fn candidates(&self) -> usize {
-        1 + 2 * self.candidate_radii.len()
+        1 + 2 * self.candidate_radii.len() + self.coarse_modes
     }
 
     /// Number of depths sampled per pixel.
@@ -151,7 +277,22 @@ impl PickLayout {
     pub fn input_channels(&self, cameras: usize) -> usize {
         self.answer_channels()
             + 2 * cameras * self.depths()
-            + if self.zncc > 0 { 2 * self.depths() } else { 0 }
+            + self.zncc_channels()
+            + self.mode_channels()
+    }
+
+    /// Channels of the ZNCC at the sampled depths.
+    fn zncc_channels(&self) -> usize {
+        if self.zncc > 0 { 2 * self.depths() } else { 0 }
+    }
+
+    /// Channels of the coarse modes (after every other).
+    pub fn mode_channels(&self) -> usize {
+        if self.coarse_modes > 0 {
+            4 * self.coarse_modes + 2
+        } else {
+            0
+        }
     }
 
     /// The cameras a first layer of `inputs` channels was trained for, if any.
@@ -163,13 +304,14 @@ impl PickLayout {
     }
 
     /// The candidates `[candidates(), h, w]`: the answer, then the minimum and maximum over
-    /// each of `candidate_radii` (wrapping in longitude).
-    pub fn candidate_maps(&self, index: &[f32], size: [usize; 2]) -> Vec<f32> {
-        self.candidates_from(index, &extremes(index, size, &self.candidate_radii))
+    /// each of `candidate_radii` (wrapping in longitude), then the first `coarse_modes` of
+    /// `modes` (which must hold that many on the grid).
+    pub fn candidate_maps(&self, index: &[f32], modes: &CoarseModes, size: [usize; 2]) -> Vec<f32> {
+        self.candidates_from(index, modes, &extremes(index, size, &self.candidate_radii))
     }
 
     /// [`Self::candidate_maps`] from the extremes of every radius it needs.
-    fn candidates_from(&self, index: &[f32], extremes: &Extremes) -> Vec<f32> {
+    fn candidates_from(&self, index: &[f32], modes: &CoarseModes, extremes: &Extremes) -> Vec<f32> {
         let mut out = Vec::with_capacity(self.candidates() * index.len());
         out.extend_from_slice(index);
         for radius in &self.candidate_radii {
@@ -177,13 +319,20 @@ impl PickLayout {
             out.extend_from_slice(low);
             out.extend_from_slice(high);
         }
+        out.extend_from_slice(&modes.index[..self.coarse_modes * index.len()]);
         out
     }
 
-    /// The answer: each pixel's candidates ([`Self::candidate_maps`] of `index`) weighted by
-    /// the softmax of their `logits` `[candidates(), h, w]`.
-    pub fn combine(&self, logits: &[f32], index: &[f32], size: [usize; 2]) -> Vec<f32> {
-        self.combine_candidates(logits, &self.candidate_maps(index, size))
+    /// The answer: each pixel's candidates ([`Self::candidate_maps`] of `index` and `modes`)
+    /// weighted by the softmax of their `logits` `[candidates(), h, w]`.
+    pub fn combine(
+        &self,
+        logits: &[f32],
+        index: &[f32],
+        modes: &CoarseModes,
+        size: [usize; 2],
+    ) -> Vec<f32> {
+        self.combine_candidates(logits, &self.candidate_maps(index, modes, size))
     }
 
     /// [`Self::combine`] of the candidate maps themselves.
@@ -208,21 +357,41 @@ impl PickLayout {
     }
 
     /// The input channels `[input_channels(cameras), h, w]` (the type's docs) for the answer
-    /// `index` and the coarse `spread` (index units of the sampler's hypotheses, on its grid),
-    /// from the frame's `images` (rig order, the cameras' own sizes).
+    /// `index` and the coarse `spread` (index units of the sampler's hypotheses, on its grid)
+    /// and `modes` (at least `coarse_modes` of them on the grid), from the frame's `images`
+    /// (rig order, the cameras' own sizes).
     ///
     /// # Errors
-    /// [`NetError::Shape`] for maps or images of other sizes.
+    /// [`NetError::Shape`] for maps or images of other sizes, or too few modes.
     pub fn inputs(
         &self,
         index: &[f32],
         spread: &[f32],
+        modes: &CoarseModes,
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
         let size = check_sizes(index, spread, sampler, images)?;
+        self.check_modes(modes, size)?;
         let extremes = extremes(index, size, &self.depth_radii);
-        Ok(self.inputs_from(index, spread, sampler, images, &extremes))
+        Ok(self.inputs_from(index, spread, modes, sampler, images, &extremes))
+    }
+
+    /// Refuses `modes` with fewer than `coarse_modes` modes on the grid `[h, w]`.
+    fn check_modes(&self, modes: &CoarseModes, [h, w]: [usize; 2]) -> Result<(), NetError> {
+        let plane = h * w;
+        if self.coarse_modes > 0
+            && (modes.count < self.coarse_modes
+                || modes.index.len() != modes.count * plane
+                || modes.mass.len() != modes.count * plane)
+        {
+            return Err(NetError::Shape {
+                what: "pick: coarse modes on the grid".into(),
+                expected: vec![self.coarse_modes, h, w],
+                actual: vec![modes.count, modes.index.len(), modes.mass.len()],
+            });
+        }
+        Ok(())
     }
 
     /// [`Self::inputs`] of maps and images of the right sizes, from the extremes of every radius
@@ -231,6 +400,7 @@ impl PickLayout {
         &self,
         index: &[f32],
         spread: &[f32],
+        modes: &CoarseModes,
         sampler: &PixelSampler,
         images: &[GrayImage],
         extremes: &Extremes,
@@ -261,39 +431,50 @@ impl PickLayout {
             depths.push(high);
         }
         let normalised: Vec<(f64, f64)> = images.iter().map(mean_and_std).collect();
-        let hypotheses = sampler.hypotheses();
         let first = self.answer_channels();
         for (d, map) in depths.iter().enumerate() {
-            // The depth's inverse depth per pixel, once for every camera.
-            let inv: Vec<f32> = map
-                .iter()
-                .map(|&n| hypotheses.inv_depth(f64::from(n)).max(1e-6) as f32)
-                .collect();
-            for (c, image) in images.iter().enumerate() {
-                let channel = first + 2 * (d * cameras + c);
-                let (gray, sees) = out[channel * plane..(channel + 2) * plane].split_at_mut(plane);
-                let (mean, std) = normalised[c];
-                gray.par_chunks_mut(w)
-                    .zip(sees.par_chunks_mut(w))
-                    .enumerate()
-                    .for_each(|(row, (gray, sees))| {
-                        for col in 0..w {
-                            let p = row * w + col;
-                            if let Some((x, y)) = sampler.project(c, p, inv[p])
-                                && let Some(value) = bilinear(image, f64::from(x), f64::from(y))
-                            {
-                                gray[col] = ((value - mean) / (std + 1e-9)) as f32;
-                                sees[col] = 1.0;
-                            }
-                        }
-                    });
+            let channel = first + 2 * d * cameras;
+            sample_cameras(
+                map,
+                sampler,
+                images,
+                &normalised,
+                &mut out[channel * plane..(channel + 2 * cameras) * plane],
+            );
+        }
+        let zncc_first = first + 2 * cameras * depths.len();
+        if self.coarse_modes > 0 {
+            let mode_first = zncc_first + self.zncc_channels();
+            let (head, tail) = out.split_at_mut(mode_first * plane);
+            let mut samples = vec![0f32; 2 * cameras * plane];
+            for (j, block) in tail
+                .chunks_mut(4 * plane)
+                .take(self.coarse_modes)
+                .enumerate()
+            {
+                let mode = &modes.index[j * plane..(j + 1) * plane];
+                let (offset, rest) = block.split_at_mut(plane);
+                let (mass, pair) = rest.split_at_mut(plane);
+                offset
+                    .iter_mut()
+                    .zip(mode.iter().zip(index))
+                    .for_each(|(o, (&m, &v))| *o = (m - v) / 32.0);
+                mass.copy_from_slice(&modes.mass[j * plane..(j + 1) * plane]);
+                samples.iter_mut().for_each(|s| *s = 0.0);
+                sample_cameras(mode, sampler, images, &normalised, &mut samples);
+                let (mean, fraction) = pair.split_at_mut(plane);
+                zncc_of_cameras(&samples, cameras, [h, w], MODE_ZNCC, mean, fraction);
             }
+            // The ZNCC at the answer, from its samples above.
+            let at_answer = &head[first * plane..(first + 2 * cameras) * plane];
+            let (mean, fraction) = tail[4 * self.coarse_modes * plane..].split_at_mut(plane);
+            zncc_of_cameras(at_answer, cameras, [h, w], MODE_ZNCC, mean, fraction);
         }
         if self.zncc > 0 {
-            let zncc_first = first + 2 * cameras * depths.len();
             let (head, tail) = out.split_at_mut(zncc_first * plane);
             let head = &head[first * plane..];
-            tail.par_chunks_mut(2 * plane)
+            tail[..self.zncc_channels() * plane]
+                .par_chunks_mut(2 * plane)
                 .enumerate()
                 .for_each(|(d, pair)| {
                     let channels = &head[2 * d * cameras * plane..2 * (d + 1) * cameras * plane];
@@ -302,6 +483,44 @@ impl PickLayout {
                 });
         }
         out
+    }
+}
+
+/// Every camera's normalised gray value (`normalised`: each image's mean and standard deviation)
+/// and whether it sees the point at each pixel's depth `map` (index units of the sampler's
+/// hypotheses), into `out` `[cameras x (gray, sees), h, w]` (left as they are where a camera does
+/// not see the point).
+fn sample_cameras(
+    map: &[f32],
+    sampler: &PixelSampler,
+    images: &[GrayImage],
+    normalised: &[(f64, f64)],
+    out: &mut [f32],
+) {
+    let w = sampler.grid().width;
+    let plane = map.len();
+    let hypotheses = sampler.hypotheses();
+    // The depth's inverse depth per pixel, once for every camera.
+    let inv: Vec<f32> = map
+        .iter()
+        .map(|&n| hypotheses.inv_depth(f64::from(n)).max(1e-6) as f32)
+        .collect();
+    for (c, (image, &(mean, std))) in images.iter().zip(normalised).enumerate() {
+        let (gray, sees) = out[2 * c * plane..2 * (c + 1) * plane].split_at_mut(plane);
+        gray.par_chunks_mut(w)
+            .zip(sees.par_chunks_mut(w))
+            .enumerate()
+            .for_each(|(row, (gray, sees))| {
+                for col in 0..w {
+                    let p = row * w + col;
+                    if let Some((x, y)) = sampler.project(c, p, inv[p])
+                        && let Some(value) = bilinear(image, f64::from(x), f64::from(y))
+                    {
+                        gray[col] = ((value - mean) / (std + 1e-9)) as f32;
+                        sees[col] = 1.0;
+                    }
+                }
+            });
     }
 }
 
@@ -686,10 +905,12 @@ impl PickRefiner {
         &self,
         index: &[f32],
         spread: &[f32],
+        modes: &CoarseModes,
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
         let size = self.check(index, spread, sampler, images)?;
+        self.layout.check_modes(modes, size)?;
         // Each radius's extremes once, for the inputs and the candidates alike.
         let layout = &self.layout;
         let radii: Vec<usize> = layout
@@ -699,9 +920,9 @@ impl PickRefiner {
             .copied()
             .collect();
         let extremes = extremes(index, size, &radii);
-        let inputs = layout.inputs_from(index, spread, sampler, images, &extremes);
+        let inputs = layout.inputs_from(index, spread, modes, sampler, images, &extremes);
         let logits = self.scores(&inputs, size)?;
-        Ok(layout.combine_candidates(&logits, &layout.candidates_from(index, &extremes)))
+        Ok(layout.combine_candidates(&logits, &layout.candidates_from(index, modes, &extremes)))
     }
 
     /// The grid's `[h, w]` when the rig has this pick's cameras and the maps and images fit
@@ -738,11 +959,12 @@ impl PickRefiner {
         &self,
         index: &[f32],
         spread: &[f32],
+        modes: &CoarseModes,
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
         self.check_cameras(sampler, images)?;
-        self.layout.inputs(index, spread, sampler, images)
+        self.layout.inputs(index, spread, modes, sampler, images)
     }
 
     /// The candidates' logits `[candidates, h, w]` for `inputs` `[channels, h, w]`.

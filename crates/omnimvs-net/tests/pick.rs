@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::PixelSampler;
 use omnimvs_net::error::NetError;
-use omnimvs_net::pick::{self, PickLayout, PickRefiner, Tensors};
+use omnimvs_net::pick::{self, CoarseModes, PickLayout, PickRefiner, Tensors};
 
 #[path = "support/micro_cascade.rs"]
 mod micro_cascade;
@@ -45,10 +45,15 @@ fn check_scores_and_pick(weights: &str, io: &str, layout: &PickLayout, [c, h, w]
         diff < 1e-5 * size,
         "logits differ from torch by {diff} (largest {size})"
     );
-    let answer = layout.combine(&io["logits"].1, &io["index"].1, [h, w]);
+    let answer = layout.combine(
+        &io["logits"].1,
+        &io["index"].1,
+        &CoarseModes::none(),
+        [h, w],
+    );
     let diff = max_difference(&answer, &io["answer"].1);
     assert!(diff < 1e-3, "answer differs from torch by {diff}");
-    let cands = layout.candidate_maps(&io["index"].1, [h, w]);
+    let cands = layout.candidate_maps(&io["index"].1, &CoarseModes::none(), [h, w]);
     let plane = h * w;
     let widest = layout.candidates() - 2;
     for p in 0..plane {
@@ -77,6 +82,7 @@ fn layout3() -> PickLayout {
         candidate_radii: vec![1, 2, 4, 7, 12],
         depth_radii: vec![2, 12],
         zncc: 5,
+        coarse_modes: 0,
     }
 }
 
@@ -119,6 +125,7 @@ fn check_inputs_on_a_real_frame(layout: &PickLayout, fixture_name: &str) {
         .inputs(
             &v,
             &spread,
+            &CoarseModes::none(),
             &PixelSampler::new(&ds.rig, &grid, &hypotheses).unwrap(),
             &images,
         )
@@ -246,4 +253,234 @@ fn good_with(bytes: &[u8], from: &str, to: &str) -> Vec<u8> {
     let mut out = bytes.to_vec();
     out[at..at + to.len()].copy_from_slice(to.as_bytes());
     out
+}
+
+#[test]
+fn coarse_modes_are_ordered_by_mass_and_fill_the_output_grid() {
+    // One coarse row of two pixels over six spheres 10 index units apart.
+    let (k, plane) = (6, 2);
+    let hyp: Vec<f32> = (0..k)
+        .flat_map(|i| [10.0 * i as f32; 2])
+        .collect::<Vec<_>>();
+    let by_pixel = [
+        [0.1, 0.5, 0.1, 0.0, 0.3, 0.0], // two modes: spheres 1 (mass 0.7) and 4 (0.3)
+        [0.0, 0.0, 0.0, 0.0, 0.2, 0.8], // one: the last sphere, mass 1
+    ];
+    let mut prob = vec![0f32; k * plane];
+    for (p, row) in by_pixel.iter().enumerate() {
+        for (i, &v) in row.iter().enumerate() {
+            prob[i * plane + p] = v;
+        }
+    }
+    let modes = CoarseModes::from_distribution(&prob, &hyp, [k, 1, 2], 3, [2, 4]).unwrap();
+    assert_eq!(modes.count, 3);
+    let close = |a: f32, b: f32| (a - b).abs() < 1e-4;
+    // Each coarse pixel covers 2 x 2 output pixels.
+    for r in 0..2 {
+        for c in 0..4 {
+            let at = |j: usize| {
+                (
+                    modes.index[j * 8 + r * 4 + c],
+                    modes.mass[j * 8 + r * 4 + c],
+                )
+            };
+            let expected = if c < 2 {
+                [(10.0, 0.7), (40.0, 0.3), (10.0, 0.0)]
+            } else {
+                [(48.0, 1.0), (48.0, 0.0), (48.0, 0.0)]
+            };
+            for (j, (index, mass)) in expected.into_iter().enumerate() {
+                let (i, m) = at(j);
+                assert!(
+                    close(i, index) && close(m, mass),
+                    "({r}, {c}) mode {j}: {i} {m}"
+                );
+            }
+        }
+    }
+    assert!(CoarseModes::from_distribution(&prob[1..], &hyp, [k, 1, 2], 3, [2, 4]).is_err());
+    assert!(CoarseModes::from_distribution(&prob, &hyp, [k, 1, 2], 3, [0, 4]).is_err());
+}
+
+/// The real `itbt_sample` frame 1, its rig's sampler on the output grid, and the fixture's
+/// synthetic answer and spread on it.
+fn real_frame() -> (
+    Vec<omnimvs_sweep::GrayImage>,
+    PixelSampler,
+    Vec<f32>,
+    Vec<f32>,
+) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/omnimvs-samples/itbt_sample");
+    let ds = Dataset::open(&root).unwrap();
+    let grid = omnimvs_sweep::EquirectGrid::new(160, 640, 45.0).unwrap();
+    let sampler = PixelSampler::new(&ds.rig, &grid, &ds.hypotheses(192).unwrap()).unwrap();
+    let (v, spread) = synthetic_answer(160, 640);
+    (ds.read_frame(1).unwrap(), sampler, v, spread)
+}
+
+/// Two modes for the answer `v`: `v` itself (mass 0.7) and 15 index units farther (0.2).
+fn two_modes(v: &[f32]) -> CoarseModes {
+    let mut index = v.to_vec();
+    index.extend(v.iter().map(|&x| (x + 15.0).min(191.0)));
+    let mut mass = vec![0.7f32; v.len()];
+    mass.extend(vec![0.2f32; v.len()]);
+    CoarseModes {
+        count: 2,
+        index,
+        mass,
+    }
+}
+
+#[test]
+fn the_coarse_modes_inputs_read_the_cameras_at_each_mode() {
+    let (images, sampler, v, spread) = real_frame();
+    let layout = PickLayout {
+        coarse_modes: 2,
+        ..layout3()
+    };
+    assert_eq!(layout.mode_channels(), 10);
+    assert_eq!(layout.candidates(), 13);
+    assert_eq!(layout.input_channels(4), layout3().input_channels(4) + 10);
+    let modes = two_modes(&v);
+    let inputs = layout
+        .inputs(&v, &spread, &modes, &sampler, &images)
+        .unwrap();
+    let plane = v.len();
+    let channel = |c: usize| &inputs[c * plane..(c + 1) * plane];
+    let first = layout.input_channels(4) - layout.mode_channels();
+    // pick-3's ZNCC at the answer (checked against the training script above), window 5.
+    let zncc_first = layout.answer_channels() + 2 * 4 * layout.depths();
+    assert_eq!(pick::MODE_ZNCC, layout.zncc);
+    let (zncc_v, pairs_v) = (channel(zncc_first), channel(zncc_first + 1));
+    // Mode 0 is the answer itself: offset 0, its mass, and the ZNCC at the answer.
+    assert!(channel(first).iter().all(|&x| x == 0.0));
+    assert!(channel(first + 1).iter().all(|&x| x == 0.7));
+    assert_eq!(channel(first + 2), zncc_v);
+    assert_eq!(channel(first + 3), pairs_v);
+    // Mode 1: its offset and mass, and other ZNCC where pairs count.
+    let offsets = channel(first + 4).iter().zip(&modes.index[plane..]).zip(&v);
+    for ((&offset, &mode), &answer) in offsets {
+        assert!((offset - (mode - answer) / 32.0).abs() < 1e-6);
+    }
+    assert!(channel(first + 5).iter().all(|&x| x == 0.2));
+    let differ = (0..plane)
+        .filter(|&p| pairs_v[p] > 0.0 && (channel(first + 6)[p] - zncc_v[p]).abs() > 0.05)
+        .count();
+    assert!(
+        differ * 4 > plane,
+        "mode 1's ZNCC differs from the answer's at {differ} pixels"
+    );
+    assert!(channel(first + 6).iter().all(|z| (-1.0..=1.0).contains(z)));
+    // Then the ZNCC at the answer.
+    assert_eq!(channel(first + 8), zncc_v);
+    assert_eq!(channel(first + 9), pairs_v);
+    // Too few modes are refused.
+    let one = CoarseModes {
+        count: 1,
+        index: v.clone(),
+        mass: vec![1.0; plane],
+    };
+    let err = layout
+        .inputs(&v, &spread, &one, &sampler, &images)
+        .unwrap_err();
+    assert!(err.to_string().contains("coarse modes"), "{err}");
+}
+
+/// A pick's safetensors (the training script's names) of `width` channels for `layout` and
+/// four cameras: zero weights, the head's biases `bias` (one per candidate).
+fn pick_file(layout: &PickLayout, width: usize, bias: &[f32]) -> Vec<u8> {
+    let w = width;
+    let c = layout.input_channels(4);
+    let layers = [
+        ("e0.0.0", c, w),
+        ("e0.1.0", w, w),
+        ("e1.0.0", w, 2 * w),
+        ("e1.1.0", 2 * w, 2 * w),
+        ("e2.0.0", 2 * w, 3 * w),
+        ("e2.1.0", 3 * w, 3 * w),
+        ("e3.0.0", 3 * w, 4 * w),
+        ("e3.1.0", 4 * w, 4 * w),
+        ("d2.0", 7 * w, 3 * w),
+        ("d1.0", 5 * w, 2 * w),
+        ("d0.0", 3 * w, w),
+        ("head", w, layout.candidates()),
+    ];
+    let mut header = serde_json::Map::new();
+    let list = |v: &[usize]| {
+        v.iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    header.insert(
+        "__metadata__".into(),
+        serde_json::json!({
+            "candidate_radii": list(&layout.candidate_radii),
+            "depth_radii": list(&layout.depth_radii),
+            "zncc": layout.zncc.to_string(),
+            "coarse_modes": layout.coarse_modes.to_string(),
+        }),
+    );
+    let mut data: Vec<f32> = Vec::new();
+    for (name, c_in, c_out) in layers {
+        let biases = if name == "head" {
+            bias.to_vec()
+        } else {
+            vec![0.0; c_out]
+        };
+        for (suffix, shape, values) in [
+            (
+                "weight",
+                vec![c_out, c_in, 3, 3],
+                vec![0f32; c_out * c_in * 9],
+            ),
+            ("bias", vec![c_out], biases),
+        ] {
+            let start = 4 * data.len();
+            data.extend(values);
+            header.insert(
+                format!("{name}.{suffix}"),
+                serde_json::json!({"dtype": "F32", "shape": shape, "data_offsets": [start, 4 * data.len()]}),
+            );
+        }
+    }
+    let header = serde_json::to_vec(&serde_json::Value::Object(header)).unwrap();
+    let mut out = (header.len() as u64).to_le_bytes().to_vec();
+    out.extend(header);
+    out.extend(data.iter().flat_map(|v| v.to_le_bytes()));
+    out
+}
+
+#[test]
+fn a_pick_that_trusts_the_second_mode_answers_with_its_depth() {
+    let (images, sampler, v, spread) = real_frame();
+    let layout = PickLayout {
+        coarse_modes: 2,
+        ..PickLayout::default()
+    };
+    // Candidates: v, six extremes, then the two modes; all the weight on the second mode.
+    let mut bias = vec![-30.0; layout.candidates()];
+    bias[8] = 30.0;
+    let bytes = pick_file(&layout, 1, &bias);
+    let pick = PickRefiner::from_bytes(&bytes, Path::new("modes.safetensors")).unwrap();
+    assert_eq!((pick.cameras(), pick.layout()), (4, &layout));
+    let modes = two_modes(&v);
+    let answer = pick.refine(&v, &spread, &modes, &sampler, &images).unwrap();
+    let diff = max_difference(&answer, &modes.index[v.len()..]);
+    assert!(
+        diff < 1e-3,
+        "the answer differs from the second mode by {diff}"
+    );
+    // Without the modes it reads, it refuses to run.
+    let err = pick
+        .refine(&v, &spread, &CoarseModes::none(), &sampler, &images)
+        .unwrap_err();
+    assert!(err.to_string().contains("coarse modes"), "{err}");
+    // A count of modes out of range in the metadata is refused, its key named.
+    let text = String::from_utf8_lossy(&bytes).into_owned();
+    assert!(text.contains("\"coarse_modes\":\"2\""));
+    let bad = good_with(&bytes, "\"coarse_modes\":\"2\"", "\"coarse_modes\":\"9\"");
+    let err = PickRefiner::from_bytes(&bad, Path::new("modes.safetensors")).unwrap_err();
+    assert!(err.to_string().contains("coarse_modes"), "{err}");
 }

@@ -13,13 +13,22 @@
 # "1,2,4,7,12", eleven candidates), and the safetensors carry the layout in their metadata
 # (candidate_radii, and pick_inputs.py's PICK_DEPTH_RADII and PICK_ZNCC as depth_radii and zncc),
 # which `PickRefiner::from_bytes` reads (absent: pick-1/2's layout).
+# pick-7 (stop 42): PICK_MODES=k (default 0) adds the coarse stage's k most probable modes as
+# candidates and their channels as inputs (`PickLayout::coarse_modes`): for each TRAIN / VAL file
+# f-NAME.npz / v-NAME.npz, m-NAME.npz / mv-NAME.npz beside it (../pick-7/pack_modes.py) holds them
+# (`modes`, appended to the inputs; `mode_cands`, appended to the candidates). A PICK_INIT with
+# fewer inputs or candidates is widened: the new inputs' weights and the new candidates' head
+# start at zero, the candidates' biases at PICK_NEW_BIAS (default -10: far candidates at a
+# percent of the weight each, -5, cost pick-6 0.4 points of house validation MAE).
 # Usage: train_pick.py STEPS TRAIN.npz[,..] VAL.npz[,..] [WIDTH] [OUT.pt] [THREADS]
 import json, os, struct, sys, time
 import numpy as np, torch, torch.nn as nn, torch.nn.functional as F
 from scipy import ndimage
 
 RADII = tuple(int(r) for r in os.environ.get("PICK_RADII", "1,2,4").split(","))
-K = 1 + 2 * len(RADII)  # candidates
+MODES = int(os.environ.get("PICK_MODES", "0"))
+K = 1 + 2 * len(RADII) + MODES  # candidates
+NEW_BIAS = float(os.environ.get("PICK_NEW_BIAS", "-10"))
 SKY_WEIGHT = float(os.environ.get("SKY_WEIGHT", "0"))
 
 
@@ -72,14 +81,42 @@ def cands(v, radii=None):
     return np.stack(out, 1)
 
 
+def inputs_of(d, i, rows=slice(None)):
+    """Frame i's inputs (rows of them), with the coarse modes' channels when PICK_MODES is set."""
+    x = d["feats"][i, :, rows]
+    return np.concatenate([x, d["modes"][i, :, rows]], 0) if MODES else x
+
+
+def cands_of(d, i, rows=slice(None)):
+    """Frame i's candidates (C, rows, W): cands() of its answer, then its coarse modes."""
+    c = cands(d["v"][i:i + 1])[0, :, rows]
+    return np.concatenate([c, d["mode_cands"][i, :, rows].astype(np.float32)], 0) if MODES else c
+
+
+def widen(state, inputs):
+    """A state dict of fewer inputs or candidates widened to `inputs` and K (see the top)."""
+    w = state["e0.0.0.weight"]
+    if w.shape[1] < inputs:
+        state["e0.0.0.weight"] = torch.cat([w, torch.zeros(w.shape[0], inputs - w.shape[1], 3, 3)], 1)
+    hw, hb = state["head.weight"], state["head.bias"]
+    if hw.shape[0] < K:
+        n = K - hw.shape[0]
+        state["head.weight"] = torch.cat([hw, torch.zeros(n, *hw.shape[1:])], 0)
+        state["head.bias"] = torch.cat([hb, torch.full((n,), NEW_BIAS)], 0)
+    return state
+
+
 def answer(logits, c):
     return (torch.softmax(logits, 1) * c).sum(1)
 
 
 def layout():
     """The inputs' and candidates' layout, as the safetensors' metadata."""
-    return {"candidate_radii": ",".join(map(str, RADII)),
-            "depth_radii": os.environ.get("PICK_DEPTH_RADII", "2"), "zncc": os.environ.get("PICK_ZNCC", "0")}
+    out = {"candidate_radii": ",".join(map(str, RADII)),
+           "depth_radii": os.environ.get("PICK_DEPTH_RADII", "2"), "zncc": os.environ.get("PICK_ZNCC", "0")}
+    if MODES:
+        out["coarse_modes"] = str(MODES)
+    return out
 
 
 def save_safetensors(net, path, metadata=None):
@@ -97,16 +134,30 @@ def save_safetensors(net, path, metadata=None):
     os.replace(path + ".tmp", path)
 
 
+def modes_path(p):
+    """The coarse modes' file of a pick_inputs.py file (f-NAME.npz: m-NAME.npz; v-NAME: mv-NAME)."""
+    head, base = os.path.split(p)
+    return os.path.join(head, ("m-" if base.startswith("f-") else "mv-") + base[2:])
+
+
 def load(paths):
-    files = [np.load(p) for p in paths.split(",")]
+    names = paths.split(",")
+    files = [np.load(p) for p in names]
     sizes = [len(x["valid"]) for x in files]
+    sources = {k: files for k in ("feats", "v", "gt", "valid")}
+    if MODES:
+        mfiles = [np.load(modes_path(p)) for p in names]
+        for p, m, size in zip(names, mfiles, sizes):
+            assert len(m["modes"]) == size and m["mode_cands"].shape[1] >= MODES, modes_path(p)
+        sources.update(modes=mfiles, mode_cands=mfiles)
     d = {}
-    for k in ("feats", "v", "gt", "valid"):
+    for k, srcs in sources.items():
         # Filled file by file: the whole array once in memory, and one file's at a time besides
         # (stop 41: concatenating a list of them held everything twice).
         out, at = None, 0
-        for x, size in zip(files, sizes):
-            a = x[k]
+        for x, size in zip(srcs, sizes):
+            # The modes' candidates as float16 (index units: steps of at most 0.125).
+            a = x[k][:, :MODES].astype(np.float16) if k == "mode_cands" else x[k]
             if out is None:
                 out = np.empty((sum(sizes),) + a.shape[1:], a.dtype)
             out[at:at + size] = a
@@ -128,13 +179,14 @@ def main():
     torch.manual_seed(0); np.random.seed(0)
     tr = load(trp)
     vas = [(p, load(p)) for p in vap.split(",")]
-    net = UNet(tr["feats"].shape[1], W)
+    channels = tr["feats"].shape[1] + (tr["modes"].shape[1] if MODES else 0)
+    net = UNet(channels, W)
     # Stop 41: PICK_INIT starts from a pick's weights (a .pt state dict) instead of the zero head;
     # PICK_LR is the one-cycle schedule's peak rate (default 1e-3).
     if os.environ.get("PICK_INIT"):
-        net.load_state_dict(torch.load(os.environ["PICK_INIT"]))
+        net.load_state_dict(widen(torch.load(os.environ["PICK_INIT"]), channels))
     LR = float(os.environ.get("PICK_LR", "1e-3"))
-    print("parameters", sum(p.numel() for p in net.parameters()), "inputs", tr["feats"].shape[1],
+    print("parameters", sum(p.numel() for p in net.parameters()), "inputs", channels,
           "train frames", len(tr["v"]))
     opt = torch.optim.Adam(net.parameters(), LR)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, LR, total_steps=steps + 1, pct_start=0.05)
@@ -146,9 +198,9 @@ def main():
             for p, d in vas:
                 before, after, sky_before, sky_after = [], [], [], []
                 for i in range(len(d["v"])):
-                    x = torch.as_tensor(d["feats"][i:i + 1]).float()
+                    x = torch.as_tensor(inputs_of(d, i)[None]).float()
                     v, g, ok = d["v"][i], d["gt"][i], d["valid"][i]
-                    r = answer(net(x), torch.as_tensor(cands(d["v"][i:i + 1])))[0].numpy()
+                    r = answer(net(x), torch.as_tensor(cands_of(d, i)[None]))[0].numpy()
                     before.append(np.abs(v - g)[ok].mean() / 1.92); after.append(np.abs(r - g)[ok].mean() / 1.92)
                     # With sky scored as index 0 (the protocol's other table).
                     gs, oks = np.where(d["sky"][i], 0.0, g), ok | d["sky"][i]
@@ -174,8 +226,8 @@ def main():
     for it in range(start, steps + 1):
         rows = [(np.random.randint(n), np.random.randint(0, 160 - 64 + 1)) for _ in range(B)]
         pick = lambda k: np.stack([tr[k][i, ..., y0:y0 + 64, :] for i, y0 in rows])
-        c = torch.as_tensor(np.stack([cands(tr["v"][i:i + 1])[0, ..., y0:y0 + 64, :] for i, y0 in rows]))
-        x = torch.as_tensor(pick("feats")).float()
+        c = torch.as_tensor(np.stack([cands_of(tr, i, slice(y0, y0 + 64)) for i, y0 in rows]))
+        x = torch.as_tensor(np.stack([inputs_of(tr, i, slice(y0, y0 + 64)) for i, y0 in rows])).float()
         g, m = torch.as_tensor(pick("gt")), torch.as_tensor(pick("valid"))
         sky = torch.as_tensor(pick("sky"))
         weight = m.float() + SKY_WEIGHT * sky.float()

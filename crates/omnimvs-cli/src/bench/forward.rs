@@ -283,11 +283,16 @@ pub fn bench_cascade_forward(
         let (out, timings) = net.forward_timed(&images, &geometry, true)?;
         let mut row = CascadeRow::from(timings);
         if let Some(pick) = pick {
-            let [_, _, fine] = out.stages;
+            let [coarse, _, fine] = out.stages;
             let index = read_values(fine.index, "index map")?;
             let spread = vec![0f32; index.len()];
             let start = std::time::Instant::now();
-            pick.refine(&index, &spread, &geometry.samplers[2], &gray)?;
+            let modes = omnimvs_net::cascade::infer::coarse_modes(
+                &coarse,
+                pick.layout().coarse_modes,
+                geometry.samplers[2].grid(),
+            )?;
+            pick.refine(&index, &spread, &modes, &geometry.samplers[2], &gray)?;
             row.pick = start.elapsed().as_secs_f64();
             row.total += row.pick;
         }

@@ -11,11 +11,11 @@ use omnimvs_data::{Dataset, DepthEstimate, StageObserver};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec, resample_map};
 
 use super::geometry::CascadeGeometry;
-use super::model::{CascadeNet, read_values};
+use super::model::{CascadeNet, StageOutput, read_values};
 use super::sampler::PixelSampler;
 use crate::error::NetError;
 use crate::infer::{input_tensors, sweep_spec};
-use crate::pick::PickRefiner;
+use crate::pick::{CoarseModes, PickRefiner};
 
 /// A cascade network ready to run on the frames of one rig.
 pub struct CascadeInference {
@@ -132,6 +132,22 @@ impl CascadeInference {
         images: &[GrayImage],
         observer: &mut dyn StageObserver,
     ) -> Result<DepthEstimate, NetError> {
+        self.run_with_modes(images, observer, 0)
+            .map(|(estimate, _)| estimate)
+    }
+
+    /// [`Self::run`], with the coarse stage's `modes` most probable modes on the output grid
+    /// ([`CoarseModes`]; none for 0). The learnt pick reads them itself when its layout asks
+    /// for them; this is for the data a pick trains on.
+    ///
+    /// # Errors
+    /// As [`Self::run`].
+    pub fn run_with_modes(
+        &self,
+        images: &[GrayImage],
+        observer: &mut dyn StageObserver,
+        modes: usize,
+    ) -> Result<(DepthEstimate, CoarseModes), NetError> {
         let inputs = input_tensors(&self.net.config, images, &self.masks, &self.device)?;
         let timed = observer.wants_timings();
         let (out, t) = self.net.forward_timed(&inputs, &self.geometry, timed)?;
@@ -140,6 +156,10 @@ impl CascadeInference {
         let on_grid = |map: Vec<f32>| resample_map(&map, &coarse_grid, &self.spec.grid);
         let entropy = on_grid(read_values(coarse.entropy(), "coarse entropy map")?);
         // The coarse distribution's standard deviation around its soft argmax, N units.
+        let start = Instant::now();
+        let wanted = modes.max(self.pick.as_ref().map_or(0, |p| p.layout().coarse_modes));
+        let coarse_modes = coarse_modes(&coarse, wanted, &self.spec.grid)?;
+        let modes_seconds = start.elapsed().as_secs_f64();
         let offsets = coarse.hypotheses - coarse.index.unsqueeze_dim::<4>(1);
         let variance = (coarse.prob * offsets.clone() * offsets)
             .sum_dim(1)
@@ -158,16 +178,42 @@ impl CascadeInference {
         ];
         if let Some(pick) = &self.pick {
             let start = Instant::now();
-            index = pick.refine(&index, &spread, self.full_sampler(), images)?;
-            let seconds = start.elapsed().as_secs_f64();
+            index = pick.refine(&index, &spread, &coarse_modes, self.full_sampler(), images)?;
+            let seconds = start.elapsed().as_secs_f64() + modes_seconds;
             stages.push(("pick", seconds));
             total += seconds;
         }
         stages.push(("total", total));
         observer.stages(&stages);
-        Ok(DepthEstimate {
-            spread: Some(spread),
-            ..DepthEstimate::with_entropy(self.spec, Self::NAME, index, entropy, total)
-        })
+        Ok((
+            DepthEstimate {
+                spread: Some(spread),
+                ..DepthEstimate::with_entropy(self.spec, Self::NAME, index, entropy, total)
+            },
+            coarse_modes,
+        ))
     }
+}
+
+/// The `count` most probable modes of a coarse stage's distribution on the output `grid`
+/// ([`CoarseModes::from_distribution`]; none for 0).
+///
+/// # Errors
+/// [`NetError`] when the stage's tensors cannot be read.
+pub fn coarse_modes(
+    coarse: &StageOutput,
+    count: usize,
+    grid: &EquirectGrid,
+) -> Result<CoarseModes, NetError> {
+    if count == 0 {
+        return Ok(CoarseModes::none());
+    }
+    let [_, k, h, w] = coarse.prob.dims();
+    CoarseModes::from_distribution(
+        &read_values(coarse.prob.clone(), "coarse distribution")?,
+        &read_values(coarse.hypotheses.clone(), "coarse spheres")?,
+        [k, h, w],
+        count,
+        [grid.height, grid.width],
+    )
 }
