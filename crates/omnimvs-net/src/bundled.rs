@@ -80,6 +80,18 @@ impl BundledModel {
         }
     }
 
+    /// Its pick followed by the second pick trained on that pick's answers (stop 42): the
+    /// cascade's; `None` for `tiny`.
+    ///
+    /// # Errors
+    /// [`NetError`] if the compiled-in files do not match the pick (a build defect).
+    pub fn pick_chain(self) -> Result<Option<PickRefiner>, NetError> {
+        match self {
+            Self::Cascade => PickRefiner::bundled_chain().map(Some),
+            Self::Tiny => Ok(None),
+        }
+    }
+
     /// The network, on `device`.
     ///
     /// # Errors
@@ -123,6 +135,34 @@ mod tests {
         }
         assert_eq!(BundledModel::from_name("paper"), None);
     }
+
+    #[test]
+    fn a_pick_choice_reads_and_writes_several_files() {
+        assert_eq!(PickChoice::parse("auto"), PickChoice::Auto);
+        assert_eq!(PickChoice::parse("off"), PickChoice::Off);
+        assert_eq!(PickChoice::parse("chain").to_string(), "chain");
+        let chain = PickChoice::Chain.load(Some(BundledModel::Cascade)).unwrap();
+        assert_eq!(chain.map(|p| p.passes()), Some(2));
+        let auto = PickChoice::Auto.load(Some(BundledModel::Cascade)).unwrap();
+        assert_eq!(auto.map(|p| p.passes()), Some(1));
+        assert!(
+            PickChoice::Chain
+                .load(Some(BundledModel::Tiny))
+                .unwrap()
+                .is_none()
+        );
+        let chain = PickChoice::parse("a.safetensors,dir/b.safetensors");
+        assert_eq!(
+            chain,
+            PickChoice::File(vec!["a.safetensors".into(), "dir/b.safetensors".into()])
+        );
+        assert_eq!(chain.to_string(), "a.safetensors,dir/b.safetensors");
+        // The first file that cannot be read is named.
+        let err = PickChoice::parse("/nonexistent/one.safetensors,/nonexistent/two.safetensors")
+            .load(None)
+            .unwrap_err();
+        assert!(err.to_string().contains("one.safetensors"), "{err}");
+    }
 }
 
 /// Which learnt pick runs after a network (`omnimvs infer --pick`, Python's `pick=`).
@@ -132,8 +172,13 @@ pub enum PickChoice {
     Auto,
     /// No pick.
     Off,
+    /// The bundled model's pick and then its second pick (the bundled cascade's two, stop 42),
+    /// none after other weights.
+    Chain,
     /// A pick's `.safetensors`, trained on the answers of the network it runs after.
-    File(std::path::PathBuf),
+    /// Several, comma-separated (`a.safetensors,b.safetensors`): each runs after the one
+    /// before it (stop 42).
+    File(Vec<std::path::PathBuf>),
 }
 
 impl PickChoice {
@@ -142,7 +187,8 @@ impl PickChoice {
         match text {
             "auto" => Self::Auto,
             "off" => Self::Off,
-            path => Self::File(path.into()),
+            "chain" => Self::Chain,
+            paths => Self::File(paths.split(',').map(Into::into).collect()),
         }
     }
 
@@ -154,8 +200,19 @@ impl PickChoice {
     pub fn load(&self, model: Option<BundledModel>) -> Result<Option<PickRefiner>, NetError> {
         match (self, model) {
             (Self::Auto, Some(model)) => model.pick(),
-            (Self::Auto | Self::Off, _) => Ok(None),
-            (Self::File(path), _) => PickRefiner::load(path).map(Some),
+            (Self::Chain, Some(model)) => model.pick_chain(),
+            (Self::Auto | Self::Off | Self::Chain, _) => Ok(None),
+            (Self::File(paths), _) => {
+                let mut chain: Option<PickRefiner> = None;
+                for path in paths {
+                    let pick = PickRefiner::load(path)?;
+                    chain = Some(match chain {
+                        Some(chain) => chain.followed_by(pick)?,
+                        None => pick,
+                    });
+                }
+                Ok(chain)
+            }
         }
     }
 }
@@ -165,7 +222,13 @@ impl std::fmt::Display for PickChoice {
         match self {
             Self::Auto => f.write_str("auto"),
             Self::Off => f.write_str("off"),
-            Self::File(path) => write!(f, "{}", path.display()),
+            Self::Chain => f.write_str("chain"),
+            Self::File(paths) => {
+                for (i, path) in paths.iter().enumerate() {
+                    write!(f, "{}{}", if i > 0 { "," } else { "" }, path.display())?;
+                }
+                Ok(())
+            }
         }
     }
 }

@@ -648,6 +648,14 @@ pub const BUNDLED_PICK: &[u8] = include_bytes!("../../../models/omnimvs-cascade-
 /// Its label in errors and reports.
 pub const BUNDLED_PICK_LABEL: &str = "models/omnimvs-cascade-pick.safetensors";
 
+/// The bundled second pick, run after [`BUNDLED_PICK`] and trained on its answers (stop 42,
+/// `models/omnimvs-cascade-pick2.safetensors`).
+pub const BUNDLED_SECOND_PICK: &[u8] =
+    include_bytes!("../../../models/omnimvs-cascade-pick2.safetensors");
+
+/// Its label in errors and reports.
+pub const BUNDLED_SECOND_PICK_LABEL: &str = "models/omnimvs-cascade-pick2.safetensors";
+
 /// One 3x3 convolution of the U-Net with its ReLU.
 #[derive(Clone, Debug)]
 struct Layer {
@@ -676,6 +684,8 @@ pub struct PickRefiner {
     /// Decoder layers from the coarsest: `d2`, `d1`, `d0`.
     decoder: [Layer; 3],
     head: Layer,
+    /// The pick run after this one on its answer (stop 42), if any.
+    then: Option<Box<PickRefiner>>,
 }
 
 /// Tensors by name: shape and values.
@@ -782,6 +792,48 @@ impl PickRefiner {
         Self::from_bytes(BUNDLED_PICK, Path::new(BUNDLED_PICK_LABEL))
     }
 
+    /// The bundled pick followed by the bundled second pick, trained on its answers (stop 42:
+    /// more accurate, and a pick's time slower; `--pick chain`).
+    ///
+    /// # Errors
+    /// [`NetError::Weights`] if the compiled-in files do not match (a build defect).
+    pub fn bundled_chain() -> Result<Self, NetError> {
+        Self::bundled()?.followed_by(Self::from_bytes(
+            BUNDLED_SECOND_PICK,
+            Path::new(BUNDLED_SECOND_PICK_LABEL),
+        )?)
+    }
+
+    /// This pick with `next` run after it on its answer (after the last of its chain).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when `next` was made for another number of cameras.
+    pub fn followed_by(mut self, next: Self) -> Result<Self, NetError> {
+        if next.cameras != self.cameras {
+            return Err(NetError::Shape {
+                what: "pick: cameras of the pick run after another".into(),
+                expected: vec![self.cameras],
+                actual: vec![next.cameras],
+            });
+        }
+        self.then = Some(Box::new(match self.then.take() {
+            Some(then) => then.followed_by(next)?,
+            None => next,
+        }));
+        Ok(self)
+    }
+
+    /// How many picks run, this one and those after it.
+    pub fn passes(&self) -> usize {
+        1 + self.then.as_ref().map_or(0, |then| then.passes())
+    }
+
+    /// The most coarse modes any pick of the chain reads ([`PickLayout::coarse_modes`]).
+    pub fn coarse_modes(&self) -> usize {
+        let after = self.then.as_ref().map_or(0, |then| then.coarse_modes());
+        self.layout.coarse_modes.max(after)
+    }
+
     /// Reads a pick from a safetensors file.
     ///
     /// # Errors
@@ -881,6 +933,7 @@ impl PickRefiner {
             encoder,
             decoder,
             head,
+            then: None,
         })
     }
 
@@ -889,7 +942,7 @@ impl PickRefiner {
         self.cameras
     }
 
-    /// Its candidates and inputs.
+    /// Its candidates and inputs (this pick's, not those of the picks after it).
     pub fn layout(&self) -> &PickLayout {
         &self.layout
     }
@@ -922,7 +975,12 @@ impl PickRefiner {
         let extremes = extremes(index, size, &radii);
         let inputs = layout.inputs_from(index, spread, modes, sampler, images, &extremes);
         let logits = self.scores(&inputs, size)?;
-        Ok(layout.combine_candidates(&logits, &layout.candidates_from(index, modes, &extremes)))
+        let answer =
+            layout.combine_candidates(&logits, &layout.candidates_from(index, modes, &extremes));
+        match &self.then {
+            Some(then) => then.refine(&answer, spread, modes, sampler, images),
+            None => Ok(answer),
+        }
     }
 
     /// The grid's `[h, w]` when the rig has this pick's cameras and the maps and images fit

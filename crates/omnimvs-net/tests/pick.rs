@@ -484,3 +484,56 @@ fn a_pick_that_trusts_the_second_mode_answers_with_its_depth() {
     let err = PickRefiner::from_bytes(&bad, Path::new("modes.safetensors")).unwrap_err();
     assert!(err.to_string().contains("coarse_modes"), "{err}");
 }
+
+#[test]
+fn a_chain_of_picks_runs_each_on_the_answer_of_the_one_before() {
+    let (images, sampler, v, spread) = real_frame();
+    let with_modes = PickLayout {
+        coarse_modes: 2,
+        ..PickLayout::default()
+    };
+    // The first answers with the second mode (v + 15); the second with the maximum over the
+    // 3 x 3 answers around (its candidate 2) of that.
+    let mut bias = vec![-30.0; with_modes.candidates()];
+    bias[8] = 30.0;
+    let first = PickRefiner::from_bytes(
+        &pick_file(&with_modes, 1, &bias),
+        Path::new("first.safetensors"),
+    )
+    .unwrap();
+    let plain = PickLayout::default();
+    let mut bias = vec![-30.0; plain.candidates()];
+    bias[2] = 30.0;
+    let second = PickRefiner::from_bytes(
+        &pick_file(&plain, 1, &bias),
+        Path::new("second.safetensors"),
+    )
+    .unwrap();
+    let chain = first.clone().followed_by(second.clone()).unwrap();
+    assert_eq!((chain.passes(), chain.coarse_modes()), (2, 2));
+    // The second of the chain reads no modes, but the chain does.
+    assert_eq!(
+        second
+            .clone()
+            .followed_by(first.clone())
+            .unwrap()
+            .coarse_modes(),
+        2
+    );
+    let modes = two_modes(&v);
+    let answer = chain
+        .refine(&v, &spread, &modes, &sampler, &images)
+        .unwrap();
+    let after_first = &modes.index[v.len()..];
+    let expected = &plain.candidate_maps(after_first, &CoarseModes::none(), [160, 640])
+        [2 * v.len()..3 * v.len()];
+    let diff = max_difference(&answer, expected);
+    assert!(diff < 1e-3, "the chain's answer differs by {diff}");
+    // A pick for one camera cannot follow a pick for four.
+    let one_camera = PickRefiner::load(&fixture("pick_tiny.safetensors")).unwrap();
+    let err = chain.followed_by(one_camera).unwrap_err();
+    assert!(err.to_string().contains("cameras"), "{err}");
+    // The bundled pick is one; the bundled chain, two.
+    assert_eq!(PickRefiner::bundled().unwrap().passes(), 1);
+    assert_eq!(PickRefiner::bundled_chain().unwrap().passes(), 2);
+}

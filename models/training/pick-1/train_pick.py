@@ -19,7 +19,9 @@
 # (`modes`, appended to the inputs; `mode_cands`, appended to the candidates). A PICK_INIT with
 # fewer inputs or candidates is widened: the new inputs' weights and the new candidates' head
 # start at zero, the candidates' biases at PICK_NEW_BIAS (default -10: far candidates at a
-# percent of the weight each, -5, cost pick-6 0.4 points of house validation MAE).
+# percent of the weight each, -5, cost pick-6 0.4 points of house validation MAE), and the new
+# inputs' weights at zero, or PyTorch's default init times PICK_NEW_INPUT_SCALE (zeros left the
+# new inputs and candidates each waiting for the other: 600 steps put 0.4 % of the weight on them).
 # Usage: train_pick.py STEPS TRAIN.npz[,..] VAL.npz[,..] [WIDTH] [OUT.pt] [THREADS]
 import json, os, struct, sys, time
 import numpy as np, torch, torch.nn as nn, torch.nn.functional as F
@@ -29,6 +31,7 @@ RADII = tuple(int(r) for r in os.environ.get("PICK_RADII", "1,2,4").split(","))
 MODES = int(os.environ.get("PICK_MODES", "0"))
 K = 1 + 2 * len(RADII) + MODES  # candidates
 NEW_BIAS = float(os.environ.get("PICK_NEW_BIAS", "-10"))
+NEW_INPUT_SCALE = float(os.environ.get("PICK_NEW_INPUT_SCALE", "0"))
 SKY_WEIGHT = float(os.environ.get("SKY_WEIGHT", "0"))
 
 
@@ -97,7 +100,9 @@ def widen(state, inputs):
     """A state dict of fewer inputs or candidates widened to `inputs` and K (see the top)."""
     w = state["e0.0.0.weight"]
     if w.shape[1] < inputs:
-        state["e0.0.0.weight"] = torch.cat([w, torch.zeros(w.shape[0], inputs - w.shape[1], 3, 3)], 1)
+        # The new inputs' weights: PyTorch's default init times NEW_INPUT_SCALE (0: zeros).
+        fresh = WrapConv(inputs, w.shape[0]).weight.detach()[:, w.shape[1]:] * NEW_INPUT_SCALE
+        state["e0.0.0.weight"] = torch.cat([w, fresh], 1)
     hw, hb = state["head.weight"], state["head.bias"]
     if hw.shape[0] < K:
         n = K - hw.shape[0]

@@ -289,7 +289,7 @@ pub fn bench_cascade_forward(
             let start = std::time::Instant::now();
             let modes = omnimvs_net::cascade::infer::coarse_modes(
                 &coarse,
-                pick.layout().coarse_modes,
+                pick.coarse_modes(),
                 geometry.samplers[2].grid(),
             )?;
             pick.refine(&index, &spread, &modes, &geometry.samplers[2], &gray)?;

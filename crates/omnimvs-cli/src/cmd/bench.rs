@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use omnimvs_camera::fs::write_atomic;
+use omnimvs_net::bundled::{BundledModel, PickChoice};
 use omnimvs_net::pick::PickRefiner;
 use omnimvs_net::{Backend, Family, NetConfig};
 use omnimvs_synth::rig::preset_rig;
@@ -56,9 +57,11 @@ pub struct Args {
     /// after the bundled cascade; the bundled pick is timed on each pass's answer otherwise.
     #[arg(long, conflicts_with = "pick")]
     pub no_pick: bool,
-    /// Time this pick's `.safetensors` instead of the bundled one (another layout, say).
-    #[arg(long)]
-    pub pick: Option<std::path::PathBuf>,
+    /// Time this pick's `.safetensors` instead of the bundled ones (another layout, say;
+    /// several, comma-separated, run one after the other as `infer --pick` does; `auto`: the
+    /// bundled one, `chain`: the bundled two, `off`: none).
+    #[arg(long, value_name = "auto|off|chain|FILE[,FILE]")]
+    pub pick: Option<String>,
     /// Where the sweep runs: the backend's best (host on CPU backends, device on GPUs).
     #[arg(long, value_enum, default_value_t = SweepPlace::Auto)]
     pub sweep: SweepPlace,
@@ -187,9 +190,9 @@ fn bench_cascade(
     let rig = preset_rig()?;
     let pick = match (&args.pick, args.no_pick) {
         (_, true) => None,
-        (Some(path), false) => {
-            Some(PickRefiner::load(path).with_context(|| format!("--pick {}", path.display()))?)
-        }
+        (Some(files), false) => PickChoice::parse(files)
+            .load(Some(BundledModel::Cascade))
+            .with_context(|| format!("--pick {files}"))?,
         (None, false) => Some(PickRefiner::bundled()?),
     };
     let forward = bench_cascade_forward(

@@ -74,9 +74,12 @@ pub struct Args {
     /// The learnt pick after the cascade: where a depth edge lies, it chooses among the answer
     /// and the nearest and farthest answers around each pixel, reading the cameras' colours
     /// there (`omnimvs_net::pick`). `auto` (the default): the bundled cascade's own pick after
-    /// the bundled cascade, none after other weights; `off`; or a pick's .safetensors trained
-    /// on the answers of the --weights network. infer.json records whether one ran.
-    #[arg(long, value_name = "auto|off|FILE", default_value = "auto", value_parser = parse_pick)]
+    /// the bundled cascade, none after other weights; `off`; `chain`: the bundled pick and then
+    /// a second pick trained on its answers (more accurate, about 0.1 s a frame slower); or a
+    /// pick's .safetensors trained on the answers of the --weights network (several,
+    /// comma-separated: each runs on the answer of the one before). infer.json records whether
+    /// one ran.
+    #[arg(long, value_name = "auto|off|chain|FILE[,FILE]", default_value = "auto", value_parser = parse_pick)]
     pub pick: PickChoice,
     /// Leave the pixels whose uncertainty (the entropy written to %05d_entropy.tiff, nats) is
     /// above this without an answer: NaN in the maps, left out of the point cloud; the

@@ -157,7 +157,7 @@ impl CascadeInference {
         let entropy = on_grid(read_values(coarse.entropy(), "coarse entropy map")?);
         // The coarse distribution's standard deviation around its soft argmax, N units.
         let start = Instant::now();
-        let wanted = modes.max(self.pick.as_ref().map_or(0, |p| p.layout().coarse_modes));
+        let wanted = modes.max(self.pick.as_ref().map_or(0, PickRefiner::coarse_modes));
         let coarse_modes = coarse_modes(&coarse, wanted, &self.spec.grid)?;
         let modes_seconds = start.elapsed().as_secs_f64();
         let offsets = coarse.hypotheses - coarse.index.unsqueeze_dim::<4>(1);
