@@ -441,6 +441,24 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
         assert!(a >= low[p] - 1e-3 && a <= high[p] + 1e-3, "pixel {p}: {a}");
     }
     assert!(max_abs_difference(&with3.data, &with.data) > 1.0);
+    // `chain` (stop 42): the bundled pick, then the second pick on its answer, whose
+    // candidates lie within the first's answers over its own widest window; the same as the
+    // two bundled files given in turn.
+    let (chained, with_chain) = run("chain");
+    assert!(chained);
+    let (low, high) = omnimvs_data::edges::neighbour_min_max(&with.data, size, true, radius);
+    for (p, &a) in with_chain.data.iter().enumerate() {
+        assert!(a >= low[p] - 1e-3 && a <= high[p] + 1e-3, "pixel {p}: {a}");
+    }
+    assert!(max_abs_difference(&with_chain.data, &with.data) > 1.0);
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
+    let files = format!(
+        "{},{}",
+        models.join("omnimvs-cascade-pick.safetensors").display(),
+        models.join("omnimvs-cascade-pick2.safetensors").display()
+    );
+    let (_, with_files) = run(&files);
+    assert_eq!(with_files.data, with_chain.data);
 }
 
 fn max_abs_difference(a: &[f32], b: &[f32]) -> f32 {

@@ -155,11 +155,11 @@ impl CascadeInference {
         let coarse_grid = *self.geometry.samplers[0].grid();
         let on_grid = |map: Vec<f32>| resample_map(&map, &coarse_grid, &self.spec.grid);
         let entropy = on_grid(read_values(coarse.entropy(), "coarse entropy map")?);
-        // The coarse distribution's standard deviation around its soft argmax, N units.
         let start = Instant::now();
         let wanted = modes.max(self.pick.as_ref().map_or(0, PickRefiner::coarse_modes));
         let coarse_modes = coarse_modes(&coarse, wanted, &self.spec.grid)?;
         let modes_seconds = start.elapsed().as_secs_f64();
+        // The coarse distribution's standard deviation around its soft argmax, N units.
         let offsets = coarse.hypotheses - coarse.index.unsqueeze_dim::<4>(1);
         let variance = (coarse.prob * offsets.clone() * offsets)
             .sum_dim(1)
