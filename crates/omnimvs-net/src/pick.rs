@@ -460,7 +460,6 @@ impl PickLayout {
                     .zip(mode.iter().zip(index))
                     .for_each(|(o, (&m, &v))| *o = (m - v) / 32.0);
                 mass.copy_from_slice(&modes.mass[j * plane..(j + 1) * plane]);
-                samples.iter_mut().for_each(|s| *s = 0.0);
                 sample_cameras(mode, sampler, images, &normalised, &mut samples);
                 let (mean, fraction) = pair.split_at_mut(plane);
                 zncc_of_cameras(&samples, cameras, [h, w], MODE_ZNCC, mean, fraction);
@@ -488,8 +487,8 @@ impl PickLayout {
 
 /// Every camera's normalised gray value (`normalised`: each image's mean and standard deviation)
 /// and whether it sees the point at each pixel's depth `map` (index units of the sampler's
-/// hypotheses), into `out` `[cameras x (gray, sees), h, w]` (left as they are where a camera does
-/// not see the point).
+/// hypotheses), into `out` `[cameras x (gray, sees), h, w]` (both 0 where a camera does not see
+/// the point).
 fn sample_cameras(
     map: &[f32],
     sampler: &PixelSampler,
@@ -518,6 +517,9 @@ fn sample_cameras(
                     {
                         gray[col] = ((value - mean) / (std + 1e-9)) as f32;
                         sees[col] = 1.0;
+                    } else {
+                        gray[col] = 0.0;
+                        sees[col] = 0.0;
                     }
                 }
             });

@@ -387,10 +387,13 @@ fn the_coarse_modes_inputs_read_the_cameras_at_each_mode() {
     assert!(err.to_string().contains("coarse modes"), "{err}");
 }
 
-/// A pick's safetensors (the training script's names) of `width` channels for `layout` and
-/// four cameras: zero weights, the head's biases `bias` (one per candidate).
-fn pick_file(layout: &PickLayout, width: usize, bias: &[f32]) -> Vec<u8> {
-    let w = width;
+/// A pick's safetensors (the training script's names) of width 1 for `layout` and four
+/// cameras that puts all the weight on candidate `trusted`: zero weights, the head's biases 30
+/// there and -30 elsewhere.
+fn pick_file(layout: &PickLayout, trusted: usize) -> Vec<u8> {
+    let w = 1;
+    let mut bias = vec![-30.0; layout.candidates()];
+    bias[trusted] = 30.0;
     let c = layout.input_channels(4);
     let layers = [
         ("e0.0.0", c, w),
@@ -425,7 +428,7 @@ fn pick_file(layout: &PickLayout, width: usize, bias: &[f32]) -> Vec<u8> {
     let mut data: Vec<f32> = Vec::new();
     for (name, c_in, c_out) in layers {
         let biases = if name == "head" {
-            bias.to_vec()
+            bias.clone()
         } else {
             vec![0.0; c_out]
         };
@@ -460,9 +463,7 @@ fn a_pick_that_trusts_the_second_mode_answers_with_its_depth() {
         ..PickLayout::default()
     };
     // Candidates: v, six extremes, then the two modes; all the weight on the second mode.
-    let mut bias = vec![-30.0; layout.candidates()];
-    bias[8] = 30.0;
-    let bytes = pick_file(&layout, 1, &bias);
+    let bytes = pick_file(&layout, 8);
     let pick = PickRefiner::from_bytes(&bytes, Path::new("modes.safetensors")).unwrap();
     assert_eq!((pick.cameras(), pick.layout()), (4, &layout));
     let modes = two_modes(&v);
@@ -494,21 +495,11 @@ fn a_chain_of_picks_runs_each_on_the_answer_of_the_one_before() {
     };
     // The first answers with the second mode (v + 15); the second with the maximum over the
     // 3 x 3 answers around (its candidate 2) of that.
-    let mut bias = vec![-30.0; with_modes.candidates()];
-    bias[8] = 30.0;
-    let first = PickRefiner::from_bytes(
-        &pick_file(&with_modes, 1, &bias),
-        Path::new("first.safetensors"),
-    )
-    .unwrap();
+    let first = PickRefiner::from_bytes(&pick_file(&with_modes, 8), Path::new("first.safetensors"))
+        .unwrap();
     let plain = PickLayout::default();
-    let mut bias = vec![-30.0; plain.candidates()];
-    bias[2] = 30.0;
-    let second = PickRefiner::from_bytes(
-        &pick_file(&plain, 1, &bias),
-        Path::new("second.safetensors"),
-    )
-    .unwrap();
+    let second =
+        PickRefiner::from_bytes(&pick_file(&plain, 2), Path::new("second.safetensors")).unwrap();
     let chain = first.clone().followed_by(second.clone()).unwrap();
     assert_eq!((chain.passes(), chain.coarse_modes()), (2, 2));
     // The second of the chain reads no modes, but the chain does.

@@ -17,11 +17,11 @@
 # candidates and their channels as inputs (`PickLayout::coarse_modes`): for each TRAIN / VAL file
 # f-NAME.npz / v-NAME.npz, m-NAME.npz / mv-NAME.npz beside it (../pick-7/pack_modes.py) holds them
 # (`modes`, appended to the inputs; `mode_cands`, appended to the candidates). A PICK_INIT with
-# fewer inputs or candidates is widened: the new inputs' weights and the new candidates' head
-# start at zero, the candidates' biases at PICK_NEW_BIAS (default -10: far candidates at a
-# percent of the weight each, -5, cost pick-6 0.4 points of house validation MAE), and the new
-# inputs' weights at zero, or PyTorch's default init times PICK_NEW_INPUT_SCALE (zeros left the
-# new inputs and candidates each waiting for the other: 600 steps put 0.4 % of the weight on them).
+# fewer inputs or candidates is widened: the new candidates' head starts at zero weights and
+# biases of PICK_NEW_BIAS (default -10: at -5, far candidates took about a percent of the weight
+# each and cost pick-6 0.4 points of house validation MAE); the new inputs' weights start at
+# PyTorch's default init times PICK_NEW_INPUT_SCALE (default 0, zeros; zeros left the new inputs
+# and candidates each waiting for the other: 600 steps put 0.4 % of the weight on them).
 # Usage: train_pick.py STEPS TRAIN.npz[,..] VAL.npz[,..] [WIDTH] [OUT.pt] [THREADS]
 import json, os, struct, sys, time
 import numpy as np, torch, torch.nn as nn, torch.nn.functional as F
