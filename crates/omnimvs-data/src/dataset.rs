@@ -285,14 +285,16 @@ impl Dataset {
             .collect()
     }
 
-    /// The validity mask of every camera.
+    /// The validity mask of every camera (the cameras in parallel: each unprojects every
+    /// pixel of its image, a fifth of `infer`'s start-up when one after the other).
     ///
     /// # Errors
     /// A mask PNG that exists but is corrupt or of the wrong size.
     pub fn masks(&self) -> Result<Vec<ValidityMask>, DataError> {
+        use rayon::prelude::*;
         self.rig
             .cameras
-            .iter()
+            .par_iter()
             .map(|c| ValidityMask::for_camera(c, &self.root).map_err(DataError::from))
             .collect()
     }
