@@ -527,4 +527,16 @@ fn a_chain_of_picks_runs_each_on_the_answer_of_the_one_before() {
     // The bundled pick is one; the bundled chain, two.
     assert_eq!(PickRefiner::bundled().unwrap().passes(), 1);
     assert_eq!(PickRefiner::bundled_chain().unwrap().passes(), 2);
+    // The third pick kept beside its run (stop 43's pick-9) follows them, with pick-6's layout.
+    let pick9 = PickRefiner::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../models/training/pick-9/pick9.safetensors"),
+    )
+    .unwrap();
+    assert_eq!(pick9.layout(), PickRefiner::bundled().unwrap().layout());
+    let three = PickRefiner::bundled_chain()
+        .unwrap()
+        .followed_by(pick9)
+        .unwrap();
+    assert_eq!(three.passes(), 3);
 }
