@@ -2,6 +2,7 @@ use std::path::{Path, PathBuf};
 
 use omnimvs_camera::{Rig, ValidityMask, parse_config_rig};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec};
+use rayon::prelude::*;
 
 use crate::gt::{EvalTruth, GroundTruth, InvDepthMap, eval_truth_on_grid, read_inv_depth};
 use crate::image_io::read_gray_sized;
@@ -291,7 +292,6 @@ impl Dataset {
     /// # Errors
     /// A mask PNG that exists but is corrupt or of the wrong size.
     pub fn masks(&self) -> Result<Vec<ValidityMask>, DataError> {
-        use rayon::prelude::*;
         self.rig
             .cameras
             .par_iter()

@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use omnimvs_camera::fs::write_atomic;
 use omnimvs_net::bundled::{BundledModel, PickChoice};
-use omnimvs_net::pick::PickRefiner;
 use omnimvs_net::{Backend, Family, NetConfig};
 use omnimvs_synth::rig::preset_rig;
 use serde::Serialize;
@@ -16,6 +15,7 @@ use crate::bench::{
     BenchReport, CascadeBenchReport, ForwardOptions, TrainStepReport, bench_cascade_forward,
     bench_cascade_train_step, bench_forward, bench_train_step,
 };
+use crate::weights::parse_pick;
 
 /// Time the network's stages, a training step and peak memory on a compute backend.
 ///
@@ -57,11 +57,11 @@ pub struct Args {
     /// after the bundled cascade; the bundled pick is timed on each pass's answer otherwise.
     #[arg(long, conflicts_with = "pick")]
     pub no_pick: bool,
-    /// Time this pick's `.safetensors` instead of the bundled ones (another layout, say;
-    /// several, comma-separated, run one after the other as `infer --pick` does; `auto`: the
-    /// bundled one, `chain`: the bundled two, `off`: none).
-    #[arg(long, value_name = "auto|off|chain|FILE[,FILE]")]
-    pub pick: Option<String>,
+    /// The pick timed, as `infer --pick`: `auto` (the default: the bundled one), `chain` (the
+    /// bundled two), `off` (none), or a pick's `.safetensors` instead of the bundled ones
+    /// (another layout, say; several, comma-separated, run one after the other).
+    #[arg(long, value_name = "auto|off|chain|FILE[,FILE]", default_value = "auto", value_parser = parse_pick)]
+    pub pick: PickChoice,
     /// Where the sweep runs: the backend's best (host on CPU backends, device on GPUs).
     #[arg(long, value_enum, default_value_t = SweepPlace::Auto)]
     pub sweep: SweepPlace,
@@ -188,12 +188,12 @@ fn bench_cascade(
     device: &burn::tensor::Device,
 ) -> Result<(Forward, Option<TrainStepReport>)> {
     let rig = preset_rig()?;
-    let pick = match (&args.pick, args.no_pick) {
-        (_, true) => None,
-        (Some(files), false) => PickChoice::parse(files)
+    let pick = if args.no_pick {
+        None
+    } else {
+        args.pick
             .load(Some(BundledModel::Cascade))
-            .with_context(|| format!("--pick {files}"))?,
-        (None, false) => Some(PickRefiner::bundled()?),
+            .with_context(|| format!("--pick {}", args.pick))?
     };
     let forward = bench_cascade_forward(
         config,
