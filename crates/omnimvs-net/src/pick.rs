@@ -430,7 +430,9 @@ impl PickLayout {
             depths.push(low);
             depths.push(high);
         }
-        let normalised: Vec<(f64, f64)> = images.iter().map(mean_and_std).collect();
+        // Each image's mean and deviation, the images in parallel (two passes over 0.6
+        // megapixels each, a few milliseconds a pick on one core).
+        let normalised: Vec<(f64, f64)> = images.par_iter().map(mean_and_std).collect();
         let first = self.answer_channels();
         for (d, map) in depths.iter().enumerate() {
             let channel = first + 2 * d * cameras;
