@@ -340,6 +340,8 @@ impl PickLayout {
         let count = self.candidates();
         let plane = candidates.len() / count;
         (0..plane)
+            .into_par_iter()
+            .with_min_len(1024)
             .map(|p| {
                 let mut best = f32::NEG_INFINITY;
                 for k in 0..count {
