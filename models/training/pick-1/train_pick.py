@@ -22,6 +22,10 @@
 # each and cost pick-6 0.4 points of house validation MAE); the new inputs' weights start at
 # PyTorch's default init times PICK_NEW_INPUT_SCALE (default 0, zeros; zeros left the new inputs
 # and candidates each waiting for the other: 600 steps put 0.4 % of the weight on them).
+# pick-10 (stop 44): PICK_TEACHER=T.pt distils a trained pick (width PICK_TEACHER_WIDTH, default 16,
+# the same inputs and candidates) into this one: every pixel of a step's bands adds PICK_DISTILL
+# (default 10) times the KL divergence of the student's candidate weights from the teacher's to
+# the loss, besides the L1 against the truth.
 # Usage: train_pick.py STEPS TRAIN.npz[,..] VAL.npz[,..] [WIDTH] [OUT.pt] [THREADS]
 import json, os, struct, sys, time
 import numpy as np, torch, torch.nn as nn, torch.nn.functional as F
@@ -33,6 +37,8 @@ K = 1 + 2 * len(RADII) + MODES  # candidates
 NEW_BIAS = float(os.environ.get("PICK_NEW_BIAS", "-10"))
 NEW_INPUT_SCALE = float(os.environ.get("PICK_NEW_INPUT_SCALE", "0"))
 SKY_WEIGHT = float(os.environ.get("SKY_WEIGHT", "0"))
+TEACHER = os.environ.get("PICK_TEACHER")
+DISTILL = float(os.environ.get("PICK_DISTILL", "10"))
 
 
 class WrapConv(nn.Conv2d):
@@ -191,6 +197,13 @@ def main():
     if os.environ.get("PICK_INIT"):
         net.load_state_dict(widen(torch.load(os.environ["PICK_INIT"]), channels))
     LR = float(os.environ.get("PICK_LR", "1e-3"))
+    teacher = None
+    if TEACHER:
+        teacher = UNet(channels, int(os.environ.get("PICK_TEACHER_WIDTH", "16")))
+        teacher.load_state_dict(torch.load(TEACHER))
+        teacher.eval()
+        for p in teacher.parameters():
+            p.requires_grad_(False)
     print("parameters", sum(p.numel() for p in net.parameters()), "inputs", channels,
           "train frames", len(tr["v"]))
     opt = torch.optim.Adam(net.parameters(), LR)
@@ -239,7 +252,13 @@ def main():
         if weight.sum() == 0:
             continue
         target = torch.where(sky, torch.zeros_like(g), g)
-        loss = ((answer(net(x), c) - target).abs() * weight).sum() / weight.sum()
+        logits = net(x)
+        loss = ((answer(logits, c) - target).abs() * weight).sum() / weight.sum()
+        if teacher is not None:
+            with torch.no_grad():
+                taught = torch.log_softmax(teacher(x), 1)
+            kl = (taught.exp() * (taught - torch.log_softmax(logits, 1))).sum(1).mean()
+            loss = loss + DISTILL * kl
         opt.zero_grad(); loss.backward(); opt.step(); sched.step()
         losses.append(loss.item())
         if it % 1000 == 0 or it == steps:
