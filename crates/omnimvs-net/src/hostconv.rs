@@ -39,6 +39,9 @@ pub struct Padding {
 /// Floats of im2col a band aims at (1 MiB: within a core's L2 cache with the GEMM's packing).
 const BAND_FLOATS: usize = 1 << 18;
 
+/// Floats of band outputs computed before they are copied into the output (64 MiB).
+const IN_FLIGHT_FLOATS: usize = 1 << 24;
+
 /// A 2D or 3D convolution (one group) with its weights laid out for the GEMM. A 2D one is a
 /// 3D one of depth 1: its sizes are `[depth, rows, columns]` with depth 1 throughout.
 #[derive(Clone, Debug)]
@@ -309,38 +312,33 @@ impl HostConv {
         let in_image = c_in * d * h * w;
         let out_image = self.c_out * plane;
         let mut out = vec![0.0f32; batch * out_image];
-        if out.is_empty() {
-            return Ok((out, [od, oh, ow]));
-        }
-        // Every band of every image on its own, writing its rows of every output channel: the
-        // output cut into those disjoint pieces, band by band, so that the bands copy their
-        // values in parallel (stop 44: the copies had run on one thread after the bands, a few
-        // percent of `infer`'s time with the other core idle).
+        // Every band of every image on its own, its output `[c_out, rows * ow]`, up to
+        // `IN_FLIGHT_FLOATS` of them at a time (so that a large output is not held twice),
+        // and at least a few per thread.
         let total = batch * bands_per_image;
-        let mut pieces: Vec<Vec<&mut [f32]>> =
-            (0..total).map(|_| Vec::with_capacity(self.c_out)).collect();
-        for (b, image_out) in out.chunks_mut(out_image).enumerate() {
-            for channel in image_out.chunks_mut(plane) {
-                for (band, piece) in channel.chunks_mut(band_rows * ow).enumerate() {
-                    pieces[b * bands_per_image + band].push(piece);
+        let band_floats = (self.c_out * band_rows * ow).max(1);
+        let in_flight =
+            (IN_FLIGHT_FLOATS / band_floats).max(4 * rayon::current_num_threads().max(1));
+        for first in (0..total).step_by(in_flight) {
+            let bands: Vec<(usize, usize, Vec<f32>)> = (first..total.min(first + in_flight))
+                .into_par_iter()
+                .map(|i| {
+                    let (b, band) = (i / bands_per_image, i % bands_per_image);
+                    let row0 = band * band_rows;
+                    let rows = band_rows.min(out_rows - row0);
+                    let image = &input[b * in_image..(b + 1) * in_image];
+                    let res = residual.map(|r| &r[b * out_image..(b + 1) * out_image]);
+                    (b, row0, self.band(image, sizes, row0, rows, res, relu))
+                })
+                .collect();
+            for (b, row0, values) in bands {
+                let n = values.len() / self.c_out;
+                for (o, chunk) in values.chunks_exact(n).enumerate() {
+                    let at = b * out_image + o * plane + row0 * ow;
+                    out[at..at + n].copy_from_slice(chunk);
                 }
             }
         }
-        pieces
-            .into_par_iter()
-            .enumerate()
-            .for_each(|(i, mut piece)| {
-                let (b, band) = (i / bands_per_image, i % bands_per_image);
-                let row0 = band * band_rows;
-                let rows = band_rows.min(out_rows - row0);
-                let image = &input[b * in_image..(b + 1) * in_image];
-                let res = residual.map(|r| &r[b * out_image..(b + 1) * out_image]);
-                let values = self.band(image, sizes, row0, rows, res, relu);
-                let n = values.len() / self.c_out;
-                for (dst, src) in piece.iter_mut().zip(values.chunks_exact(n)) {
-                    dst.copy_from_slice(src);
-                }
-            });
         Ok((out, [od, oh, ow]))
     }
 
