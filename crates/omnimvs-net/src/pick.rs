@@ -376,7 +376,14 @@ impl PickLayout {
         let size = check_sizes(index, spread, sampler, images)?;
         self.check_modes(modes, size)?;
         let extremes = extremes(index, size, &self.depth_radii);
-        Ok(self.inputs_from(index, spread, modes, sampler, images, &extremes))
+        Ok(self.inputs_from(
+            index,
+            spread,
+            modes,
+            sampler,
+            &Frame::new(images),
+            &extremes,
+        ))
     }
 
     /// Refuses `modes` with fewer than `coarse_modes` modes on the grid `[h, w]`.
@@ -404,9 +411,10 @@ impl PickLayout {
         spread: &[f32],
         modes: &CoarseModes,
         sampler: &PixelSampler,
-        images: &[GrayImage],
+        frame: &Frame,
         extremes: &Extremes,
     ) -> Vec<f32> {
+        let (images, normalised) = (frame.images, &frame.normalised);
         let (h, w) = (sampler.grid().height, sampler.grid().width);
         let plane = h * w;
         let cameras = images.len();
@@ -432,9 +440,6 @@ impl PickLayout {
             depths.push(low);
             depths.push(high);
         }
-        // Each image's mean and deviation, the images in parallel (two passes over 0.6
-        // megapixels each, a few milliseconds a pick on one core).
-        let normalised: Vec<(f64, f64)> = images.par_iter().map(mean_and_std).collect();
         let first = self.answer_channels();
         for (d, map) in depths.iter().enumerate() {
             let channel = first + 2 * d * cameras;
@@ -442,7 +447,7 @@ impl PickLayout {
                 map,
                 sampler,
                 images,
-                &normalised,
+                normalised,
                 &mut out[channel * plane..(channel + 2 * cameras) * plane],
             );
         }
@@ -464,7 +469,7 @@ impl PickLayout {
                     .zip(mode.iter().zip(index))
                     .for_each(|(o, (&m, &v))| *o = (m - v) / 32.0);
                 mass.copy_from_slice(&modes.mass[j * plane..(j + 1) * plane]);
-                sample_cameras(mode, sampler, images, &normalised, &mut samples);
+                sample_cameras(mode, sampler, images, normalised, &mut samples);
                 let (mean, fraction) = pair.split_at_mut(plane);
                 zncc_of_cameras(&samples, cameras, [h, w], MODE_ZNCC, mean, fraction);
             }
@@ -968,7 +973,19 @@ impl PickRefiner {
         sampler: &PixelSampler,
         images: &[GrayImage],
     ) -> Result<Vec<f32>, NetError> {
-        let size = self.check(index, spread, sampler, images)?;
+        self.refine_frame(index, spread, modes, sampler, &Frame::new(images))
+    }
+
+    /// [`Self::refine`] with the frame's images normalised once for every pick of the chain.
+    fn refine_frame(
+        &self,
+        index: &[f32],
+        spread: &[f32],
+        modes: &CoarseModes,
+        sampler: &PixelSampler,
+        frame: &Frame,
+    ) -> Result<Vec<f32>, NetError> {
+        let size = self.check(index, spread, sampler, frame.images)?;
         self.layout.check_modes(modes, size)?;
         // Each radius's extremes once, for the inputs and the candidates alike.
         let layout = &self.layout;
@@ -979,12 +996,12 @@ impl PickRefiner {
             .copied()
             .collect();
         let extremes = extremes(index, size, &radii);
-        let inputs = layout.inputs_from(index, spread, modes, sampler, images, &extremes);
+        let inputs = layout.inputs_from(index, spread, modes, sampler, frame, &extremes);
         let logits = self.scores(&inputs, size)?;
         let answer =
             layout.combine_candidates(&logits, &layout.candidates_from(index, modes, &extremes));
         match &self.then {
-            Some(then) => then.refine(&answer, spread, modes, sampler, images),
+            Some(then) => then.refine_frame(&answer, spread, modes, sampler, frame),
             None => Ok(answer),
         }
     }
@@ -1052,6 +1069,23 @@ impl PickRefiner {
             x = layer.run(&joined, [x.1[0] + skip.1[0], skip.1[1], skip.1[2]])?;
         }
         Ok(self.head.run(&x.0, x.1)?.0)
+    }
+}
+
+/// A frame's images (rig order) with each one's mean and standard deviation, which the
+/// cameras' samples are normalised by: computed once for every pick of a chain.
+struct Frame<'a> {
+    images: &'a [GrayImage],
+    normalised: Vec<(f64, f64)>,
+}
+
+impl<'a> Frame<'a> {
+    /// The images in parallel (two passes over 0.6 megapixels each).
+    fn new(images: &'a [GrayImage]) -> Self {
+        Self {
+            images,
+            normalised: images.par_iter().map(mean_and_std).collect(),
+        }
     }
 }
 
