@@ -266,11 +266,7 @@ pub fn network_inputs(
         .zip(masks.par_iter())
         .map(|(image, mask)| {
             let normalized = normalize_for_network(image, Some(mask))?;
-            Ok(if [normalized.height, normalized.width] == size {
-                normalized.data
-            } else {
-                resize_bilinear(&normalized, size[1], size[0]).data
-            })
+            Ok(resize_bilinear(&normalized, size[1], size[0]).data)
         })
         .collect()
 }
