@@ -2,8 +2,10 @@
 # pick-10's training (stop 44), the exact commands: a half-width second pick (U-Net width 8 instead of
 # 16, a quarter of the multiplications) for `--pick chain`, trained on pick-6's answers on all 1,510
 # frames (pick-8b's data, s-*.npz) with pick-8's script.
-#  1. `l1`: from pick-8b's weights cut to width 8 (prune.py), 4,000 of 6,000 steps by the L1 alone
-#     (stopped: see README.md); /work/data2/pick10-l1-s4000.pt.
+#  1. `l1`: from pick-8b's weights cut to width 8 (prune.py), by the L1 alone on a 6,000-step
+#     schedule, stopped by hand after its step-4,000 weights were written (see README.md), which
+#     were then copied: `cp /work/data2/pick10-l1.pt /work/data2/pick10-l1-s4000.pt` (the run
+#     itself wrote them as pick10.pt; the name here keeps them apart from step 2's).
 #  2. `distil`: from there, pick-8b distilled into it (PICK_TEACHER: the KL divergence of its
 #     candidate weights from pick-8b's, weight 10, besides the L1), 4,000 steps;
 #     /work/data2/pick10.pt and .safetensors.

@@ -2,14 +2,17 @@
 # valid pixels with |full - gt| > 10. Categories by the coarse soft argmax (each coarse pixel over its 4 x 4
 # output pixels), the half stage's answer (over 2 x 2) and the coarse distribution's most probable mode.
 # Stop 44: with a fourth argument `edges`, also the largest category's error by distance to the truth's
-# nearest depth edge (a jump of more than 20 index units between 4-neighbours, longitude wrapping; as
-# ../pick-10/edge_error.py) at the output grid: within 3 and within 8 pixels.
+# nearest depth edge (../pick-10/edge_error.py's edge_distance: a jump of more than 20 index units
+# between 4-neighbours, longitude wrapping) at the output grid: within 3 and within 8 pixels.
 # Usage: miss_categories.py DUMP_DIR A B [edges]   (the venv of ../../../../shared/tools/omni_np.py)
 import json, sys
 import numpy as np
-import scipy.ndimage as nd
 d=sys.argv[1]; A,B=int(sys.argv[2]),int(sys.argv[3])
 EDGES = len(sys.argv) > 4 and sys.argv[4] == "edges"
+if EDGES:
+    import os
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "../pick-10"))
+    from edge_error import edge_distance
 
 C={}
 n=0; errall=0.
@@ -38,9 +41,7 @@ for f in range(A,B+1):
     add("  of which mode1 mass>0.5",(s&(m1mass>0.5)).sum(),fe[s&(m1mass>0.5)].sum())
     add("  of which coarse between mode1 and full", (s&(np.abs(co4-m1)<np.abs(full-m1))).sum(),0)
     if EDGES:
-        g=np.where(gt>0,gt,0.0)
-        dx=np.abs(g-np.roll(g,1,1))>20; dy=np.zeros_like(dx); dy[1:]=np.abs(g[1:]-g[:-1])>20
-        dist=nd.distance_transform_edt(~(dx|np.roll(dx,-1,1)|dy|np.roll(dy,-1,0)))
+        dist=edge_distance(np.where(gt>0,gt,0.0))
         s=bad&~cok&~mok&~hok
         for r in (3, 8):
             add(f"  of which within {r} px of a depth edge",(s&(dist<r)).sum(),fe[s&(dist<r)].sum())
