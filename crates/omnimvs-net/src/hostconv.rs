@@ -500,32 +500,48 @@ fn gemm_add(m: usize, n: usize, k: usize, a: &[f32], b: &[f32], c: &mut [f32]) {
     }
 }
 
+/// The inputs of [`host_forward`] handed back when the host kernel does not take them: the
+/// caller runs burn's path on them instead.
+pub type Declined<const D: usize> = Box<(Tensor<D>, Option<Tensor<D>>)>;
+
 /// `host` on a tensor `[B, C_in, H, W]` (a 2D convolution) or `[B, C_in, D, H, W]` (3D), plus
 /// `residual` of the output's shape when given, then a ReLU when `relu`: the output on the
 /// input's device.
 ///
+/// The tensors are taken by value: a tensor that holds its values alone hands them over
+/// without a copy (a clone kept by the caller would make burn copy them, twice for `f32`).
+///
 /// # Errors
-/// [`NetError::Shape`] when the tensor has another rank, or its values do not read as `f32`
-/// or do not fit the kernel (the callers then take burn's path).
+/// The inputs back ([`Declined`]) when the tensor has another rank, or its values do not read
+/// as `f32` or do not fit the kernel: the callers then take burn's path.
 pub fn host_forward<const D: usize>(
     host: &HostConv,
     x: Tensor<D>,
     residual: Option<Tensor<D>>,
     relu: bool,
-) -> Result<Tensor<D>, NetError> {
+) -> Result<Tensor<D>, Declined<D>> {
     let device = x.device();
     let dims = x.dims();
     // A 2D map is a volume of depth 1.
     let volume = match *dims.as_slice() {
         [b, c, h, w] => [b, c, 1, h, w],
         [b, c, d, h, w] => [b, c, d, h, w],
-        _ => return Err(shape_error("input rank", vec![4, 5], vec![D])),
+        _ => return Err(Box::new((x, residual))),
     };
-    let input = read_values(x, "host convolution input")?;
-    let residual = residual
-        .map(|r| read_values(r, "host convolution residual"))
-        .transpose()?;
-    let (out, [od, oh, ow]) = host.forward3d(&input, volume, residual.as_deref(), relu)?;
+    let input = x.into_data();
+    let residual = residual.map(Tensor::into_data);
+    let out = match (
+        input.as_slice::<f32>(),
+        residual.as_ref().map(|r| r.as_slice::<f32>()),
+    ) {
+        (Ok(values), None) => host.forward3d(values, volume, None, relu),
+        (Ok(values), Some(Ok(r))) => host.forward3d(values, volume, Some(r), relu),
+        _ => Err(shape_error("input values as f32", vec![], vec![])),
+    };
+    let Ok((out, [od, oh, ow])) = out else {
+        let back = |data: TensorData| Tensor::from_data(data, &device);
+        return Err(Box::new((back(input), residual.map(back))));
+    };
     let mut shape = dims;
     shape[1] = host.out_channels();
     shape[D - 2] = oh;

@@ -409,3 +409,45 @@ fn three_d_convolutions_answer_as_burns() {
 fn relu_5(x: Tensor<5>) -> Tensor<5> {
     burn::tensor::activation::relu(x)
 }
+
+/// `host_forward` takes its tensors by value (stop 45: a clone kept for burn's path made burn
+/// copy every input twice). A tensor the kernel does not fit comes back as it was, with its
+/// residual, for burn's path; one that fits answers the same whether or not the caller still
+/// shares its values.
+#[test]
+fn host_forward_hands_back_what_it_declines_and_answers_alike_shared_or_not() {
+    use omnimvs_net::hostconv::host_forward;
+    let device = Device::flex();
+    device.seed(45);
+    let conv: Conv2d = Conv2dConfig::new([3, 4], [3, 3])
+        .with_padding(PaddingConfig2d::Explicit(1, 1, 1, 1))
+        .init(&device);
+    let host = HostConv::from_conv(&conv, 0, false).expect("a host kernel");
+
+    // Two channels where the kernel takes three: declined, both tensors handed back unchanged.
+    let wrong = Tensor::<4>::random([1, 2, 5, 6], Distribution::Normal(0.0, 1.0), &device);
+    let residual = Tensor::<4>::random([1, 4, 5, 6], Distribution::Normal(0.0, 1.0), &device);
+    let (wrong_values, residual_values) = (
+        read_values(wrong.clone(), "input").unwrap(),
+        read_values(residual.clone(), "residual").unwrap(),
+    );
+    let Err(declined) = host_forward(&host, wrong, Some(residual), true) else {
+        panic!("a 2-channel input is not the 3-channel kernel's");
+    };
+    let (back, back_residual) = *declined;
+    assert_eq!(back.dims(), [1, 2, 5, 6]);
+    assert_eq!(read_values(back, "back").unwrap(), wrong_values);
+    let back_residual = back_residual.expect("the residual handed back");
+    assert_eq!(read_values(back_residual, "back").unwrap(), residual_values);
+
+    // A fitting input: shared with a clone the caller keeps, then alone; both as burn's.
+    let x = Tensor::<4>::random([1, 3, 5, 6], Distribution::Normal(0.0, 1.0), &device);
+    let expected = read_values(conv.forward(x.clone()), "burn").unwrap();
+    let kept = x.clone();
+    let shared = host_forward(&host, x, None, false).expect("the kernel fits");
+    let alone = host_forward(&host, kept, None, false).expect("the kernel fits");
+    let [shared, alone] = [shared, alone].map(|t| read_values(t, "out").unwrap());
+    assert_eq!(shared, alone);
+    let scale = expected.iter().fold(1f32, |m, v| m.max(v.abs()));
+    assert!(max_difference(&shared, &expected) / scale < 1e-5);
+}

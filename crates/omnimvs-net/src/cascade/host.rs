@@ -12,7 +12,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 
 use super::geometry::HostTaps;
-use super::model::read_values;
+use super::model::with_values;
 use crate::error::NetError;
 
 /// Most feature channels the kernel takes (its per-sample sums live on the stack).
@@ -57,7 +57,6 @@ pub fn correlation(
             taps.cameras.iter().map(Vec::len).collect(),
         ));
     }
-    let mut tables = Vec::with_capacity(features.len());
     let mut channels = 0;
     for feature in features {
         let [b, c, rows, cols] = feature.dims();
@@ -75,8 +74,12 @@ pub fn correlation(
             ));
         }
         channels = c;
-        tables.push(channels_last(&read_values(feature.clone(), "features")?, c));
     }
+    // Channels-last tables, the cameras in parallel.
+    let tables = features
+        .par_iter()
+        .map(|feature| with_values(feature.clone(), "features", |v| channels_last(v, channels)))
+        .collect::<Result<Vec<_>, _>>()?;
     if groups == 0 || channels % groups != 0 {
         return Err(shape_error("groups", vec![channels], vec![groups]));
     }
@@ -98,12 +101,16 @@ pub fn correlation(
     }
     // [G + 1, S]: the groups, then the visibility.
     let mut volume = vec![0f32; (groups + 1) * samples];
-    for (g, plane) in volume.chunks_exact_mut(samples).take(groups).enumerate() {
-        for (v, row) in plane.iter_mut().zip(grouped.chunks_exact(groups)) {
-            *v = row[g];
-        }
-    }
-    volume[groups * samples..].copy_from_slice(&taps.visibility);
+    let (planes, visibility) = volume.split_at_mut(groups * samples);
+    planes
+        .par_chunks_exact_mut(samples)
+        .enumerate()
+        .for_each(|(g, plane)| {
+            for (v, row) in plane.iter_mut().zip(grouped.chunks_exact(groups)) {
+                *v = row[g];
+            }
+        });
+    visibility.copy_from_slice(&taps.visibility);
     Ok(Tensor::from_data(
         TensorData::new(volume, [1, groups + 1, k, h, w]),
         device,

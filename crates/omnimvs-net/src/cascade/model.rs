@@ -383,11 +383,13 @@ impl PanoConv2d {
 
     /// `[B, C_in, H, W] -> [B, C_out, H', W']`.
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
-        if let Some(host) = &self.host
-            && let Ok(y) = host_forward(host, x.clone(), None, self.relu)
-        {
-            return y;
-        }
+        let x = match &self.host {
+            Some(host) => match host_forward(host, x, None, self.relu) {
+                Ok(y) => return y,
+                Err(declined) => declined.0,
+            },
+            None => x,
+        };
         let [_, _, _, w] = x.dims();
         let first = x.clone().narrow(3, 0, 1);
         let last = x.clone().narrow(3, w - 1, 1);
@@ -1679,6 +1681,30 @@ pub fn read_values<const D: usize>(t: Tensor<D>, what: &str) -> Result<Vec<f32>,
             expected: vec![],
             actual: vec![],
         })
+}
+
+/// `f` on the values of `t` as `f32`, borrowed from the tensor's buffer: no copy when the
+/// tensor holds its values alone, one when it shares them (where [`read_values`] of a shared
+/// tensor copies twice).
+///
+/// # Errors
+/// [`NetError::Shape`] when the data cannot be read as `f32`.
+pub fn with_values<const D: usize, R>(
+    t: Tensor<D>,
+    what: &str,
+    f: impl FnOnce(&[f32]) -> R,
+) -> Result<R, NetError> {
+    let data = t.into_data();
+    if let Ok(values) = data.as_slice::<f32>() {
+        return Ok(f(values));
+    }
+    // Another dtype, or bytes not aligned for f32: converted in a copy.
+    let values = data.try_into_vec_as::<f32>().map_err(|e| NetError::Shape {
+        what: format!("{what} ({e:?})"),
+        expected: vec![],
+        actual: vec![],
+    })?;
+    Ok(f(&values))
 }
 
 /// A `[1, K, H, W]` tensor of hypothesis indices from `[K, H * W]` values.

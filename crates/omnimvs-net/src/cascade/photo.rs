@@ -24,7 +24,7 @@ use omnimvs_stereo::params::{COST_SCALE, Directions, cost_units};
 use omnimvs_stereo::{ZNCC_VARIANCE_EPS, camera_pairs};
 use rayon::prelude::*;
 
-use super::model::read_values;
+use super::model::with_values;
 use super::score_sgm::aggregate_eight;
 use crate::error::NetError;
 use crate::taps::{SweepGrid, bilinear_taps};
@@ -93,7 +93,7 @@ impl ImagePyramid {
         };
         let [_, _, rows, cols] = first.dims();
         let values = images
-            .iter()
+            .par_iter()
             .map(|image| {
                 let dims = image.dims();
                 if dims != [1, 1, rows, cols] {
@@ -103,7 +103,7 @@ impl ImagePyramid {
                         actual: dims.to_vec(),
                     });
                 }
-                read_values(image.clone(), "input image")
+                with_values(image.clone(), "input image", <[f32]>::to_vec)
             })
             .collect::<Result<Vec<_>, _>>()?;
         Self::new(values, [rows, cols])

@@ -124,11 +124,13 @@ impl ConvBn2d {
 
     /// `[B, C_in, H, W] -> [B, C_out, H', W']`, adding `residual` before the ReLU.
     pub fn forward(&self, x: Tensor<4>, residual: Option<Tensor<4>>) -> Tensor<4> {
-        if let Some(host) = &self.host
-            && let Ok(y) = host_forward(host, x.clone(), residual.clone(), self.relu)
-        {
-            return y;
-        }
+        let (x, residual) = match &self.host {
+            Some(host) => match host_forward(host, x, residual, self.relu) {
+                Ok(y) => return y,
+                Err(declined) => *declined,
+            },
+            None => (x, residual),
+        };
         let x = self.conv.forward(x); // [B, C_out, H', W']
         finish(x, self.bn.as_ref(), residual, self.relu)
     }
@@ -205,11 +207,13 @@ impl ConvBn3d {
 
     /// `[B, C_in, D, H, W] -> [B, C_out, D', H', W']`.
     pub fn forward(&self, x: Tensor<5>, residual: Option<Tensor<5>>) -> Tensor<5> {
-        if let Some(host) = &self.host
-            && let Ok(y) = host_forward(host, x.clone(), residual.clone(), self.relu)
-        {
-            return y;
-        }
+        let (x, residual) = match &self.host {
+            Some(host) => match host_forward(host, x, residual, self.relu) {
+                Ok(y) => return y,
+                Err(declined) => *declined,
+            },
+            None => (x, residual),
+        };
         let x = self.conv.forward(x); // [B, C_out, D', H', W']
         self.finish(x, residual)
     }
