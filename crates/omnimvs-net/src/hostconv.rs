@@ -15,6 +15,8 @@
 //! test compares them with burn's to 1e-4 relative. No gradient: training keeps burn's
 //! modules ([`HostConv::from_conv`] reads a trained, batch-norm-folded layer).
 
+use std::marker::PhantomData;
+
 use burn::module::Param;
 use burn::nn::conv::{Conv2d, Conv3d};
 use burn::nn::{PaddingConfig2d, PaddingConfig3d};
@@ -38,9 +40,6 @@ pub struct Padding {
 
 /// Floats of im2col a band aims at (1 MiB: within a core's L2 cache with the GEMM's packing).
 const BAND_FLOATS: usize = 1 << 18;
-
-/// Floats of band outputs computed before they are copied into the output (64 MiB).
-const IN_FLIGHT_FLOATS: usize = 1 << 24;
 
 /// A 2D or 3D convolution (one group) with its weights laid out for the GEMM. A 2D one is a
 /// 3D one of depth 1: its sizes are `[depth, rows, columns]` with depth 1 throughout.
@@ -312,37 +311,29 @@ impl HostConv {
         let in_image = c_in * d * h * w;
         let out_image = self.c_out * plane;
         let mut out = vec![0.0f32; batch * out_image];
-        // Every band of every image on its own, its output `[c_out, rows * ow]`, up to
-        // `IN_FLIGHT_FLOATS` of them at a time (so that a large output is not held twice),
-        // and at least a few per thread.
+        // Every band of every image on its own, written where it belongs in the output (no
+        // band buffers, no copies after them).
         let total = batch * bands_per_image;
-        let band_floats = (self.c_out * band_rows * ow).max(1);
-        let in_flight =
-            (IN_FLIGHT_FLOATS / band_floats).max(4 * rayon::current_num_threads().max(1));
-        for first in (0..total).step_by(in_flight) {
-            let bands: Vec<(usize, usize, Vec<f32>)> = (first..total.min(first + in_flight))
-                .into_par_iter()
-                .map(|i| {
-                    let (b, band) = (i / bands_per_image, i % bands_per_image);
-                    let row0 = band * band_rows;
-                    let rows = band_rows.min(out_rows - row0);
-                    let image = &input[b * in_image..(b + 1) * in_image];
-                    let res = residual.map(|r| &r[b * out_image..(b + 1) * out_image]);
-                    (b, row0, self.band(image, sizes, row0, rows, res, relu))
-                })
-                .collect();
-            for (b, row0, values) in bands {
-                let n = values.len() / self.c_out;
-                for (o, chunk) in values.chunks_exact(n).enumerate() {
-                    let at = b * out_image + o * plane + row0 * ow;
-                    out[at..at + n].copy_from_slice(chunk);
-                }
-            }
-        }
+        let dst = OutputBase::new(&mut out);
+        (0..total).into_par_iter().for_each(|i| {
+            let (b, band) = (i / bands_per_image, i % bands_per_image);
+            let row0 = band * band_rows;
+            let rows = band_rows.min(out_rows - row0);
+            let image = &input[b * in_image..(b + 1) * in_image];
+            let res = residual.map(|r| &r[b * out_image..(b + 1) * out_image]);
+            let rows_of = BandRows {
+                first: b * out_image + row0 * ow,
+                len: rows * ow,
+                channel_stride: plane,
+            };
+            self.band(image, sizes, row0, rows, res, relu, dst, rows_of);
+        });
         Ok((out, [od, oh, ow]))
     }
 
-    /// Output rows `row0 .. row0 + rows` (over all depths) of one image: `[c_out, rows * ow]`.
+    /// Output rows `row0 .. row0 + rows` (over all depths) of one image into `dst`, at
+    /// `rows_of`: the band's `[c_out, rows * ow]` values, channels `plane` apart.
+    #[allow(clippy::too_many_arguments)]
     fn band(
         &self,
         image: &[f32],
@@ -351,16 +342,20 @@ impl HostConv {
         rows: usize,
         residual: Option<&[f32]>,
         relu: bool,
-    ) -> Vec<f32> {
+        dst: OutputBase<'_>,
+        rows_of: BandRows,
+    ) {
         let n = rows * s.ow;
+        debug_assert_eq!(n, rows_of.len);
         let direct = self.kernel == [1, 1, 1]
             && self.stride == [1, 1, 1]
             && self.depth_pad == 0
             && self.padding.rows == 0
             && self.padding.cols == 0;
-        let mut out = Vec::with_capacity(self.c_out * n);
-        for &b in &self.bias {
-            out.extend(std::iter::repeat_n(b, n));
+        for (o, &b) in self.bias.iter().enumerate() {
+            // SAFETY: `rows_of` is this band's (`forward3d`), one channel's slice at a time.
+            #[allow(unsafe_code)]
+            unsafe { dst.channel(rows_of, o) }.fill(b);
         }
         if direct {
             // A 1x1 convolution reads the input's rows as they are: one copy per channel.
@@ -370,27 +365,29 @@ impl HostConv {
                 let at = c * volume + row0 * s.w;
                 col.extend_from_slice(&image[at..at + n]);
             }
-            gemm_add(self.c_out, n, self.c_in, &self.weight, &col, &mut out);
+            gemm_add(self.c_out, n, self.c_in, &self.weight, &col, dst, rows_of);
         } else {
             let col = self.im2col(image, s, row0, rows);
             let k = self.c_in * self.kernel.iter().product::<usize>();
-            gemm_add(self.c_out, n, k, &self.weight, &col, &mut out);
+            gemm_add(self.c_out, n, k, &self.weight, &col, dst, rows_of);
         }
-        if let Some(r) = residual {
-            let plane = r.len() / self.c_out;
-            for (o, chunk) in out.chunks_exact_mut(n).enumerate() {
+        for o in 0..self.c_out {
+            // SAFETY: as for the bias above; `gemm_add` has returned.
+            #[allow(unsafe_code)]
+            let chunk = unsafe { dst.channel(rows_of, o) };
+            if let Some(r) = residual {
+                let plane = r.len() / self.c_out;
                 let at = o * plane + row0 * s.ow;
                 for (v, r) in chunk.iter_mut().zip(&r[at..at + n]) {
                     *v += r;
                 }
             }
-        }
-        if relu {
-            for v in &mut out {
-                *v = v.max(0.0);
+            if relu {
+                for v in chunk.iter_mut() {
+                    *v = v.max(0.0);
+                }
             }
         }
-        out
     }
 
     /// The im2col matrix of output rows `row0 .. row0 + rows` (over all depths):
@@ -462,27 +459,89 @@ impl HostConv {
     }
 }
 
-/// `c[m, n] += a[m, k] b[k, n]`, all row-major and contiguous, on this thread.
-fn gemm_add(m: usize, n: usize, k: usize, a: &[f32], b: &[f32], c: &mut [f32]) {
+/// The values of one band in a convolution's output: `len` values of each output channel,
+/// the first channel's from `first`, the next ones `channel_stride` further each.
+#[derive(Clone, Copy, Debug)]
+struct BandRows {
+    first: usize,
+    len: usize,
+    channel_stride: usize,
+}
+
+/// The start of a convolution's output `Vec`, shared by the bands that fill it in parallel.
+///
+/// Each band writes only its own [`BandRows`]: the rows of one image that no other band
+/// has (bands cut an image's output rows into disjoint ranges, and images lie apart), inside
+/// the output (`HostConv::forward3d` sizes it as every image's channels times their rows).
+/// So no two threads ever touch the same value, and the `Vec` is neither read nor moved
+/// while the bands run (`forward3d` waits for all of them).
+#[derive(Clone, Copy)]
+struct OutputBase<'a>(*mut f32, PhantomData<&'a mut [f32]>);
+
+// SAFETY: the pointer is only used as described on `OutputBase`: disjoint writes from the
+// bands of one `forward3d` call, which holds the output borrowed for `'a`.
+#[allow(unsafe_code)]
+unsafe impl Send for OutputBase<'_> {}
+// SAFETY: as for `Send`.
+#[allow(unsafe_code)]
+unsafe impl Sync for OutputBase<'_> {}
+
+impl<'a> OutputBase<'a> {
+    /// The base of `out`, borrowed for as long as bands write into it.
+    fn new(out: &'a mut [f32]) -> Self {
+        Self(out.as_mut_ptr(), PhantomData)
+    }
+
+    /// The band's values of output channel `o`.
+    ///
+    /// # Safety
+    /// `rows` must be the calling band's own (see [`OutputBase`]) and inside the output, and
+    /// the caller must hold no other slice of them while it uses this one.
+    #[allow(unsafe_code)]
+    unsafe fn channel(self, rows: BandRows, o: usize) -> &'a mut [f32] {
+        // SAFETY: the caller's contract above.
+        unsafe {
+            std::slice::from_raw_parts_mut(
+                self.0.add(rows.first + o * rows.channel_stride),
+                rows.len,
+            )
+        }
+    }
+}
+
+/// `c[m, n] += a[m, k] b[k, n]` on this thread, `a` and `b` row-major and contiguous, `c` the
+/// band `rows` of the output at `dst` (its row `i` channel `i`'s values).
+fn gemm_add(
+    m: usize,
+    n: usize,
+    k: usize,
+    a: &[f32],
+    b: &[f32],
+    dst: OutputBase<'_>,
+    rows: BandRows,
+) {
     assert!(
-        a.len() >= m * k && b.len() >= k * n && c.len() >= m * n,
-        "gemm_add: slices shorter than {m}x{k}, {k}x{n}, {m}x{n}"
+        a.len() >= m * k && b.len() >= k * n && rows.len == n,
+        "gemm_add: slices shorter than {m}x{k} and {k}x{n}, or a band of {} values, not {n}",
+        rows.len
     );
     if m == 0 || n == 0 || k == 0 {
         return;
     }
     // SAFETY: the assertion above keeps every element `gemm` reads (`a`: m x k, row stride k;
-    // `b`: k x n, row stride n) and writes (`c`: m x n, row stride n) inside its slice; `c`
-    // is borrowed mutably, so it aliases neither input; one thread (`Parallelism::None`).
+    // `b`: k x n, row stride n) inside its slice; it writes `c`'s m rows of n values, row `i`
+    // at `rows.first + i * rows.channel_stride`: the band's own values (`OutputBase`), which
+    // alias neither input (those are borrowed, the output is the `Vec` being filled); one
+    // thread (`Parallelism::None`).
     #[allow(unsafe_code)]
     unsafe {
         gemm::gemm(
             m,
             n,
             k,
-            c.as_mut_ptr(),
+            dst.0.add(rows.first),
             1,
-            n as isize,
+            rows.channel_stride as isize,
             true,
             a.as_ptr(),
             1,
