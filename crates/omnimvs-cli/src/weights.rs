@@ -110,7 +110,7 @@ impl Weights {
 }
 
 /// `clap`'s reader of a `--pick` value (the learnt pick after the cascade network,
-/// `omnimvs_net::pick`): `auto`, `off` or a path.
+/// `omnimvs_net::pick`): `auto`, `off`, `single`, `chain` or paths.
 pub fn parse_pick(text: &str) -> Result<PickChoice, String> {
     Ok(PickChoice::parse(text))
 }

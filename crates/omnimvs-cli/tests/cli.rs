@@ -404,7 +404,8 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
         let index = omnimvs_data::gt::read_inv_depth(&out.join("00001_index.tiff")).unwrap();
         (settings["pick"].as_bool().unwrap(), index)
     };
-    let (picked, with) = run("auto");
+    // `single`: the bundled first pick alone (the default until stop 45).
+    let (picked, with) = run("single");
     let (not_picked, without) = run("off");
     assert!(picked && !not_picked);
     let size = [without.height, without.width];
@@ -459,6 +460,10 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
     );
     let (_, with_files) = run(&files);
     assert_eq!(with_files.data, with_chain.data);
+    // The default since stop 45: `auto` runs the two bundled picks, as `chain`.
+    let (auto_picked, with_auto) = run("auto");
+    assert!(auto_picked);
+    assert_eq!(with_auto.data, with_chain.data);
 }
 
 fn max_abs_difference(a: &[f32], b: &[f32]) -> f32 {

@@ -143,8 +143,14 @@ mod tests {
         assert_eq!(PickChoice::parse("chain").to_string(), "chain");
         let chain = PickChoice::Chain.load(Some(BundledModel::Cascade)).unwrap();
         assert_eq!(chain.map(|p| p.passes()), Some(2));
+        // The default since stop 45: the two picks; `single` the first alone.
         let auto = PickChoice::Auto.load(Some(BundledModel::Cascade)).unwrap();
-        assert_eq!(auto.map(|p| p.passes()), Some(1));
+        assert_eq!(auto.map(|p| p.passes()), Some(2));
+        assert_eq!(PickChoice::parse("single").to_string(), "single");
+        let single = PickChoice::Single
+            .load(Some(BundledModel::Cascade))
+            .unwrap();
+        assert_eq!(single.map(|p| p.passes()), Some(1));
         assert!(
             PickChoice::Chain
                 .load(Some(BundledModel::Tiny))
@@ -168,10 +174,15 @@ mod tests {
 /// Which learnt pick runs after a network (`omnimvs infer --pick`, Python's `pick=`).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum PickChoice {
-    /// The bundled model's own pick after it (the bundled cascade's), none after other weights.
+    /// The bundled model's own picks after it: the bundled cascade's two in turn, as
+    /// [`PickChoice::Chain`] (stop 45; its first pick alone until then), none after other
+    /// weights.
     Auto,
     /// No pick.
     Off,
+    /// The bundled model's first pick alone (the default until stop 45), none after other
+    /// weights.
+    Single,
     /// The bundled model's pick and then its second pick (the bundled cascade's two, stop 42),
     /// none after other weights.
     Chain,
@@ -182,11 +193,12 @@ pub enum PickChoice {
 }
 
 impl PickChoice {
-    /// Reads `auto`, `off` or a path.
+    /// Reads `auto`, `off`, `single`, `chain` or a path.
     pub fn parse(text: &str) -> Self {
         match text {
             "auto" => Self::Auto,
             "off" => Self::Off,
+            "single" => Self::Single,
             "chain" => Self::Chain,
             paths => Self::File(paths.split(',').map(Into::into).collect()),
         }
@@ -199,9 +211,9 @@ impl PickChoice {
     /// [`NetError`] for a pick file that cannot be read or is not a pick's.
     pub fn load(&self, model: Option<BundledModel>) -> Result<Option<PickRefiner>, NetError> {
         match (self, model) {
-            (Self::Auto, Some(model)) => model.pick(),
-            (Self::Chain, Some(model)) => model.pick_chain(),
-            (Self::Auto | Self::Off | Self::Chain, _) => Ok(None),
+            (Self::Single, Some(model)) => model.pick(),
+            (Self::Auto | Self::Chain, Some(model)) => model.pick_chain(),
+            (Self::Auto | Self::Off | Self::Single | Self::Chain, _) => Ok(None),
             (Self::File(paths), _) => {
                 let mut chain: Option<PickRefiner> = None;
                 for path in paths {
@@ -222,6 +234,7 @@ impl std::fmt::Display for PickChoice {
         match self {
             Self::Auto => f.write_str("auto"),
             Self::Off => f.write_str("off"),
+            Self::Single => f.write_str("single"),
             Self::Chain => f.write_str("chain"),
             Self::File(paths) => {
                 for (i, path) in paths.iter().enumerate() {

@@ -25,7 +25,8 @@ fn bundled_model(weights: Option<&Path>) -> Option<BundledModel> {
 }
 
 /// The learnt pick after the cascade as `omnimvs infer --pick` chooses it: `"auto"` the bundled
-/// model's own (the bundled cascade's), `"off"` none, or a pick's `.safetensors`.
+/// model's own (the bundled cascade's two picks), `"off"` none, `"single"` the first bundled
+/// pick alone, `"chain"` both, or a pick's `.safetensors`.
 fn load_pick(pick: &str, weights: Option<&Path>) -> PyResult<Option<PickRefiner>> {
     PickChoice::parse(pick)
         .load(bundled_model(weights))
@@ -78,9 +79,10 @@ fn load_network(
 ///         standard deviation of the network's distribution, a sharper filter (`omnimvs infer
 ///         --max-spread`; applied after `max_entropy`).
 ///     pick: the learnt pick after the cascade network (`omnimvs infer --pick`): `"auto"`
-///         (the default: the bundled cascade's own pick after the bundled cascade, none after
-///         other weights), `"off"`, or a pick's `.safetensors` trained on the answers of the
-///         `weights` network.
+///         (the default: the bundled cascade's own picks after the bundled cascade, its two
+///         in turn since stop 45, none after other weights), `"off"`, `"single"` (the first
+///         bundled pick alone), `"chain"` (both), or a pick's `.safetensors` trained on the
+///         answers of the `weights` network (several, comma-separated, run in turn).
 ///     maps: `False` (the default) for the inverse-depth array alone; `True` for a dict of
 ///         every map of the estimate, each `numpy.float32` `(height, width)` or `None` where
 ///         the network has none: `inv_depth`, `index` (hypothesis index, N units), `entropy`

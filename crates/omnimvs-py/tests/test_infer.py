@@ -146,7 +146,8 @@ def test_maps(itbt_path, itbt, itbt_net, cli, tmp_path):
 
 
 def test_pick(itbt_path, itbt, itbt_net, cli, tmp_path):
-    # "auto" (the default) runs the bundled cascade's learnt pick after it, as the command line does.
+    # "auto" (the default) runs the bundled cascade's learnt picks after it, as the command line
+    # does: since stop 45 its two in turn ("chain"); "single" the first alone.
     without = omnimvs.infer(itbt, 1, pick="off")
     cli("infer", itbt_path, "--frames", 1, "--pick", "off", "--out", tmp_path)
     np.testing.assert_allclose(without, tifffile.imread(tmp_path / "00001.tiff"), rtol=1e-5, atol=1e-6)
@@ -155,9 +156,16 @@ def test_pick(itbt_path, itbt, itbt_net, cli, tmp_path):
     two_indices = 2 * (1 / itbt.min_depth) / 191
     moved = np.abs(without - itbt_net) > two_indices
     assert 0.01 < moved.mean() < 0.3
-    # A pick file: the bundled one by path is the default's.
-    bundled = Path(__file__).resolve().parents[3] / "models" / "omnimvs-cascade-pick.safetensors"
-    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, pick=str(bundled)), itbt_net)
+    # Pick files: the bundled two by path, in turn, are the default's; the first alone is
+    # "single"'s.
+    models = Path(__file__).resolve().parents[3] / "models"
+    bundled = models / "omnimvs-cascade-pick.safetensors"
+    second = models / "omnimvs-cascade-pick2.safetensors"
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, pick=f"{bundled},{second}"), itbt_net)
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, pick="chain"), itbt_net)
+    single = omnimvs.infer(itbt, 1, pick="single")
+    np.testing.assert_array_equal(omnimvs.infer(itbt, 1, pick=str(bundled)), single)
+    assert np.abs(single - itbt_net).max() > 0
     with pytest.raises(FileNotFoundError, match="nonexistent"):
         omnimvs.infer(itbt, 1, pick="/nonexistent/pick.safetensors")
     # No pick after the paper's network: "auto" leaves it out, a file is refused.

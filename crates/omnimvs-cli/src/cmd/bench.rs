@@ -54,13 +54,14 @@ pub struct Args {
     #[arg(long)]
     pub burn_convs: bool,
     /// Leave out the learnt pick after the cascade (`omnimvs_net::pick`), which `infer` runs
-    /// after the bundled cascade; the bundled pick is timed on each pass's answer otherwise.
+    /// after the bundled cascade; the bundled picks are timed on each pass's answer otherwise.
     #[arg(long, conflicts_with = "pick")]
     pub no_pick: bool,
-    /// The pick timed, as `infer --pick`: `auto` (the default: the bundled one), `chain` (the
-    /// bundled two), `off` (none), or a pick's `.safetensors` instead of the bundled ones
-    /// (another layout, say; several, comma-separated, run one after the other).
-    #[arg(long, value_name = "auto|off|chain|FILE[,FILE]", default_value = "auto", value_parser = parse_pick)]
+    /// The pick timed, as `infer --pick`: `auto` (the default: the bundled ones, as `chain`
+    /// since stop 45), `single` (the bundled first pick alone), `chain` (the bundled two),
+    /// `off` (none), or a pick's `.safetensors` instead of the bundled ones (another layout,
+    /// say; several, comma-separated, run one after the other).
+    #[arg(long, value_name = "auto|off|single|chain|FILE[,FILE]", default_value = "auto", value_parser = parse_pick)]
     pub pick: PickChoice,
     /// Where the sweep runs: the backend's best (host on CPU backends, device on GPUs).
     #[arg(long, value_enum, default_value_t = SweepPlace::Auto)]

@@ -52,10 +52,11 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = Preset::Paper)]
     pub preset: Preset,
     /// The learnt pick after the cascade, as `infer --pick`: `auto` (the bundled cascade's own
-    /// after the bundled cascade), `off`, `chain` (the bundled pick and the second one after it),
-    /// or a pick's .safetensors (after every cascade row; several, comma-separated, run one
-    /// after the other).
-    #[arg(long, value_name = "auto|off|chain|FILE[,FILE]", default_value = "auto", value_parser = parse_pick)]
+    /// after the bundled cascade: its two picks in turn), `off`, `single` (the bundled first
+    /// pick alone), `chain` (the bundled pick and the second one after it), or a pick's
+    /// .safetensors (after every cascade row; several, comma-separated, run one after the
+    /// other).
+    #[arg(long, value_name = "auto|off|single|chain|FILE[,FILE]", default_value = "auto", value_parser = parse_pick)]
     pub pick: PickChoice,
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
