@@ -78,6 +78,19 @@ class UNet(nn.Module):
         return s.head(d0)
 
 
+# The U-Net's convolutions in order, each with the layers whose outputs it reads (None: the
+# pick's inputs); a decoder layer reads a concatenation [upsampled deeper part, skip part]. For
+# scripts that cut or grow a trained pick's channels (pick-10's prune.py, pick-11's widen.py).
+UNET_LAYERS = [
+    ("e0.0.0", None), ("e0.1.0", ["e0.0.0"]),
+    ("e1.0.0", ["e0.1.0"]), ("e1.1.0", ["e1.0.0"]),
+    ("e2.0.0", ["e1.1.0"]), ("e2.1.0", ["e2.0.0"]),
+    ("e3.0.0", ["e2.1.0"]), ("e3.1.0", ["e3.0.0"]),
+    ("d2.0", ["e3.1.0", "e2.1.0"]), ("d1.0", ["d2.0", "e1.1.0"]), ("d0.0", ["d1.0", "e0.1.0"]),
+    ("head", ["d0.0"]),
+]
+
+
 def cands(v, radii=None):
     """v (B, H, W) -> (B, K, H, W): v, and the min / max over (2 r + 1)^2 for r in RADII (default
     3x3, 5x5, 9x9; wrapping in longitude)."""

@@ -4,8 +4,11 @@
 # channels (the decoder's concatenations keep the kept channels of both parts). The head is kept
 # whole. The result is a width W/2 state dict for train_pick.py's PICK_INIT, fine-tuned after.
 # Usage: prune.py IN.pt OUT.pt   (the torch venv)
-import sys
+import os, sys
 import torch
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "../pick-1"))
+from train_pick import UNET_LAYERS as layers  # noqa: E402
 
 src = torch.load(sys.argv[1])
 w = src["e0.0.0.weight"].shape[0]
@@ -19,16 +22,8 @@ def keep(name, n):
     return torch.sort(torch.topk(norm, n).indices).values
 
 
-# (layer, input-channel source(s)) in order; a source is a previous layer's kept outputs, or
-# None for all of the inputs. Concatenations: [upsampled deeper part, skip part].
-layers = [
-    ("e0.0.0", None), ("e0.1.0", ["e0.0.0"]),
-    ("e1.0.0", ["e0.1.0"]), ("e1.1.0", ["e1.0.0"]),
-    ("e2.0.0", ["e1.1.0"]), ("e2.1.0", ["e2.0.0"]),
-    ("e3.0.0", ["e2.1.0"]), ("e3.1.0", ["e3.0.0"]),
-    ("d2.0", ["e3.1.0", "e2.1.0"]), ("d1.0", ["d2.0", "e1.1.0"]), ("d0.0", ["d1.0", "e0.1.0"]),
-    ("head", ["d0.0"]),
-]
+# (layer, input-channel source(s)) in order (train_pick.py's UNET_LAYERS); a source is a previous
+# layer's kept outputs, or None for all of the inputs.
 kept, out = {}, {}
 for name, sources in layers:
     wt, b = src[name + ".weight"], src[name + ".bias"]
