@@ -476,7 +476,12 @@ struct BandRows {
 /// So no two threads ever touch the same value, and the `Vec` is neither read nor moved
 /// while the bands run (`forward3d` waits for all of them).
 #[derive(Clone, Copy)]
-struct OutputBase<'a>(*mut f32, PhantomData<&'a mut [f32]>);
+struct OutputBase<'a> {
+    ptr: *mut f32,
+    /// The output's length: every range handed out is checked against it.
+    len: usize,
+    _out: PhantomData<&'a mut [f32]>,
+}
 
 // SAFETY: the pointer is only used as described on `OutputBase`: disjoint writes from the
 // bands of one `forward3d` call, which holds the output borrowed for `'a`.
@@ -489,20 +494,37 @@ unsafe impl Sync for OutputBase<'_> {}
 impl<'a> OutputBase<'a> {
     /// The base of `out`, borrowed for as long as bands write into it.
     fn new(out: &'a mut [f32]) -> Self {
-        Self(out.as_mut_ptr(), PhantomData)
+        Self {
+            ptr: out.as_mut_ptr(),
+            len: out.len(),
+            _out: PhantomData,
+        }
+    }
+
+    /// Whether `channels` rows of the band `rows` lie inside the output.
+    fn holds(self, rows: BandRows, channels: usize) -> bool {
+        channels == 0
+            || (channels - 1)
+                .checked_mul(rows.channel_stride)
+                .and_then(|at| at.checked_add(rows.first))
+                .and_then(|at| at.checked_add(rows.len))
+                .is_some_and(|end| end <= self.len)
     }
 
     /// The band's values of output channel `o`.
     ///
     /// # Safety
-    /// `rows` must be the calling band's own (see [`OutputBase`]) and inside the output, and
-    /// the caller must hold no other slice of them while it uses this one.
+    /// `rows` must be the calling band's own (see [`OutputBase`]), and the caller must hold no
+    /// other slice of them while it uses this one. (That the range lies inside the output is
+    /// asserted here.)
     #[allow(unsafe_code)]
     unsafe fn channel(self, rows: BandRows, o: usize) -> &'a mut [f32] {
-        // SAFETY: the caller's contract above.
+        assert!(self.holds(rows, o + 1), "band rows outside the output");
+        // SAFETY: inside the output (asserted above); the band's own, one slice at a time (the
+        // caller's contract).
         unsafe {
             std::slice::from_raw_parts_mut(
-                self.0.add(rows.first + o * rows.channel_stride),
+                self.ptr.add(rows.first + o * rows.channel_stride),
                 rows.len,
             )
         }
@@ -521,25 +543,26 @@ fn gemm_add(
     rows: BandRows,
 ) {
     assert!(
-        a.len() >= m * k && b.len() >= k * n && rows.len == n,
-        "gemm_add: slices shorter than {m}x{k} and {k}x{n}, or a band of {} values, not {n}",
+        a.len() >= m * k && b.len() >= k * n && rows.len == n && dst.holds(rows, m),
+        "gemm_add: slices shorter than {m}x{k} and {k}x{n}, or a band of {} values, not {n}, \
+         or {m} rows of it outside the output",
         rows.len
     );
     if m == 0 || n == 0 || k == 0 {
         return;
     }
     // SAFETY: the assertion above keeps every element `gemm` reads (`a`: m x k, row stride k;
-    // `b`: k x n, row stride n) inside its slice; it writes `c`'s m rows of n values, row `i`
-    // at `rows.first + i * rows.channel_stride`: the band's own values (`OutputBase`), which
-    // alias neither input (those are borrowed, the output is the `Vec` being filled); one
-    // thread (`Parallelism::None`).
+    // `b`: k x n, row stride n) inside its slice, and the m rows of n values it writes, row `i`
+    // at `rows.first + i * rows.channel_stride`, inside the output: the band's own values
+    // (`OutputBase`), which alias neither input (those are borrowed, the output is the `Vec`
+    // being filled); one thread (`Parallelism::None`).
     #[allow(unsafe_code)]
     unsafe {
         gemm::gemm(
             m,
             n,
             k,
-            dst.0.add(rows.first),
+            dst.ptr.add(rows.first),
             1,
             rows.channel_stride as isize,
             true,
