@@ -346,7 +346,6 @@ impl HostConv {
         rows_of: BandRows,
     ) {
         let n = rows * s.ow;
-        debug_assert_eq!(n, rows_of.len);
         let direct = self.kernel == [1, 1, 1]
             && self.stride == [1, 1, 1]
             && self.depth_pad == 0
@@ -612,15 +611,14 @@ pub fn host_forward<const D: usize>(
     };
     let input = x.into_data();
     let residual = residual.map(Tensor::into_data);
-    let out = match (
-        input.as_slice::<f32>(),
-        residual.as_ref().map(|r| r.as_slice::<f32>()),
-    ) {
-        (Ok(values), None) => host.forward3d(values, volume, None, relu),
-        (Ok(values), Some(Ok(r))) => host.forward3d(values, volume, Some(r), relu),
-        _ => Err(shape_error("input values as f32", vec![], vec![])),
+    let values = input.as_slice::<f32>().ok();
+    let residual_values = residual.as_ref().map(|r| r.as_slice::<f32>().ok());
+    let out = match (values, residual_values) {
+        (Some(values), None) => host.forward3d(values, volume, None, relu).ok(),
+        (Some(values), Some(Some(r))) => host.forward3d(values, volume, Some(r), relu).ok(),
+        _ => None,
     };
-    let Ok((out, [od, oh, ow])) = out else {
+    let Some((out, [od, oh, ow])) = out else {
         let back = |data: TensorData| Tensor::from_data(data, &device);
         return Err(Box::new((back(input), residual.map(back))));
     };

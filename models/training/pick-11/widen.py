@@ -34,8 +34,6 @@ for name, sources in tp.UNET_LAYERS:
         new_in = torch.ones(new_w.shape[1], dtype=torch.bool)
         new_in[old_in] = False
         new_w[:, new_in] = 0.0  # nothing reads a new channel yet
-    new_w[:o_old] = 0.0
-    new_w[:o_old][:, old_in] = old_w
     new_w[:o_old, old_in] = old_w
     new_b[:o_old] = old_b
     if name == "head":
