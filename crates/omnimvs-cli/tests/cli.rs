@@ -404,7 +404,7 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
         let index = omnimvs_data::gt::read_inv_depth(&out.join("00001_index.tiff")).unwrap();
         (settings["pick"].as_bool().unwrap(), index)
     };
-    // `single`: the bundled first pick alone (the default until stop 45).
+    // `single`: the bundled first pick alone.
     let (picked, with) = run("single");
     let (not_picked, without) = run("off");
     assert!(picked && !not_picked);
@@ -430,11 +430,10 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
         "{moved} of {pixels} moved"
     );
     assert!(change < 3.0, "mean change {change}");
-    // A pick of another layout (stop 40's pick-3: eleven candidates up to the 25 x 25 extremes,
+    // A pick of another layout (pick-3: eleven candidates up to the 25 x 25 extremes,
     // its layout in the file's metadata) by path: within its own widest extremes, and not the
     // bundled pick's answer.
-    let pick3 = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../models/training/pick-3/pick3.safetensors");
+    let pick3 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/extra/pick3.safetensors");
     let (picked3, with3) = run(pick3.to_str().unwrap());
     assert!(picked3);
     let (low, high) = omnimvs_data::edges::neighbour_min_max(&without.data, size, true, 12);
@@ -442,7 +441,7 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
         assert!(a >= low[p] - 1e-3 && a <= high[p] + 1e-3, "pixel {p}: {a}");
     }
     assert!(max_abs_difference(&with3.data, &with.data) > 1.0);
-    // `chain` (stop 42): the bundled pick, then the second pick on its answer, whose
+    // `chain`: the bundled pick, then the second pick on its answer, whose
     // candidates lie within the first's answers over its own widest window; the same as the
     // two bundled files given in turn.
     let (chained, with_chain) = run("chain");
@@ -460,7 +459,7 @@ fn infer_runs_the_learnt_pick_after_the_bundled_cascade() {
     );
     let (_, with_files) = run(&files);
     assert_eq!(with_files.data, with_chain.data);
-    // The default since stop 45: `auto` runs the two bundled picks, as `chain`.
+    // The default: `auto` runs the two bundled picks, as `chain`.
     let (auto_picked, with_auto) = run("auto");
     assert!(auto_picked);
     assert_eq!(with_auto.data, with_chain.data);

@@ -2,7 +2,7 @@
 //! The learnt pick after the cascade (`omnimvs_net::pick`) against the PyTorch scripts that
 //! trained it: the U-Net's scores and the picked answer on a random input
 //! (`tests/fixtures/pick/`, made by `scripts/pick_parity/make_pick_fixture.py`), and the
-//! inputs computed from the real `itbt_sample` frame 1 as `models/training/pick-1/pick_inputs.py`
+//! inputs computed from the real `itbt_sample` frame 1 as `scripts/pick/pick_inputs.py`
 //! computes them.
 
 use std::path::{Path, PathBuf};
@@ -527,10 +527,9 @@ fn a_chain_of_picks_runs_each_on_the_answer_of_the_one_before() {
     // The bundled pick is one; the bundled chain, two.
     assert_eq!(PickRefiner::bundled().unwrap().passes(), 1);
     assert_eq!(PickRefiner::bundled_chain().unwrap().passes(), 2);
-    // The third pick kept beside its run (stop 43's pick-9) follows them, with pick-6's layout.
+    // The third pick kept beside its run (pick-9, `models/extra/`) follows them, with pick-6's layout.
     let pick9 = PickRefiner::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../models/training/pick-9/pick9.safetensors"),
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/extra/pick9.safetensors"),
     )
     .unwrap();
     assert_eq!(pick9.layout(), PickRefiner::bundled().unwrap().layout());

@@ -1,1 +1,0 @@
-/work/target-arch/release/omnimvs train --cost mccnn --data /work/data/things-s101,/work/data/house-s102 --out /work/runs/mccnn-1 --steps 4000 --batch 256 --lr 0.001 --train-frames 1..480 --val-frames 481..500 --seed 1

@@ -1,6 +1,0 @@
-#!/usr/bin/env bash
-# SweepNet-style cost, run sweepnet-3 (issue 15). Resumable: omnimvs train --resume /work/runs/sweepnet-3
-set -euo pipefail
-/work/bin/omnimvs-sweep3 train --cost sweepnet --data /work/data/things-s101,/work/data/house-s102 \
-  --out /work/runs/sweepnet-3 --steps 3000 --batch 256 --lr 0.001 \
-  --train-frames 1..480 --val-frames 481..500 --seed 1

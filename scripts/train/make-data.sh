@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# Generates the synthetic datasets that the bundled models were trained, validated and tested
+# on (`omnimvs synth`, deterministic: a frame depends only on its set's kind, difficulty, rig,
+# size, seed and index, so any subset of frames can be made again, in any order).
+#
+#   DATA=path/to/data scripts/train/make-data.sh [GROUP ...]
+#
+# GROUP is one of (default: train test):
+#   train   the cascade's training and validation sets: things-s101, house-s102 (frames
+#           1..500; 481..500 are the validation frames), things-hard-s103, house-hard-s104,
+#           and two hard sets on the real itbt_sample rig's geometry (house-hard-itbtrig-s105,
+#           things-hard-itbtrig-s106; needs ITBT=path/to/itbt_sample/config.yaml)
+#   pick    the learnt picks' training sets (seeds 201-213) and house-hard-s107's validation
+#           frames 481..500
+#   test    the held-out test sets, frames 1..20, seeds no training or tuning used:
+#           test-things-s7001, test-house-s7002, test-things-hard-s7003, test-house-hard-s7004
+#   tiny    the `tiny` network's sets at its input size 192x200
+# Environment: DATA (required), OMNIMVS (the binary; default `omnimvs` on PATH, else
+# target/release/omnimvs), ITBT (for the train group). Frames already written are skipped,
+# so the script can be started again after an interruption.
+set -euo pipefail
+: "${DATA:?set DATA to the folder that receives the datasets}"
+root=$(cd "$(dirname "$0")/../.." && pwd)
+bin=${OMNIMVS:-$(command -v omnimvs || echo "$root/target/release/omnimvs")}
+mkdir -p "$DATA"
+synth() {  # NAME KIND DIFFICULTY FRAMES SEED [more synth options]
+  local name=$1 kind=$2 difficulty=$3 frames=$4 seed=$5
+  shift 5
+  echo "== $name ($kind, $difficulty, frames $frames, seed $seed)" >&2
+  "$bin" synth --kind "$kind" --difficulty "$difficulty" --frames "$frames" --seed "$seed" \
+    --out "$DATA/$name" "$@"
+}
+groups=("$@")
+[ ${#groups[@]} -gt 0 ] || groups=(train test)
+for group in "${groups[@]}"; do
+  case $group in
+    train)
+      : "${ITBT:?set ITBT to the itbt_sample config.yaml (the rig of the itbtrig sets)}"
+      synth things-s101 things standard 1..500 101
+      synth house-s102 house standard 1..500 102
+      synth things-hard-s103 things hard 1..400 103
+      synth house-hard-s104 house hard 1..200 104
+      synth house-hard-itbtrig-s105 house hard 1..200 105 --rig "$ITBT" --size 766x800
+      synth things-hard-itbtrig-s106 things hard 1..200 106 --rig "$ITBT" --size 766x800
+      ;;
+    pick)
+      synth house-hard-s107 house hard 481..500 107
+      synth things-s201 things standard 1..150 201
+      synth house-s202 house standard 1..100 202
+      synth things-hard-s203 things hard 1..60 203
+      synth house-hard-s207 house hard 1..60 207
+      synth things-s208 things standard 1..300 208
+      synth things-hard-s209 things hard 1..120 209
+      synth house-s210 house standard 1..150 210
+      synth things-s211 things standard 1..300 211
+      synth things-hard-s212 things hard 1..120 212
+      synth house-s213 house standard 1..150 213
+      ;;
+    test)
+      synth test-things-s7001 things standard 1..20 7001
+      synth test-house-s7002 house standard 1..20 7002
+      synth test-things-hard-s7003 things hard 1..20 7003
+      synth test-house-hard-s7004 house hard 1..20 7004
+      ;;
+    tiny)
+      synth things things standard 1..330 0 --rig sunny --size 192x200
+      synth things-s1 things standard 1..300 1 --rig sunny --size 192x200
+      synth things-s2 things standard 1..300 2 --rig sunny --size 192x200
+      synth house house standard 1..130 0 --rig sunny --size 192x200
+      synth house-s1 house standard 1..110 1 --rig sunny --size 192x200
+      ;;
+    *)
+      echo "error: unknown group '$group' (train, pick, test, tiny)" >&2
+      exit 2
+      ;;
+  esac
+done
