@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The bundled cascade on a GPU machine in one call (a session's GPU time is short): parity of the
+# The bundled cascade on a GPU machine in one call (for GPU time that comes in short slots): parity of the
 # whole inference against the CPU, the benchmark per stage with its training step, the paper
 # preset's training step against PyTorch's on the same GPU, and a fine-tuning run of the bundled
 # cascade trained there end to end. Build the binaries here first (README, "GPU procedure");
@@ -29,8 +29,9 @@
 #   STEPS_PER_EPOCH [100]; TRAIN_EPOCHS: epochs of the run, the last 3 at TRAIN_LR_LOW [100]
 #   VAL_FRAMES      validation frames of the two standard sets [481..488]
 #   LOADER_THREADS  threads preparing the training samples [8] (one left the GPU idle two
-#                   thirds of the time in stop 30)
+#                   thirds of the time)
 #   WORK            scratch folder for data and runs [/tmp/omnimvs-gpu]
+#   ITBT            the itbt_sample config.yaml, for the training sets on its rig [none: skipped]
 #   PYTHON          [python3]
 #   DEADLINE        seconds from the start after which no step starts, and to which the last
 #                   one's limit is cut [540]
@@ -138,11 +139,11 @@ stamp "env"
 cat "$logs/env.log"
 
 # The frames: held-out test frames for parity (the same seed and frames as the README's tables,
-# synth is deterministic), and the training sets of models/training/cascade-14 (the same seeds,
+# synth is deterministic), and the bundled cascade's training sets (scripts/train/make-data.sh's seeds,
 # the first TRAIN_FRAMES frames of each, validation frames 481..488 of the two standard sets),
 # generated in the background while the GPU measurements run.
-rig=""
-[ -f "$root/.gpu-carry/itbt-config.yaml" ] && rig="$root/.gpu-carry/itbt-config.yaml"
+# ITBT: the itbt_sample config.yaml, for the training sets on its rig (skipped without it).
+rig="${ITBT:-}"
 D=$work/data
 step synth-test 120 "$bin" synth --kind things --frames 1..2 --out "$D/test-things-s7001" --seed 7001
 if want train; then

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Independent golden values for the spherical-sweep lookup table.
 
-Written from the conventions of `../shared/docs/FORMATS.md` alone (numpy, no
+Written from the conventions of the file formats chapter of the user guide (`docs/book/src/formats.md`) alone (numpy, no
 code shared with the Rust implementation). For each sample rig it evaluates,
 at a strided subset of the 160x640 (+-45 deg) grid and for a few spheres of
 N = 192 (every other sphere, as in the `.hwd` file), the source pixel

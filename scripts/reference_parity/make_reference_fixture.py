@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Parity fixtures made by the reference implementation's own code (issue #13).
+"""Parity fixtures made by the reference implementation's own code.
 
 Takes a checkout of hyu-cvlab/omnimvs-pytorch (GPL-3.0; imported from its path, nothing of
 it is copied into this project) and writes, under OUT (default

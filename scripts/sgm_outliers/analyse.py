@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Where the large errors of a depth method come from (issue 15's outlier study).
+"""Where the large errors of a depth method come from (the outlier study of `research/learned-costs.md`).
 
 Every pixel the reference rules score (160x640, N = 192, sky not scored) is put in the first
 class it belongs to:

@@ -41,7 +41,7 @@ mod weights;
 /// read, never written. Lookup tables are cached in `$OMNIMVS_CACHE_DIR`
 /// (default `~/.cache/omnimvs`).
 #[derive(Debug, Parser)]
-#[command(name = "omnimvs", version, propagate_version = true)]
+#[command(name = "omnimvs", version = env!("OMNIMVS_VERSION"), propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

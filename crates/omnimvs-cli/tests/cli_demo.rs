@@ -70,7 +70,7 @@ fn demo_reports_figures_of_its_outputs_in_range() {
 
     // Every method in the range measured for it (% of N, seed 2026) and below the best
     // constant answer's error: SGM MAE 5.6 and the bundled `tiny` 5.8, far below (under half);
-    // the bundled cascade (training in progress, see models/training/) must at least beat it.
+    // the bundled cascade (see models/README.md) must at least beat it.
     let constant = constant_guess_mae(&truth, ndepth);
     let report = read_json(&out.join("eval/eval.json"));
     let methods = report["methods"].as_array().unwrap();
@@ -138,7 +138,7 @@ fn demo_reports_figures_of_its_outputs_in_range() {
         (missed.0 / missed.1 as f64, right.0 / right.1 as f64)
     };
     // Its coarse stage's entropy is higher where it misses. (The full-resolution stage's
-    // entropy, its uncertainty until stop 32, was lower there.)
+    // entropy, its former uncertainty measure, was lower there.)
     let (missed, right) = means("entropy", 0.0..=(32f64).ln() + 1e-4);
     println!("cascade entropy: {missed:.3} nats where > 5 % off, {right:.3} within 1 %");
     assert!(missed > right + 0.1, "{missed} vs {right}");

@@ -1,5 +1,5 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-//! The learned matching costs (issue 15) end to end on small generated datasets:
+//! The learned matching costs end to end on small generated datasets:
 //! `omnimvs sgm --cost mccnn|sweepnet` with the bundled weights writes its estimate and beats
 //! the best constant answer; the bundled MC-CNN cost on a frame ranks the true sphere above a
 //! wrong one far more often than chance; `omnimvs train --cost mccnn|sweepnet` trains a few

@@ -4,7 +4,7 @@
 //! onto one of the two surfaces (a toggle filter).
 //!
 //! Measured on the bundled cascade's things and house validation frames
-//! (`models/training/cascade-25/edge_post.py`, the README of `omnimvs-net`): it lowers the
+//! (`research/errors.md`): it lowers the
 //! share of pixels more than 1, 3 and 5 % of the range off, leaves the mean error as it was and
 //! raises the RMS, because a pixel snapped to the wrong side is off by the whole step, so it
 //! is an option (`infer --snap-edges`), not the default.

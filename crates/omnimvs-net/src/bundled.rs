@@ -3,7 +3,7 @@
 //!
 //! - `cascade` (the default, [`BundledModel::DEFAULT`]): the cascade network (see `cascade`),
 //!   answering at the paper's 160x640 with N = 192 from the full-size inputs. Its weights and
-//!   the commands that trained them are in `models/training/`.
+//!   the commands that trained them are in `models/README.md` and `models/recipes/`.
 //! - `tiny`: the paper's architecture at 192x200 inputs, answering at 32x128 with N = 64 (the
 //!   default before the cascade; what needs the paper's network family names it).
 
@@ -80,7 +80,7 @@ impl BundledModel {
         }
     }
 
-    /// Its pick followed by the second pick trained on that pick's answers (stop 42): the
+    /// Its pick followed by the second pick trained on that pick's answers: the
     /// cascade's; `None` for `tiny`.
     ///
     /// # Errors
@@ -143,7 +143,7 @@ mod tests {
         assert_eq!(PickChoice::parse("chain").to_string(), "chain");
         let chain = PickChoice::Chain.load(Some(BundledModel::Cascade)).unwrap();
         assert_eq!(chain.map(|p| p.passes()), Some(2));
-        // The default since stop 45: the two picks; `single` the first alone.
+        // The default: the two picks; `single` the first alone.
         let auto = PickChoice::Auto.load(Some(BundledModel::Cascade)).unwrap();
         assert_eq!(auto.map(|p| p.passes()), Some(2));
         assert_eq!(PickChoice::parse("single").to_string(), "single");
@@ -175,20 +175,20 @@ mod tests {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum PickChoice {
     /// The bundled model's own picks after it: the bundled cascade's two in turn, as
-    /// [`PickChoice::Chain`] (stop 45; its first pick alone until then), none after other
+    /// [`PickChoice::Chain`], none after other
     /// weights.
     Auto,
     /// No pick.
     Off,
-    /// The bundled model's first pick alone (the default until stop 45), none after other
+    /// The bundled model's first pick alone, none after other
     /// weights.
     Single,
-    /// The bundled model's pick and then its second pick (the bundled cascade's two, stop 42),
+    /// The bundled model's pick and then its second pick (the bundled cascade's two),
     /// none after other weights.
     Chain,
     /// A pick's `.safetensors`, trained on the answers of the network it runs after.
     /// Several, comma-separated (`a.safetensors,b.safetensors`): each runs after the one
-    /// before it (stop 42).
+    /// before it.
     File(Vec<std::path::PathBuf>),
 }
 

@@ -58,11 +58,11 @@ pub struct CascadeParams {
     /// Spheres of the coarse cost volume, evenly spaced in index over `0..=N-1`.
     pub coarse_spheres: usize,
     /// How many times coarser than the output the coarse stage's grid is: `4` (and left out
-    /// of the file: 40 x 160 for the paper's grid, every cascade before stop 35) or `2` (the
+    /// of the file: 40 x 160 for the paper's grid, the bundled cascade's) or `2` (the
     /// half-resolution grid, 80 x 320). At 40 x 160 a quarter of a things frame's pixels hold
     /// a depth edge in their 4 x 4 block of the output, and 61 % of the coarse stage's misses
     /// over 20 index units lie there, out of the refinement's reach; at 80 x 320 6.5 % of the
-    /// 2 x 2 blocks do (`models/training/cascade-35/edge_blocks.py`). With `2` the half stage
+    /// 2 x 2 blocks do (`research/cascade.md`). With `2` the half stage
     /// centres on the coarse answer itself (no upsampling, so no half-grid selector), the
     /// coarse stage still reads the stride-8 features, and its cue is matched on its own grid
     /// from the half-size images (`coarse_cue_oversample` must be 1, no `mid_cue_sgm`).
@@ -73,7 +73,7 @@ pub struct CascadeParams {
     /// the stride-8 ones only). On the half-resolution grid (`coarse_scale` 2) the stride-8
     /// features blur a depth edge over about two of its pixels: moved there and trained,
     /// the coarse stage still missed by over 20 at a third of the things pixels whose 4 x 4
-    /// output block holds an edge (36.9 % at 40 x 160; `models/training/cascade-37`). The
+    /// output block holds an edge (36.9 % at 40 x 160; `research/errors.md`). The
     /// first convolution reads `groups[1]` more channels per sphere, after the others (zero
     /// weights when switched on from weights without them, [`crate::cascade::CascadeNet::with_coarse_stride4`]).
     #[serde(default, skip_serializing_if = "is_false")]
@@ -85,7 +85,7 @@ pub struct CascadeParams {
     /// (`false`, and left out of the file). On the half grid the coarse answer is better than
     /// at 40 x 160, but the half stage refined it less without the choice of side that the
     /// learnt upsampling made at a depth edge (house: 4.53 -> 4.08 against 4.80 -> 3.94,
-    /// `models/training/cascade-37/stage_errors.py`, stop 35).
+    /// `research/errors.md`).
     #[serde(default, skip_serializing_if = "is_false")]
     pub same_grid_selector: bool,
     /// Channels of a 1x1 convolution that the coarse stage's evidence passes through before
@@ -185,7 +185,7 @@ pub struct CascadeParams {
     /// regularisation of the coarse stage sees a few pixels around; the paths carry the
     /// evidence of a whole wall: on things validation frames the aggregated cue's best sphere
     /// lies within +-9 of the truth for 93.9-96.9 % of far pixels away from edges, the network
-    /// (`cascade-23`) for 83.0 % and the raw cue for 78.8 % (`models/training/cascade-24`).
+    /// (`cascade-23`) for 83.0 % and the raw cue for 78.8 % (`research/cascade.md`).
     /// Its first convolution's input grows by one channel per sphere (zero weights when
     /// switched on from weights without it).
     #[serde(default, skip_serializing_if = "is_false")]
@@ -197,7 +197,7 @@ pub struct CascadeParams {
     /// [`crate::cascade::photo::MID_SGM_P1`], [`crate::cascade::photo::MID_SGM_P2`]) and read
     /// at each pixel's hypotheses, linearly between planes. On things validation frames the
     /// aggregated half-grid cue alone is off by more than 3 at 6.6 % of far open pixels, the
-    /// network (`cascade-25`'s start) at 21.1 % (`models/training/cascade-25/half_study.py`).
+    /// network (`cascade-25`'s start) at 21.1 % (`research/cascade.md`).
     /// The half stage's first convolution grows by one channel per hypothesis.
     #[serde(default, skip_serializing_if = "is_false")]
     pub mid_cue_sgm: bool,
@@ -207,7 +207,7 @@ pub struct CascadeParams {
     /// [`ScoreSgm`] lower the log-probabilities of the spheres a pixel's surroundings rule
     /// out, so that a region where the evidence is weak takes the sphere of the sure pixels
     /// around it. No weight depends on it and training steps do not run it (validation
-    /// does). Measured in stop 41 (`models/training/coarse-sgm/`): with `p1` 1, `p2` 4 and
+    /// does). Measured (`research/cascade.md`): with `p1` 1, `p2` 4 and
     /// a temperature of 8 on the bundled network, the things validation frames' coarse
     /// answers off by more than 20 fall from 15.0 % to 12.3 % of the pixels, most of them
     /// sky next to objects; on the pixels the reference's rules score, the final MAE rises
@@ -221,7 +221,7 @@ pub struct CascadeParams {
     /// likewise: at a depth edge the centre (an upsampling) blends the two surfaces, and an
     /// evenly spaced reach around it holds neither, where the neighbours' extremes are the two
     /// surfaces. On things validation frames the better of a pixel's own answer and its 3 x 3
-    /// neighbourhood's lowest and highest would halve the network's error (stop 32). No weight
+    /// neighbourhood's lowest and highest would halve the network's error (`research/errors.md`). No weight
     /// depends on it.
     #[serde(default, skip_serializing_if = "is_zero_pair")]
     pub neighbour_extremes: [usize; 2],
@@ -249,7 +249,7 @@ pub struct CascadeParams {
     /// (a grown network's starting bias is `neighbour_start_score / g`, so it starts where it
     /// would with `g = 1`). Under Adam, whose steps do not depend on a gradient's scale, this
     /// trains the weights grown for them `g` times faster than the rest of the stage: a rate of
-    /// their own (stop 33: at 3e-5 their zero weights could move by 0.02 in 600 steps). `1`
+    /// their own (at 3e-5 their zero weights could move by 0.02 in 600 steps). `1`
     /// (and left out of the file) by default; the answer depends on it, so weights trained
     /// with one gain answer with it.
     #[serde(default = "one_f64", skip_serializing_if = "is_one_f64")]

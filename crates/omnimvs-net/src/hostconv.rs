@@ -4,7 +4,7 @@
 //! channels-last order on one thread, builds each im2col tile with a bounds check per tap and
 //! channel, multiplies, then scatters the product back element by element. With the few
 //! channels of the cascade (8 to 96) those copies cost more than the multiplication: in a
-//! `perf` profile of `omnimvs infer` (stop 38) the convolution took about 30 % of the samples,
+//! `perf` profile of `omnimvs infer` the convolution took about 30 % of the samples,
 //! of which the GEMM kernels were under half. Here each im2col row (one input channel and one
 //! kernel tap over a band of output rows) is copied from the channels-first input in runs,
 //! the band's output starts as the bias, the GEMM adds into it, and the residual and ReLU

@@ -259,7 +259,7 @@ pub fn network_inputs(
     masks: &[ValidityMask],
     size: [usize; 2],
 ) -> Result<Vec<Vec<f32>>, NetError> {
-    // The cameras in parallel (stop 44: two passes over each image on one thread had cost
+    // The cameras in parallel (two passes over each image on one thread had cost
     // about 7 ms a full-size frame with the other core idle).
     images
         .par_iter()

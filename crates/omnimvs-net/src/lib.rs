@@ -12,9 +12,9 @@
 //! - [`weights`]: our safetensors files and the import of reference PyTorch checkpoints.
 //! - [`infer`]: running the paper's network on a dataset's frames.
 //! - [`estimator`]: either family on a dataset's frames, one result type.
-//! - [`mccnn`]: the MC-CNN-style matching-cost network for `omnimvs-stereo`'s SGM (issue 15).
+//! - [`mccnn`]: the MC-CNN-style matching-cost network for `omnimvs-stereo`'s SGM.
 //! - [`learned_sgm`]: SGM on ZNCC or a learned cost, by name.
-//! - [`sweepnet`]: the SweepNet-style matching-cost head for `omnimvs-stereo`'s SGM (issue 15).
+//! - [`sweepnet`]: the SweepNet-style matching-cost head for `omnimvs-stereo`'s SGM.
 //! - [`synthetic`]: a lookup table without a rig, for benchmarks and tests.
 //! - [`hostconv`]: 2D and 3D convolutions on the host for inference on a CPU (burn flex).
 //! - [`backend`]: run-time choice of the compute backend (`cpu`, `libtorch`, `wgpu`, ...).

@@ -1,5 +1,5 @@
-//! The MC-CNN-fast style matching-cost network (Zbontar and LeCun, JMLR 2016, section 3.2;
-//! issue 15): a siamese tower of `layers` 3x3 convolutions (ReLU between them, none after the
+//! The MC-CNN-fast style matching-cost network (Zbontar and LeCun, JMLR 2016, section 3.2):
+//! a siamese tower of `layers` 3x3 convolutions (ReLU between them, none after the
 //! last) whose output at a pixel describes the 9x9 patch around it; two patches match when
 //! the cosine similarity of their descriptors is high.
 //!

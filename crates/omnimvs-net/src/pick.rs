@@ -1,6 +1,6 @@
-//! A learnt pick after the network, at the output grid (stop 39): where a depth edge lies, the
+//! A learnt pick after the network, at the output grid: where a depth edge lies, the
 //! cascade's answer is often a blend of the two surfaces (a soft argmax over both), and the
-//! right surface is usually one of the extremes of the answers around the pixel (stop 32:
+//! right surface is usually one of the extremes of the answers around the pixel (
 //! the nearest of a pixel's 5 x 5 minimum, maximum and own answer has a third less error).
 //! The cameras' colours at those depths and the shape of the answer around say which one.
 //!
@@ -11,7 +11,7 @@
 //! - at each of the depths `v`, `m`, `M`, every camera's gray value there (each image
 //!   normalised by its own mean and standard deviation, bilinear, 0 where the camera does not
 //!   see the point) and whether it sees it;
-//! - optionally (pick-3, stop 40), at each of those depths, the cameras' mean pairwise ZNCC
+//! - optionally (pick-3), at each of those depths, the cameras' mean pairwise ZNCC
 //!   over a small window of the output grid;
 //!
 //! and a small U-Net (3x3 convolutions wrapping in longitude, three stride-2 levels, bilinear
@@ -20,7 +20,7 @@
 //! 3 x 3, 5 x 5 and 9 x 9). The answer is their softmax-weighted mean.
 //!
 //! It is trained outside the network, on the network's answers on frames it never trained on
-//! (`models/training/pick-1/`, PyTorch; the weights are written as safetensors with the
+//! (`scripts/pick/`, PyTorch; the weights are written as safetensors with the
 //! module names of that script and the layout in their metadata), and runs on the host with
 //! the convolution kernel of [`crate::hostconv`].
 
@@ -39,7 +39,7 @@ use crate::hostconv::{HostConv, Padding};
 
 /// Which candidates a pick scores and which inputs it reads. A pick's safetensors carry it in
 /// their metadata (`candidate_radii`, `depth_radii`, `zncc`: comma-separated integers, as
-/// `models/training/pick-1/train_pick.py` writes them); a file without them has pick-1/2's
+/// `scripts/pick/train_pick.py` writes them); a file without them has pick-1/2's
 /// layout, [`PickLayout::default`].
 ///
 /// Inputs, in order:
@@ -55,7 +55,7 @@ use crate::hostconv::{HostConv, Padding};
 ///   where both see the centre and both see at least half the window), and the fraction of
 ///   the pairs that count.
 ///
-/// - with `coarse_modes = k > 0` (stop 42), for each of the coarse stage's `k` most probable
+/// - with `coarse_modes = k > 0`, for each of the coarse stage's `k` most probable
 ///   modes ([`CoarseModes`]): `(mode - v) / 32`, its probability mass, and the mean pairwise
 ///   ZNCC and fraction of pairs that count (as above, over [`MODE_ZNCC`] x [`MODE_ZNCC`]) with
 ///   every camera sampled at the mode's depth; then the same ZNCC and fraction at `v`.
@@ -81,11 +81,11 @@ pub const MODE_ZNCC: usize = 5;
 /// Most coarse modes a layout may ask for.
 pub const MAX_COARSE_MODES: usize = 8;
 
-/// The coarse stage's most probable modes, on the output grid (stop 42). Where the network
+/// The coarse stage's most probable modes, on the output grid. Where the network
 /// misses a whole region, its coarse distribution often still holds the right surface as
 /// another mode: on things validation frames 481-490, the truth lay within 6 index units of
 /// one of the three most probable modes at 37 % of the pixels the network missed by more than
-/// 10 (`models/training/pick-7/`).
+/// 10 (`research/pick.md`).
 ///
 /// A mode is a local maximum of a coarse pixel's distribution over its spheres (at least its
 /// lower neighbour's probability, more than its upper's); its mass is the probability of the
@@ -659,7 +659,7 @@ pub const BUNDLED_PICK: &[u8] = include_bytes!("../../../models/omnimvs-cascade-
 /// Its label in errors and reports.
 pub const BUNDLED_PICK_LABEL: &str = "models/omnimvs-cascade-pick.safetensors";
 
-/// The bundled second pick, run after [`BUNDLED_PICK`] and trained on its answers (stop 42,
+/// The bundled second pick, run after [`BUNDLED_PICK`] and trained on its answers (
 /// `models/omnimvs-cascade-pick2.safetensors`).
 pub const BUNDLED_SECOND_PICK: &[u8] =
     include_bytes!("../../../models/omnimvs-cascade-pick2.safetensors");
@@ -695,7 +695,7 @@ pub struct PickRefiner {
     /// Decoder layers from the coarsest: `d2`, `d1`, `d0`.
     decoder: [Layer; 3],
     head: Layer,
-    /// The pick run after this one on its answer (stop 42), if any.
+    /// The pick run after this one on its answer, if any.
     then: Option<Box<PickRefiner>>,
 }
 
@@ -803,7 +803,7 @@ impl PickRefiner {
         Self::from_bytes(BUNDLED_PICK, Path::new(BUNDLED_PICK_LABEL))
     }
 
-    /// The bundled pick followed by the bundled second pick, trained on its answers (stop 42:
+    /// The bundled pick followed by the bundled second pick, trained on its answers (
     /// more accurate, and a pick's time slower; `--pick chain`).
     ///
     /// # Errors

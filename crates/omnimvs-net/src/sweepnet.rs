@@ -1,4 +1,4 @@
-//! The SweepNet-style matching-cost network (Won et al., ICRA 2019; issue 15), sized for a
+//! The SweepNet-style matching-cost network (Won et al., ICRA 2019), sized for a
 //! CPU: the learned head of `omnimvs_stereo::sweepnet`, a small perceptron that reads the
 //! window features of the warped images of every camera at a sphere point (each pair's ZNCC,
 //! each window's texture, which windows are complete) and gives the point's matching cost in

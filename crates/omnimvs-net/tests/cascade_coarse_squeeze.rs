@@ -1,5 +1,5 @@
 //! The coarse stage's evidence squeezed through a 1x1 convolution before its first 3x3 one
-//! (`coarse_squeeze`, stop 37): the setting is checked and written only when set; a trained
+//! (`coarse_squeeze`): the setting is checked and written only when set; a trained
 //! network factorised by a truncated SVD of that layer answers as before at the layer's full
 //! rank and comes nearer as the rank grows; the loader grows a saved network into it, the
 //! squeeze learns, grows further (the aggregated cue's inputs land on the squeeze with zero

@@ -1,5 +1,5 @@
 //! The half stage's learnt choice among the coarse answers around each pixel when the coarse
-//! stage shares its grid (`same_grid_selector`, stop 36): the setting is checked and written
+//! stage shares its grid (`same_grid_selector`): the setting is checked and written
 //! only when on, the candidates are the 3 x 3 neighbourhood on the same grid with the pixel's
 //! own answer first in the prior, a network saved without the selector grows into it starting
 //! near its own answers, the selector learns, and a saved one reloads as it was. Uses the

@@ -1,4 +1,4 @@
-//! 2D convolutions on the host (`omnimvs_net::hostconv`, stop 38): every kind of layer the
+//! 2D convolutions on the host (`omnimvs_net::hostconv`): every kind of layer the
 //! cascade has (kernels 1, 3 and 5; strides 1 and 2; dilations 1, 2 and 4; zero padding, or
 //! columns wrapping around as on the panorama; a residual; a ReLU; several images; maps wide
 //! enough to be cut into bands) answers as burn's convolution does, to float rounding; a
@@ -410,7 +410,7 @@ fn relu_5(x: Tensor<5>) -> Tensor<5> {
     burn::tensor::activation::relu(x)
 }
 
-/// `host_forward` takes its tensors by value (stop 45: a clone kept for burn's path made burn
+/// `host_forward` takes its tensors by value (a clone kept for burn's path made burn
 /// copy every input twice). A tensor the kernel does not fit comes back as it was, with its
 /// residual, for burn's path; one that fits answers the same whether or not the caller still
 /// shares its values.

@@ -80,7 +80,7 @@ fn load_network(
 ///         --max-spread`; applied after `max_entropy`).
 ///     pick: the learnt pick after the cascade network (`omnimvs infer --pick`): `"auto"`
 ///         (the default: the bundled cascade's own picks after the bundled cascade, its two
-///         in turn since stop 45, none after other weights), `"off"`, `"single"` (the first
+///         in turn, none after other weights), `"off"`, `"single"` (the first
 ///         bundled pick alone), `"chain"` (both), or a pick's `.safetensors` trained on the
 ///         answers of the `weights` network (several, comma-separated, run in turn).
 ///     maps: `False` (the default) for the inverse-depth array alone; `True` for a dict of

@@ -147,7 +147,7 @@ def test_maps(itbt_path, itbt, itbt_net, cli, tmp_path):
 
 def test_pick(itbt_path, itbt, itbt_net, cli, tmp_path):
     # "auto" (the default) runs the bundled cascade's learnt picks after it, as the command line
-    # does: since stop 45 its two in turn ("chain"); "single" the first alone.
+    # does: its two in turn ("chain"); "single" the first alone.
     without = omnimvs.infer(itbt, 1, pick="off")
     cli("infer", itbt_path, "--frames", 1, "--pick", "off", "--out", tmp_path)
     np.testing.assert_allclose(without, tifffile.imread(tmp_path / "00001.tiff"), rtol=1e-5, atol=1e-6)

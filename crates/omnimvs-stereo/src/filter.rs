@@ -1,4 +1,4 @@
-//! Post-processing of the index map against outliers (issue 15): a median filter that
+//! Post-processing of the index map against outliers: a median filter that
 //! removes isolated wrong answers, and confidence-based invalidation that leaves ambiguous
 //! pixels without an answer (NaN; `eval` reports the share that keeps one as coverage).
 

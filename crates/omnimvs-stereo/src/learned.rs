@@ -1,4 +1,4 @@
-//! Learned matching costs (issue 15): per-camera feature maps from a network, compared across
+//! Learned matching costs: per-camera feature maps from a network, compared across
 //! the cameras that see a sphere point.
 //!
 //! A [`FeatureExtractor`] (implemented by the MC-CNN-style network of `omnimvs-net`) turns each

@@ -24,7 +24,7 @@ pub const DEFAULT_P1: f32 = 0.1;
 /// Tuned with [`DEFAULT_P1`].
 pub const DEFAULT_P2: f32 = 2.0;
 
-/// Default side of the median filter on the index map (issue 15's outlier study, README).
+/// Default side of the median filter on the index map (the outlier study, `research/learned-costs.md`).
 pub const DEFAULT_MEDIAN: usize = 5;
 
 /// Which SGM paths are aggregated.

@@ -1,4 +1,4 @@
-//! The SweepNet-style learned matching cost (Won et al., ICRA 2019; issue 15): a network that
+//! The SweepNet-style learned matching cost (Won et al., ICRA 2019): a network that
 //! looks at the spherically warped images of all cameras around a sphere point and predicts
 //! its matching cost.
 //!

@@ -30,7 +30,7 @@ pub enum Selection {
     #[default]
     WithSky,
     /// MAE under the reference's protocol, sky not scored (`val_reference`, the paper's
-    /// tables and issue #11's bar).
+    /// tables).
     Reference,
 }
 

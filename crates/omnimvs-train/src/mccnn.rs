@@ -1,4 +1,4 @@
-//! Training of the MC-CNN-style matching-cost network (`omnimvs_net::mccnn`, issue 15) with
+//! Training of the MC-CNN-style matching-cost network (`omnimvs_net::mccnn`) with
 //! MC-CNN-fast's hinge loss on patch pairs drawn through the real rig.
 //!
 //! Every sample is a ground-truth pixel of the 160x640 grid and two cameras that both see its

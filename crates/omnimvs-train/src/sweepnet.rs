@@ -1,4 +1,4 @@
-//! Training of the SweepNet-style matching cost (`omnimvs_net::sweepnet`, issue 15).
+//! Training of the SweepNet-style matching cost (`omnimvs_net::sweepnet`).
 //!
 //! A sample is one ground-truth pixel of the 160x640 grid with the window features of the
 //! warped images on every one of the `N` spheres (`omnimvs_stereo::sweepnet::band_features`,

@@ -57,8 +57,8 @@ pub struct Args {
     /// after the bundled cascade; the bundled picks are timed on each pass's answer otherwise.
     #[arg(long, conflicts_with = "pick")]
     pub no_pick: bool,
-    /// The pick timed, as `infer --pick`: `auto` (the default: the bundled ones, as `chain`
-    /// since stop 45), `single` (the bundled first pick alone), `chain` (the bundled two),
+    /// The pick timed, as `infer --pick`: `auto` (the default: the bundled ones, as `chain`),
+    /// `single` (the bundled first pick alone), `chain` (the bundled two),
     /// `off` (none), or a pick's `.safetensors` instead of the bundled ones (another layout,
     /// say; several, comma-separated, run one after the other).
     #[arg(long, value_name = "auto|off|single|chain|FILE[,FILE]", default_value = "auto", value_parser = parse_pick)]

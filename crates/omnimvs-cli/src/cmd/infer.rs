@@ -74,9 +74,9 @@ pub struct Args {
     /// The learnt pick after the cascade: where a depth edge lies, it chooses among the answer
     /// and the nearest and farthest answers around each pixel, reading the cameras' colours
     /// there (`omnimvs_net::pick`). `auto` (the default): the bundled cascade's own picks after
-    /// the bundled cascade, none after other weights: since stop 45 its two picks in turn, as
-    /// `chain`; `off`; `single`: the bundled first pick alone (the default until stop 45, about
-    /// 0.1 s a frame faster, less accurate); `chain`: the bundled pick and then a second pick
+    /// the bundled cascade, none after other weights: its two picks in turn, as `chain`;
+    /// `off`; `single`: the bundled first pick alone (about 0.1 s a frame faster, less
+    /// accurate); `chain`: the bundled pick and then a second pick
     /// trained on its answers; or a pick's .safetensors trained on the answers of the
     /// --weights network (several, comma-separated: each runs on the answer of the one
     /// before). infer.json records whether one ran.

@@ -130,7 +130,7 @@ pub struct Args {
     #[arg(long, conflicts_with = "resume")]
     pub coarse_feature_channels: Option<usize>,
     /// Cascade: how many times coarser than the output the coarse stage's grid is
-    /// (`coarse_scale`): 4 (40 x 160 at the paper's grid, every cascade before stop 35) or 2
+    /// (`coarse_scale`): 4 (40 x 160 at the paper's grid, the bundled cascade's) or 2
     /// (80 x 320, where the half stage centres on the coarse answer itself; needs
     /// --coarse-cue-oversample 1). --init weights with the coarse stage at 4 move to it: its
     /// first and scoring convolutions resampled along the spheres, every other weight kept.
@@ -261,7 +261,7 @@ pub struct Args {
     /// Stop after this many epochs of this invocation (the run continues with --resume).
     #[arg(long)]
     pub stop_after: Option<usize>,
-    /// Train a matching-cost network for SGM instead of a depth network (issue 15):
+    /// Train a matching-cost network for SGM instead of a depth network:
     /// `mccnn`, MC-CNN-fast's siamese tower with its hinge loss on patch pairs drawn
     /// through the rig at the ground truth's sphere and a wrong one (`--steps` steps of
     /// `--batch` pairs, Adam at --lr; train frames by --train-frames, validation pairs from

@@ -123,7 +123,7 @@ impl CascadeInference {
     /// centres and say nothing of a gross miss (on things validation frames, leaving out the
     /// tenth of the pixels with the highest full-resolution entropy raises the MAE of the rest,
     /// 4.33 -> 4.53; by the coarse entropy it falls to 3.21, by the spread to 2.97;
-    /// `models/training/cascade-25/uncertainty.py`).
+    /// `research/errors.md`).
     ///
     /// # Errors
     /// [`NetError`] for a wrong number of images or a mask of another size.

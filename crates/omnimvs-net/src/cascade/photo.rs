@@ -200,7 +200,7 @@ impl ImagePyramid {
 
 /// Penalty of the coarse cue's aggregation (`coarse_cue_sgm`) for a change of one depth
 /// between neighbours, in cost units `(1 - zncc) / 2`. With [`COARSE_SGM_P2`], the best of
-/// the settings tried on things validation frames (`models/training/cascade-24/sgm_cue.py`).
+/// the settings tried on things validation frames (`research/cascade.md`).
 pub const COARSE_SGM_P1: f32 = 0.05;
 
 /// Penalty of the coarse cue's aggregation for larger changes (see [`COARSE_SGM_P1`]).
@@ -209,7 +209,7 @@ pub const COARSE_SGM_P2: f32 = 1.0;
 /// Penalty of the half-resolution stage's aggregated cue (`mid_cue_sgm`) for a change of one
 /// depth between neighbours (ZNCC+SGM's own default), in cost units; with
 /// [`MID_SGM_P2`] the better of the two settings tried on the half grid
-/// (`models/training/cascade-25/half_study.py`).
+/// (`research/cascade.md`).
 pub const MID_SGM_P1: f32 = 0.1;
 
 /// Penalty of the half-resolution stage's aggregated cue for larger changes (see

@@ -1,4 +1,4 @@
-//! Semi-global aggregation of the coarse stage's own distribution (`coarse_score_sgm`, stop 41).
+//! Semi-global aggregation of the coarse stage's own distribution (`coarse_score_sgm`).
 //!
 //! The coarse stage's 2D encoder-decoder sees a few coarse pixels around each one; where the
 //! cameras' evidence is weak over a region (a textureless face, a repeated texture), its
@@ -10,7 +10,7 @@
 //! `softmax(log p - S / temperature)`, and its soft argmax the coarse answer the refinement
 //! stages start from.
 //!
-//! Measured in stop 41 on the bundled network (`models/training/coarse-sgm/`, things
+//! Measured on the bundled network (`research/cascade.md`, things
 //! validation frames 481-490 of `things-s101`, `p1` 1, `p2` 4, temperature 8): the coarse
 //! answers off by more than 20 index units fall from 15.0 % of the pixels to 12.3 % and the
 //! coarse MAE from 5.94 to 5.48 with sky scored as index 0; but over the pixels the
@@ -28,7 +28,7 @@ use crate::error::NetError;
 
 /// The largest matching cost (nats of negative log-probability) the aggregation sees: a sphere
 /// the network gives less than `e^-8` (3e-4) of a pixel's weight costs as much as one it rules
-/// out. Stop 41's study found the same answers with 4 nats and with no clamp.
+/// out. The study found the same answers with 4 nats and with no clamp.
 pub const SCORE_SGM_MAX_COST: f32 = 8.0;
 
 /// The aggregated log-scores of a coarse distribution `prob` (`K` spheres of `h x w` values,

@@ -133,7 +133,7 @@ def infer(
     max_entropy: Optional[float] = None,
     # None, or index units of N: the same by the spread (standard deviation).
     max_spread: Optional[float] = None,
-    # "auto": the bundled cascade's learnt picks after it (since stop 45 its two, as "chain");
+    # "auto": the bundled cascade's learnt picks after it (its two, as "chain");
     # "off"; "single": its first pick alone; "chain": its two picks, the second trained on the
     # first's answers; or a pick's .safetensors (several, comma-separated, run in turn).
     pick: str = "auto",
