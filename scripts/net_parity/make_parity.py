@@ -14,7 +14,7 @@ The lookup table is an analytic function of (camera, sphere, row, col), recomput
 Rust test (`grid_value` there), so it is not stored. Written independently of the
 reference code (GPL), from the layer description of the paper's Table 1.
 
-Usage: /work/venv-torch/bin/python scripts/net_parity/make_parity.py OUT_DIR
+Usage: python3 scripts/net_parity/make_parity.py OUT_DIR
 """
 import json
 import math
