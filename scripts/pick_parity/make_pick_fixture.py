@@ -1,21 +1,22 @@
-# Fixtures of crates/omnimvs-net/tests/pick.rs (stop 39): the learnt pick's U-Net and its inputs as
-# the scripts that trained the bundled pick compute them (models/training/pick-1/).
+# Fixtures of crates/omnimvs-net/tests/pick.rs: the learnt pick's U-Net and its inputs as the
+# scripts that train the picks compute them (scripts/pick/).
 #   1. pick_tiny.safetensors: a U-Net of width 2 for one camera (11 inputs), seeded random weights
 #      (the head too); io.safetensors: a random input (11, 16, 64), its logits, an index map and
 #      the softmax-weighted candidates (the pick's answer).
 #   2. inputs.safetensors: the 29 inputs on the real itbt_sample frame 1 for a synthetic answer and
 #      spread (formulas below, repeated in the test) at every 97th pixel of 160 x 640.
-#   3. (stop 40, pick-3's layout) pick_tiny3.safetensors / io3.safetensors: as 1. with eleven
+#   3. (a wider layout: pick-3's) pick_tiny3.safetensors / io3.safetensors: as 1. with eleven
 #      candidates (radii 1, 2, 4, 7, 12) and the layout in the metadata, one camera (depth radii
 #      2, 12 and ZNCC: 8 + 10 + 10 = 28 inputs); inputs3.safetensors: as 2. with depth radii 2, 12
 #      and ZNCC over 5 x 5 (58 inputs).
-# Usage (a venv with torch, numpy, scipy, pillow, tifffile, pyyaml):
+# Usage (a venv with torch, numpy, scipy, pillow, tifffile, pyyaml; omni_np.py on PYTHONPATH or
+# named by OMNI_NP, as scripts/pick/pick_inputs.py needs it):
 #   make_pick_fixture.py OUT_DIR [SAMPLES_DIR]
 import json, os, struct, sys
 import numpy as np, torch
 
 here = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(here, "../../models/training/pick-1"))
+sys.path.insert(0, os.path.join(here, "..", "pick"))
 import train_pick as tp
 import pick_inputs as pi
 
@@ -72,8 +73,9 @@ def main():
                 {"candidate_radii": "1,2,4,7,12", "depth_radii": "2,12", "zncc": "5"})
 
     ds = os.path.join(samples, "itbt_sample")
-    cfg, cams, md = pi.o.load(ds)
-    min_inv = 1.0 / (1.0 / pi.o.EPS)
+    o = pi.omni_np()
+    cfg, cams, md = o.load(ds)
+    min_inv = 1.0 / (1.0 / o.EPS)
     step = (1.0 / md - min_inv) / 191.0
     v, spread = synthetic_answer(160, 640)
     ims = pi.normalised_images(ds, 1, cfg, cams)

@@ -1,35 +1,64 @@
-# The learnt pick after the cascade (stop 39, `omnimvs_net::pick`): a small U-Net over
-# pick_inputs.py's inputs scores seven candidates per pixel (the answer and the min / max of the
-# answers over 3x3, 5x5 and 9x9 around, wrapping in longitude); the answer is their
-# softmax-weighted mean, trained by its L1 against the truth (sky left out, as the reference
-# scores) on 64-row bands of the whole width (4 per step, Adam, one-cycle to 1e-3) of frames
-# the network never trained on. Validation: whole panoramas, MAE in percent of N = 192 (the
-# reference's rules) before -> after. Every 1000 steps the weights are written (torch and
-# safetensors with these module names, which `PickRefiner::from_bytes` reads).
-# SKY_WEIGHT (environment, default 0): sky pixels (the truth's index just below 0 under the reference's
-# rules, where nothing is there) also weigh in the loss with this weight, their target index 0 (the
-# protocol that scores sky); pick-1 trained without them, pick-2 with 0.25.
-# pick-3 (stop 40): PICK_RADII (environment, default "1,2,4") sets the candidates' radii (pick-3:
-# "1,2,4,7,12", eleven candidates), and the safetensors carry the layout in their metadata
-# (candidate_radii, and pick_inputs.py's PICK_DEPTH_RADII and PICK_ZNCC as depth_radii and zncc),
-# which `PickRefiner::from_bytes` reads (absent: pick-1/2's layout).
-# pick-7 (stop 42): PICK_MODES=k (default 0) adds the coarse stage's k most probable modes as
-# candidates and their channels as inputs (`PickLayout::coarse_modes`): for each TRAIN / VAL file
-# f-NAME.npz / v-NAME.npz, m-NAME.npz / mv-NAME.npz beside it (../pick-7/pack_modes.py) holds them
-# (`modes`, appended to the inputs; `mode_cands`, appended to the candidates). A PICK_INIT with
-# fewer inputs or candidates is widened: the new candidates' head starts at zero weights and
-# biases of PICK_NEW_BIAS (default -10: at -5, far candidates took about a percent of the weight
-# each and cost pick-6 0.4 points of house validation MAE); the new inputs' weights start at
-# PyTorch's default init times PICK_NEW_INPUT_SCALE (default 0, zeros; zeros left the new inputs
-# and candidates each waiting for the other: 600 steps put 0.4 % of the weight on them).
-# pick-10 (stop 44): PICK_TEACHER=T.pt distils a trained pick (width PICK_TEACHER_WIDTH, default 16,
-# the same inputs and candidates) into this one: every pixel of a step's bands adds PICK_DISTILL
-# (default 10) times the KL divergence of the student's candidate weights from the teacher's to
-# the loss, besides the L1 against the truth.
+# Trains a learnt pick (`omnimvs_net::pick::PickRefiner`), the small network that runs after the
+# cascade at the output grid. A U-Net over pick_inputs.py's inputs scores the candidates of each
+# pixel (pick_common.candidates: the answer v and the minimum / maximum of the answers around it,
+# by default over 3 x 3, 5 x 5 and 9 x 9, wrapping in longitude); the pick's answer is their
+# softmax-weighted mean, so it never leaves the range of the answers around a pixel.
+#
+# Training: the L1 of the answer against the truth, on 4 bands of 64 rows x the whole width a
+# step from random frames of TRAIN, Adam with a one-cycle rate (5 % warm-up). Sky pixels are left
+# out of the loss unless SKY_WEIGHT is set (they then weigh that much, with target index 0). A
+# fresh pick's head starts at zero weights with biases that put about 96 % of the weight on v.
+# Every 1,000 steps (and at the last) it prints the validation MAE of each VAL file in percent of
+# N = 192 by the reference's rules (sky not scored), before -> after the pick, with the MAE with
+# sky scored as index 0 in brackets, and writes OUT.pt (a PyTorch state dict), OUT.safetensors
+# (the same weights with these module names and the layout in the metadata, which
+# `PickRefiner::from_bytes` reads: `omnimvs infer --pick OUT.safetensors`) and OUT.pt.ckpt (the
+# step, optimiser, schedule and random states). Started again with the same arguments, it
+# resumes from OUT.pt.ckpt.
+#
 # Usage: train_pick.py STEPS TRAIN.npz[,..] VAL.npz[,..] [WIDTH] [OUT.pt] [THREADS]
-import json, os, struct, sys, time
-import numpy as np, torch, torch.nn as nn, torch.nn.functional as F
-from scipy import ndimage
+#   STEPS    steps of the one-cycle schedule
+#   TRAIN    pick_inputs.py files (or second_inputs.py's, for a pick run after another), in order
+#   VAL      the same for the validation frames (whole panoramas)
+#   WIDTH    the U-Net's width (default 16: 16 / 32 / 48 / 64 channels, 0.20 M parameters)
+#   OUT.pt   where the weights go (default: not written)
+#   THREADS  PyTorch's CPU threads (default 2)
+# Options (environment):
+#   SKY_WEIGHT=w         weight of sky pixels in the loss, target index 0 (default 0; the bundled
+#                        picks: 0.25)
+#   PICK_LR=x            the one-cycle schedule's peak rate (default 1e-3)
+#   PICK_INIT=P          start from a pick's weights (.pt state dict or .safetensors) instead of
+#                        a fresh head; fewer inputs or candidates than asked are widened (below)
+#   PICK_RADII=1,2,4     the candidates' radii
+#   PICK_DEPTH_RADII, PICK_ZNCC
+#                        pick_inputs.py's layout options; only recorded in the metadata here, so
+#                        set them as the data was made
+#   PICK_MODES=k         also the coarse stage's k most probable modes as candidates, and their
+#                        channels as inputs (`PickLayout::coarse_modes`): each TRAIN / VAL file
+#                        f-NAME.npz / v-NAME.npz needs m-NAME.npz / mv-NAME.npz beside it (arrays
+#                        `modes` and `mode_cands`, made by `models/training/pick-7/pack_modes.py`
+#                        at revision ec41632)
+#   PICK_NEW_BIAS=b      widening: the new candidates' head starts at zero weights and bias b
+#                        (default -10)
+#   PICK_NEW_INPUT_SCALE=s
+#                        widening: the new inputs' first-layer weights start at PyTorch's
+#                        default initialisation times s (default 0: zeros)
+#   PICK_TEACHER=T       distil a trained pick T (.pt or .safetensors; its width
+#                        PICK_TEACHER_WIDTH, default 16; the same inputs and candidates) into
+#                        this one: PICK_DISTILL (default 10) times the KL divergence of this
+#                        pick's candidate weights from T's, over every pixel of a step's bands,
+#                        is added to the L1
+# Needs PyTorch, numpy and scipy.
+import os
+import sys
+import time
+
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+from pick_common import candidates, layout_metadata, read_safetensors, write_safetensors
 
 RADII = tuple(int(r) for r in os.environ.get("PICK_RADII", "1,2,4").split(","))
 MODES = int(os.environ.get("PICK_MODES", "0"))
@@ -80,7 +109,7 @@ class UNet(nn.Module):
 
 # The U-Net's convolutions in order, each with the layers whose outputs it reads (None: the
 # pick's inputs); a decoder layer reads a concatenation [upsampled deeper part, skip part]. For
-# scripts that cut or grow a trained pick's channels (pick-10's prune.py, pick-11's widen.py).
+# scripts that cut or grow a trained pick's channels.
 UNET_LAYERS = [
     ("e0.0.0", None), ("e0.1.0", ["e0.0.0"]),
     ("e1.0.0", ["e0.1.0"]), ("e1.1.0", ["e1.0.0"]),
@@ -92,15 +121,8 @@ UNET_LAYERS = [
 
 
 def cands(v, radii=None):
-    """v (B, H, W) -> (B, K, H, W): v, and the min / max over (2 r + 1)^2 for r in RADII (default
-    3x3, 5x5, 9x9; wrapping in longitude)."""
-    out = [v]
-    for r in RADII if radii is None else radii:
-        k, p = 2 * r + 1, r
-        vp = np.concatenate([v[..., -p:], v, v[..., :p]], -1)
-        out.append(ndimage.minimum_filter(vp, size=(1, k, k), mode="nearest")[..., p:-p])
-        out.append(ndimage.maximum_filter(vp, size=(1, k, k), mode="nearest")[..., p:-p])
-    return np.stack(out, 1)
+    """v (B, H, W) -> (B, K, H, W): pick_common.candidates over `radii` (default PICK_RADII)."""
+    return candidates(v, RADII if radii is None else radii)
 
 
 def inputs_of(d, i, rows=slice(None)):
@@ -116,7 +138,8 @@ def cands_of(d, i, rows=slice(None)):
 
 
 def widen(state, inputs):
-    """A state dict of fewer inputs or candidates widened to `inputs` and K (see the top)."""
+    """A state dict of fewer inputs or candidates widened to `inputs` and K (PICK_NEW_INPUT_SCALE,
+    PICK_NEW_BIAS)."""
     w = state["e0.0.0.weight"]
     if w.shape[1] < inputs:
         # The new inputs' weights: PyTorch's default init times NEW_INPUT_SCALE (0: zeros).
@@ -131,31 +154,38 @@ def widen(state, inputs):
 
 
 def answer(logits, c):
+    """The pick's answer: the candidates c weighted by the softmax of their logits (dim 1)."""
     return (torch.softmax(logits, 1) * c).sum(1)
 
 
 def layout():
     """The inputs' and candidates' layout, as the safetensors' metadata."""
-    out = {"candidate_radii": ",".join(map(str, RADII)),
-           "depth_radii": os.environ.get("PICK_DEPTH_RADII", "2"), "zncc": os.environ.get("PICK_ZNCC", "0")}
-    if MODES:
-        out["coarse_modes"] = str(MODES)
-    return out
+    depth_radii = [int(r) for r in os.environ.get("PICK_DEPTH_RADII", "2").split(",")]
+    return layout_metadata(RADII, depth_radii, int(os.environ.get("PICK_ZNCC", "0")), MODES)
+
+
+def load_state(path):
+    """A pick's weights as a state dict, and the layout metadata (None for a .pt state dict)."""
+    if path.endswith(".safetensors"):
+        tensors, metadata = read_safetensors(path)
+        return {k: torch.from_numpy(a) for k, a in tensors.items()}, metadata
+    return torch.load(path), None
+
+
+def width_of(state):
+    """The U-Net width of a state dict (the first layer's output channels)."""
+    return state["e0.0.0.weight"].shape[0]
 
 
 def save_safetensors(net, path, metadata=None):
-    tensors = {k: v.detach().float().contiguous().numpy() for k, v in net.state_dict().items()}
-    header, off = ({"__metadata__": metadata} if metadata else {}), 0
-    for k, a in tensors.items():
-        header[k] = {"dtype": "F32", "shape": list(a.shape), "data_offsets": [off, off + a.nbytes]}
-        off += a.nbytes
-    h = json.dumps(header).encode()
-    h += b" " * ((8 - len(h) % 8) % 8)
-    with open(path + ".tmp", "wb") as f:
-        f.write(struct.pack("<Q", len(h))); f.write(h)
-        for a in tensors.values():
-            f.write(a.astype("<f4").tobytes())
-    os.replace(path + ".tmp", path)
+    """Writes a network's weights as float32 safetensors with its module names."""
+    write_safetensors({k: v.detach().float().contiguous().numpy() for k, v in net.state_dict().items()},
+                      path, metadata)
+
+
+def safetensors_path(out):
+    """OUT.pt -> OUT.safetensors (any other name: the name with .safetensors appended)."""
+    return (out[:-3] if out.endswith(".pt") else out) + ".safetensors"
 
 
 def modes_path(p):
@@ -165,6 +195,7 @@ def modes_path(p):
 
 
 def load(paths):
+    """The frames of comma-separated pick_inputs.py files, concatenated in order."""
     names = paths.split(",")
     files = [np.load(p) for p in names]
     sizes = [len(x["valid"]) for x in files]
@@ -176,8 +207,7 @@ def load(paths):
         sources.update(modes=mfiles, mode_cands=mfiles)
     d = {}
     for k, srcs in sources.items():
-        # Filled file by file: the whole array once in memory, and one file's at a time besides
-        # (stop 41: concatenating a list of them held everything twice).
+        # Filled file by file: the whole array once in memory, and one file's at a time besides.
         out, at = None, 0
         for x, size in zip(srcs, sizes):
             # The modes' candidates as float16 (index units: steps of at most 0.125).
@@ -188,14 +218,17 @@ def load(paths):
             at += size
             del a
         d[k] = out
-    # The candidates of frame i are cands(v[i]), computed when a step or an evaluation needs them
-    # (stop 41: as an array of all frames they took 11.5 MB a frame; the values are the same).
+    # The candidates of frame i are cands(v[i]), computed when a step or an evaluation needs
+    # them (for all frames at once they would take 11.5 MB a frame).
     # Sky: pick_inputs.py's truth index is -EPS / step there (holes are -1).
     d["sky"] = (d["gt"] < 0) & (d["gt"] > -0.5)
     return d
 
 
 def main():
+    if len(sys.argv) < 4:
+        raise SystemExit("usage: train_pick.py STEPS TRAIN.npz[,..] VAL.npz[,..] [WIDTH] [OUT.pt] [THREADS]"
+                         " (see the top of the file)")
     steps, trp, vap = int(sys.argv[1]), sys.argv[2], sys.argv[3]
     W = int(sys.argv[4]) if len(sys.argv) > 4 else 16
     out = sys.argv[5] if len(sys.argv) > 5 else None
@@ -205,15 +238,13 @@ def main():
     vas = [(p, load(p)) for p in vap.split(",")]
     channels = tr["feats"].shape[1] + (tr["modes"].shape[1] if MODES else 0)
     net = UNet(channels, W)
-    # Stop 41: PICK_INIT starts from a pick's weights (a .pt state dict) instead of the zero head;
-    # PICK_LR is the one-cycle schedule's peak rate (default 1e-3).
     if os.environ.get("PICK_INIT"):
-        net.load_state_dict(widen(torch.load(os.environ["PICK_INIT"]), channels))
+        net.load_state_dict(widen(load_state(os.environ["PICK_INIT"])[0], channels))
     LR = float(os.environ.get("PICK_LR", "1e-3"))
     teacher = None
     if TEACHER:
         teacher = UNet(channels, int(os.environ.get("PICK_TEACHER_WIDTH", "16")))
-        teacher.load_state_dict(torch.load(TEACHER))
+        teacher.load_state_dict(load_state(TEACHER)[0])
         teacher.eval()
         for p in teacher.parameters():
             p.requires_grad_(False)
@@ -242,9 +273,10 @@ def main():
         return "  ".join(res)
 
     n, t0, B, losses = len(tr["v"]), time.time(), 4, []
-    # Resumable (stop 40): OUT.ckpt holds the step, the optimiser, the schedule and both random
-    # states as of the last weights written; a run started again with the same arguments goes on
-    # from there.
+    height = tr["v"].shape[1]
+    # Resumable: OUT.pt.ckpt holds the step, the optimiser, the schedule and both random states
+    # as of the last weights written; a run started again with the same arguments goes on from
+    # there.
     ckpt, start = (out + ".ckpt") if out else None, 1
     if ckpt and os.path.exists(ckpt):
         st = torch.load(ckpt, weights_only=False)
@@ -255,7 +287,7 @@ def main():
     else:
         print(0, "s", 0, evaluate(), flush=True)
     for it in range(start, steps + 1):
-        rows = [(np.random.randint(n), np.random.randint(0, 160 - 64 + 1)) for _ in range(B)]
+        rows = [(np.random.randint(n), np.random.randint(0, height - 64 + 1)) for _ in range(B)]
         pick = lambda k: np.stack([tr[k][i, ..., y0:y0 + 64, :] for i, y0 in rows])
         c = torch.as_tensor(np.stack([cands_of(tr, i, slice(y0, y0 + 64)) for i, y0 in rows]))
         x = torch.as_tensor(np.stack([inputs_of(tr, i, slice(y0, y0 + 64)) for i, y0 in rows])).float()
@@ -282,7 +314,7 @@ def main():
                             "np_rng": np.random.get_state(), "torch_rng": torch.get_rng_state(),
                             "step": it, "elapsed": time.time() - t0}, ckpt + ".tmp")
                 os.replace(ckpt + ".tmp", ckpt)
-                save_safetensors(net, out.replace(".pt", ".safetensors"), layout())
+                save_safetensors(net, safetensors_path(out), layout())
 
 
 if __name__ == "__main__":
