@@ -30,9 +30,8 @@
 # Environment:
 #   DATA     required: the folder of the datasets and of everything this script writes
 #   OMNIMVS  the binary (default: `omnimvs` on PATH, else target/release/omnimvs)
-#   PY       the Python interpreter (default python3): numpy, scipy, pillow, tifffile, pyyaml;
-#            PyTorch for `second`
-#   OMNI_NP  the folder of omni_np.py (pick_inputs.py's geometry), unless it is on PYTHONPATH
+#   PY       the Python interpreter (default python3): numpy, scipy, pillow, pyyaml; PyTorch
+#            for `second`
 #   JOBS     Python processes at a time (default 2)
 #   PICK     `second`: the first pick's weights (.safetensors or .pt; default the bundled
 #            models/omnimvs-cascade-pick.safetensors)

@@ -18,9 +18,8 @@
 # ZNCC window's side (default 0, none). The defaults are the bundled picks' layout: 29 channels
 # for four cameras. A pick's weights record the layout in their metadata (train_pick.py).
 #
-# Geometry, ground truth and image reading come from omni_np.py, the project's independent numpy
-# implementation of the dataset conventions (shared tools, outside this repository): put its
-# folder on PYTHONPATH or name it in OMNI_NP. Needs numpy, scipy, pillow, tifffile, pyyaml.
+# Geometry, ground truth and TIFF reading come from geometry.py beside this file (the dataset
+# conventions in numpy, as the Rust crates implement them). Needs numpy, scipy, pillow, pyyaml.
 #
 # Usage: pick_inputs.py DATASET OUTDIR A B DST.npz
 #   DATASET   a dataset folder (`omnimvs synth` output: config.yaml, the cameras' images, the truth)
@@ -33,26 +32,10 @@ import sys
 import numpy as np
 from scipy import ndimage
 
+import geometry
+
 DEPTH_RADII = tuple(int(r) for r in os.environ.get("PICK_DEPTH_RADII", "2").split(","))
 ZNCC = int(os.environ.get("PICK_ZNCC", "0"))
-
-_omni_np = None
-
-
-def omni_np():
-    """The omni_np module (imported on first use; OMNI_NP names its folder or file)."""
-    global _omni_np
-    if _omni_np is None:
-        where = os.environ.get("OMNI_NP")
-        if where:
-            sys.path.insert(0, where if os.path.isdir(where) else os.path.dirname(os.path.abspath(where)))
-        try:
-            import omni_np as module
-        except ImportError as e:
-            raise SystemExit("pick_inputs.py needs omni_np.py (the shared tools' independent numpy "
-                             "reference): put its folder on PYTHONPATH or set OMNI_NP=FOLDER") from e
-        _omni_np = module
-    return _omni_np
 
 
 def minmax(v, k):
@@ -76,8 +59,7 @@ def normalise(im):
 def normalised_images(ds, f, cfg, cams):
     """Frame f's camera images, each normalised (normalise)."""
     from PIL import Image
-    o = omni_np()
-    return [normalise(Image.open(o.frame_path(ds, i, cfg, f))) for i in range(len(cams))]
+    return [normalise(Image.open(geometry.frame_path(ds, i, cfg, f))) for i in range(len(cams))]
 
 
 def box_sum(a, k):
@@ -118,12 +100,11 @@ def channels(cameras, depth_radii=None, zncc_k=None):
 
 def features(ims, cams, v, spread, min_inv, step, phi_deg=45.0, depth_radii=None, zncc_k=None):
     """The inputs (channels, H, W) for the answer v and the spread (index units, H x W), from the
-    normalised images `ims` of the cameras `cams` (omni_np's): see the top for the layout."""
-    o = omni_np()
+    normalised images `ims` of the cameras `cams` (geometry.Camera): see the top for the layout."""
     depth_radii = DEPTH_RADII if depth_radii is None else depth_radii
     zncc_k = ZNCC if zncc_k is None else zncc_k
     h, w = v.shape
-    R = o.rays(h, w, phi_deg)
+    R = geometry.rays(h, w, phi_deg)
     chans, depths = [v / 192.0, spread / 30.0], [v]
     for r in depth_radii:
         mn, mx = minmax(v, 2 * r + 1)
@@ -135,7 +116,7 @@ def features(ims, cams, v, spread, min_inv, step, phi_deg=45.0, depth_radii=None
         grays, sees = [], []
         for cam, im in zip(cams, ims):
             col, row, vis = cam.project(X)
-            val, ok = o.bilinear(im, col, row)
+            val, ok = geometry.bilinear(im, col, row)
             ok = (vis & ok).astype(np.float64)
             grays.append((val * ok).reshape(h, w)); sees.append(ok.reshape(h, w))
             chans += [grays[-1], sees[-1]]
@@ -148,10 +129,10 @@ def features(ims, cams, v, spread, min_inv, step, phi_deg=45.0, depth_radii=None
 
 def frame_feats(ds, outdir, f, cfg, cams, md):
     """Frame f's inputs (float16), answer v, truth index gt (float32) and validity, at 160 x 640."""
-    o = omni_np()
-    pred = o.read_f32_tiff(f"{outdir}/{f:05d}.tiff")
-    spread = o.read_f32_tiff(f"{outdir}/{f:05d}_spread.tiff")
-    gi, valid, min_inv, step = o.reference_gt_index(o.gt_reference(ds, f, 160, 640, 45.0), md)
+    g = geometry
+    pred = g.read_f32_tiff(f"{outdir}/{f:05d}.tiff")
+    spread = g.read_f32_tiff(f"{outdir}/{f:05d}_spread.tiff")
+    gi, valid, min_inv, step = g.reference_gt_index(g.gt_reference(ds, f, 160, 640, 45.0, cfg), md)
     v = (pred - min_inv) / step
     x = features(normalised_images(ds, f, cfg, cams), cams, v, spread, min_inv, step)
     return x.astype(np.float16), v.astype(np.float32), gi.astype(np.float32), valid
@@ -161,7 +142,7 @@ def main():
     if len(sys.argv) != 6:
         raise SystemExit("usage: pick_inputs.py DATASET OUTDIR A B DST.npz (see the top of the file)")
     ds, outdir, a, b, dst = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
-    cfg, cams, md = omni_np().load(ds)
+    cfg, cams, md = geometry.load(ds)
     F, V, G, M = [], [], [], []
     for f in range(a, b + 1):
         x, v, g, m = frame_feats(ds, outdir, f, cfg, cams, md)

@@ -15,13 +15,14 @@
 #   DATASET   the dataset folder; OUTDIR its `omnimvs infer --pick off` outputs (for the spread)
 #   PICK      the first pick's weights: a .safetensors file (e.g. the bundled
 #             models/omnimvs-cascade-pick.safetensors) or a train_pick.py state dict (.pt)
-# Needs PyTorch and what pick_inputs.py needs (omni_np.py: OMNI_NP or PYTHONPATH).
+# Needs PyTorch and what pick_inputs.py needs (geometry.py beside it).
 import os
 import sys
 
 import numpy as np
 import torch
 
+import geometry
 import pick_inputs as pi
 import train_pick as t
 
@@ -55,13 +56,13 @@ def main():
     if len(d["v"]) != b - a + 1:
         raise SystemExit(f"{src} holds {len(d['v'])} frames, not {b - a + 1} (frames {a}..{b})")
     net = first_pick(pick)
-    o = pi.omni_np()
-    cfg, cams, md = o.load(ds)
+    g = geometry
+    cfg, cams, md = g.load(ds)
     feats, vs = [], []
     for i, f in enumerate(range(a, b + 1)):
         r = pick_answer(net, d["feats"][i], d["v"][i])
-        spread = o.read_f32_tiff(f"{outdir}/{f:05d}_spread.tiff")
-        gi, valid, min_inv, step = o.reference_gt_index(o.gt_reference(ds, f, 160, 640, 45.0), md)
+        spread = g.read_f32_tiff(f"{outdir}/{f:05d}_spread.tiff")
+        gi, valid, min_inv, step = g.reference_gt_index(g.gt_reference(ds, f, 160, 640, 45.0, cfg), md)
         x = pi.features(pi.normalised_images(ds, f, cfg, cams), cams, r, spread, min_inv, step)
         feats.append(x.astype(np.float16)); vs.append(r.astype(np.float32))
     np.savez(dst + ".tmp.npz", feats=np.stack(feats), v=np.stack(vs), gt=d["gt"], valid=d["valid"])

@@ -1,5 +1,5 @@
 """pick_inputs.py's numpy parts: box sums, the cameras' ZNCC, image normalisation, the channel
-count and order of the inputs (against a stand-in for omni_np's geometry)."""
+count and order of the inputs (against a stand-in for geometry.py)."""
 import types
 
 import numpy as np
@@ -109,7 +109,7 @@ class StubCam:
         return X[0] * s + self.dx, X[1] * s, s < self.limit
 
 
-def stub_omni_np(h, w):
+def stub_geometry(h, w):
     def rays(hh, ww, phi):
         assert (hh, ww) == (h, w)
         rows, cols = np.meshgrid(np.arange(h, dtype=np.float64), np.arange(w, dtype=np.float64), indexing="ij")
@@ -126,7 +126,7 @@ def stub_omni_np(h, w):
 @pytest.mark.parametrize("depth_radii,zncc_k", [((2,), 0), ((2, 12), 5)])
 def test_features_layout(monkeypatch, depth_radii, zncc_k):
     h, w = 12, 40
-    monkeypatch.setattr(pi, "omni_np", lambda: stub_omni_np(h, w))
+    monkeypatch.setattr(pi, "geometry", stub_geometry(h, w))
     rng = np.random.default_rng(8)
     v = rng.uniform(0, 191, size=(h, w))
     spread = rng.uniform(0, 40, size=(h, w))
