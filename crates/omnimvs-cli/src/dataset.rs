@@ -1,9 +1,8 @@
 //! Opening a dataset the way every command does: a `config.yaml` dataset, or a folder in the
 //! released layout whose `poses.txt` translations are in the unit of the global `--pose-unit`
-//! (centimetres unless stated).
+//! (centimetres unless stated), which `main` passes to the commands that open datasets.
 
 use std::path::Path;
-use std::sync::OnceLock;
 
 use anyhow::{Context, Result};
 use omnimvs_camera::LengthUnit;
@@ -30,29 +29,35 @@ impl From<PoseUnit> for LengthUnit {
     }
 }
 
-/// The unit stated on the command line, set once by `main`.
-static POSE_UNIT: OnceLock<Option<LengthUnit>> = OnceLock::new();
-
-/// Records `--pose-unit` for [`open_dataset`]; called once, before any command runs.
-pub fn set_pose_unit(unit: Option<PoseUnit>) {
-    // Only `main` sets it, once; a second call would keep the first value.
-    let _ = POSE_UNIT.set(unit.map(LengthUnit::from));
+/// Opens datasets the way every command does, with the global `--pose-unit` as stated on the
+/// command line (`None`: not stated).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct DatasetOpener {
+    pose_unit: Option<LengthUnit>,
 }
 
-/// The stated pose unit, if any.
-pub fn pose_unit() -> Option<LengthUnit> {
-    POSE_UNIT.get().copied().flatten()
-}
+impl DatasetOpener {
+    /// An opener with `--pose-unit`'s value.
+    pub fn new(pose_unit: Option<PoseUnit>) -> Self {
+        Self {
+            pose_unit: pose_unit.map(LengthUnit::from),
+        }
+    }
 
-/// Opens the dataset at `path` with the stated pose unit.
-///
-/// # Errors
-/// The library's error, with `--pose-unit` named when it was stated.
-pub fn open_dataset(path: &Path) -> Result<Dataset> {
-    let unit = pose_unit();
-    let ds = Dataset::open_with(path, unit);
-    match unit {
-        Some(u) => ds.with_context(|| format!("--pose-unit {u}")),
-        None => Ok(ds?),
+    /// The stated pose unit, if any.
+    pub fn pose_unit(&self) -> Option<LengthUnit> {
+        self.pose_unit
+    }
+
+    /// Opens the dataset at `path` with the stated pose unit.
+    ///
+    /// # Errors
+    /// The library's error, with `--pose-unit` named when it was stated.
+    pub fn open(&self, path: &Path) -> Result<Dataset> {
+        let ds = Dataset::open_with(path, self.pose_unit);
+        match self.pose_unit {
+            Some(u) => ds.with_context(|| format!("--pose-unit {u}")),
+            None => Ok(ds?),
+        }
     }
 }

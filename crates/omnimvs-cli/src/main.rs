@@ -69,7 +69,7 @@ enum Command {
     Eval(cmd::eval::Args),
 }
 
-/// The commands that do not open their dataset through [`dataset::open_dataset`], so a
+/// The commands that do not open their dataset through [`dataset::DatasetOpener`], so a
 /// stated pose unit would be silently ignored there: `train` (its datasets are opened by the
 /// trainer), `demo` and `synth` (they write their own `config.yaml`), `bench`.
 fn ignores_pose_unit(command: &Command) -> Option<&'static str> {
@@ -96,19 +96,19 @@ fn main() -> ExitCode {
         );
         return ExitCode::from(2);
     }
-    dataset::set_pose_unit(cli.pose_unit);
+    let datasets = dataset::DatasetOpener::new(cli.pose_unit);
     let result = match cli.command {
         Command::Bench(a) => cmd::bench::run(&a),
         Command::Demo(a) => cmd::demo::run(&a),
-        Command::Infer(a) => cmd::infer::run(&a),
-        Command::Info(a) => cmd::info::run(&a),
-        Command::Lut(a) => cmd::lut::run(&a),
-        Command::Pano(a) => cmd::pano::run(&a),
-        Command::Parity(a) => cmd::parity::run(&a),
-        Command::Sgm(a) => cmd::sgm::run(&a),
+        Command::Infer(a) => cmd::infer::run(&a, &datasets),
+        Command::Info(a) => cmd::info::run(&a, &datasets),
+        Command::Lut(a) => cmd::lut::run(&a, &datasets),
+        Command::Pano(a) => cmd::pano::run(&a, &datasets),
+        Command::Parity(a) => cmd::parity::run(&a, &datasets),
+        Command::Sgm(a) => cmd::sgm::run(&a, &datasets),
         Command::Synth(a) => cmd::synth::run(&a),
         Command::Train(a) => cmd::train::run(&a),
-        Command::Eval(a) => cmd::eval::run(&a),
+        Command::Eval(a) => cmd::eval::run(&a, &datasets),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

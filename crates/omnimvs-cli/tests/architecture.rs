@@ -85,10 +85,7 @@ fn documented(root: &Path) -> Vec<(String, BTreeSet<String>)> {
 #[test]
 fn the_documented_graph_is_the_workspace_graph() {
     let root = repo_root();
-    let actual: Graph = manifests(&root)
-        .iter()
-        .map(|p| read_manifest(p))
-        .collect();
+    let actual: Graph = manifests(&root).iter().map(|p| read_manifest(p)).collect();
     let listed = documented(&root);
     let documented: Graph = listed.iter().cloned().collect();
     let mut expected_block = String::new();

@@ -336,22 +336,94 @@ pub fn band_features(
 ) {
     let (w, h) = (grid.width, grid.height);
     let ncam = views.len();
-    let layout = spec.layout(ncam);
-    let radii = &spec.radii;
     let pairs = camera_pairs(ncam);
     let reach = spec.reach();
-    let (w0, w1) = (rows.start.saturating_sub(reach), (rows.end + reach).min(h));
-    let nwarp = w1 - w0;
+    let band = Band {
+        w,
+        h,
+        ncam,
+        w0: rows.start.saturating_sub(reach),
+        nwarp: (rows.end + reach).min(h) - rows.start.saturating_sub(reach),
+        nq: 3 * ncam + pairs.len(),
+    };
     let s = scratch;
-    s.values.resize(ncam * nwarp * w, 0.0);
-    s.missing.resize(ncam * nwarp * w, 0.0);
+    warp_band(&band, projectors, views, inv_depth, s);
+    prefix_sums(&band, &pairs, s);
+    s.colsum.resize(w, 0.0);
+    s.boxsum.resize(band.nq * w, 0.0);
+    s.mean.resize(ncam * w, 0.0);
+    s.inv_std.resize(ncam * w, 0.0);
+    let mut current = WindowStats {
+        mean: vec![0f32; ncam],
+        inv_std: vec![0f32; ncam],
+    };
+    // Shiftable windows: the first window size's ZNCC of every pair on the band's rows and
+    // the rows one shift above and below it (NaN where a window is incomplete).
+    let shift = spec.radii[0];
+    let e0 = rows.start.saturating_sub(shift);
+    if spec.shifted {
+        shifted_znccs(&band, &pairs, shift, e0..(rows.end + shift).min(h), s);
+    }
+    let layout = spec.layout(ncam);
+    let dim = layout.dim();
+    for (o, row) in rows.clone().enumerate() {
+        let out_row = &mut out[o * w * dim..][..w * dim];
+        for (scale, &radius) in spec.radii.iter().enumerate() {
+            window_features(
+                &band,
+                &pairs,
+                &layout,
+                (row, scale, radius),
+                s,
+                &mut current,
+                out_row,
+            );
+        }
+        center_differences(&band, &pairs, &layout, row, s, out_row);
+        if spec.shifted {
+            best_shifted(&band, &pairs, &layout, (row, shift, e0), s, out_row);
+        }
+    }
+}
+
+/// The shape of one band of [`band_features`]: the grid's `w` x `h`, `ncam` cameras, the
+/// `nwarp` warped rows from grid row `w0` that its windows reach, and `nq` summed quantities
+/// (per camera the sum, sum of squares and missing count; per pair the product sum).
+struct Band {
+    w: usize,
+    h: usize,
+    ncam: usize,
+    w0: usize,
+    nwarp: usize,
+    nq: usize,
+}
+
+/// One window's mean and inverse standard deviation (0 where the window is incomplete), per
+/// camera.
+struct WindowStats {
+    mean: Vec<f32>,
+    inv_std: Vec<f32>,
+}
+
+/// Every camera's image warped onto the band's rows of the sphere: `s.values` and
+/// `s.missing` (1 where the camera does not see the point), `[cam][warped row][col]`.
+fn warp_band(
+    band: &Band,
+    projectors: &[SphereProjector],
+    views: &[CameraView],
+    inv_depth: f32,
+    s: &mut BandScratch,
+) {
+    let (w, nwarp) = (band.w, band.nwarp);
+    s.values.resize(band.ncam * nwarp * w, 0.0);
+    s.missing.resize(band.ncam * nwarp * w, 0.0);
     s.pos_col.resize(w, 0.0);
     s.pos_row.resize(w, 0.0);
     s.table_pos.resize(w, 0.0);
-    for cam in 0..ncam {
+    for cam in 0..band.ncam {
         for r in 0..nwarp {
             projectors[cam].project_run(
-                (w0 + r) * w,
+                (band.w0 + r) * w,
                 inv_depth,
                 &mut s.pos_col,
                 &mut s.pos_row,
@@ -367,9 +439,12 @@ pub fn band_features(
             }
         }
     }
-    // Quantities: per camera sum, sum of squares, missing count; per pair the product sum.
-    // Their sums down the warped rows, so that any window's rows are one difference.
-    let nq = 3 * ncam + pairs.len();
+}
+
+/// The quantities' sums down the warped rows into `s.prefix`, so that any window's rows are
+/// one difference.
+fn prefix_sums(band: &Band, pairs: &[(usize, usize)], s: &mut BandScratch) {
+    let (w, nwarp, ncam, nq) = (band.w, band.nwarp, band.ncam, band.nq);
     let stride = (nwarp + 1) * w;
     s.prefix.clear();
     s.prefix.resize(nq * stride, 0.0);
@@ -396,115 +471,152 @@ pub fn band_features(
             }
         }
     }
-    let dim = layout.dim();
-    s.colsum.resize(w, 0.0);
-    s.boxsum.resize(nq * w, 0.0);
-    s.mean.resize(ncam * w, 0.0);
-    s.inv_std.resize(ncam * w, 0.0);
-    let (mut cur_mean, mut cur_inv_std) = (vec![0f32; ncam], vec![0f32; ncam]);
-    // Shiftable windows: the first window size's ZNCC of every pair on the band's rows and
-    // the rows one shift above and below it (NaN where a window is incomplete).
-    let shift = radii[0];
-    let (e0, e1) = (rows.start.saturating_sub(shift), (rows.end + shift).min(h));
-    let np = pairs.len();
-    if spec.shifted {
-        s.shifted.resize((e1 - e0) * np * w, f32::NAN);
-        for er in e0..e1 {
-            let inv_n = window_sums(s, er, shift, w0, h, w, nq);
-            for (p, &pair) in pairs.iter().enumerate() {
-                let dst = &mut s.shifted[((er - e0) * np + p) * w..][..w];
-                for (x, d) in dst.iter_mut().enumerate() {
-                    *d = boxsum_zncc(&s.boxsum, w, ncam, inv_n, p, pair, x).unwrap_or(f32::NAN);
-                }
+}
+
+/// The ZNCC of every pair over the `shift`-radius window of grid rows `extended` into
+/// `s.shifted`, `[row - extended.start][pair][col]` (NaN where a window is incomplete).
+fn shifted_znccs(
+    band: &Band,
+    pairs: &[(usize, usize)],
+    shift: usize,
+    extended: Range<usize>,
+    s: &mut BandScratch,
+) {
+    let (w, np) = (band.w, pairs.len());
+    let e0 = extended.start;
+    s.shifted.resize(extended.len() * np * w, f32::NAN);
+    for er in extended {
+        let inv_n = window_sums(s, er, shift, band.w0, band.h, w, band.nq);
+        for (p, &pair) in pairs.iter().enumerate() {
+            let dst = &mut s.shifted[((er - e0) * np + p) * w..][..w];
+            for (x, d) in dst.iter_mut().enumerate() {
+                *d = boxsum_zncc(&s.boxsum, w, band.ncam, inv_n, p, pair, x).unwrap_or(f32::NAN);
             }
         }
     }
-    for (o, row) in rows.clone().enumerate() {
-        for (scale, &radius) in radii.iter().enumerate() {
-            let inv_n = window_sums(s, row, radius, w0, h, w, nq);
-            let q = |quantity: usize, x: usize| s.boxsum[quantity * w + x];
-            for x in 0..w {
-                let f = &mut out[(o * w + x) * dim..][..dim];
-                for cam in 0..ncam {
-                    let mu = q(cam, x) * inv_n;
-                    let var = (q(ncam + cam, x) * inv_n - mu * mu).max(0.0);
-                    let complete = q(2 * ncam + cam, x) < 0.5;
-                    cur_mean[cam] = mu;
-                    cur_inv_std[cam] = if complete {
-                        1.0 / (var + ZNCC_VARIANCE_EPS).sqrt()
-                    } else {
-                        0.0
-                    };
-                    f[layout.texture(scale, cam)] = if complete {
-                        0.25 * (var + ZNCC_VARIANCE_EPS).ln()
-                    } else {
-                        0.0
-                    };
-                    f[layout.camera_complete(scale, cam)] = if complete { 1.0 } else { 0.0 };
-                }
-                if scale == 0 {
-                    for cam in 0..ncam {
-                        s.mean[cam * w + x] = cur_mean[cam];
-                        s.inv_std[cam * w + x] = cur_inv_std[cam];
-                    }
-                }
-                for (p, &(a, b)) in pairs.iter().enumerate() {
-                    let norm = cur_inv_std[a] * cur_inv_std[b];
-                    let used = norm > 0.0;
-                    let cov = q(3 * ncam + p, x) * inv_n - cur_mean[a] * cur_mean[b];
-                    f[layout.zncc(scale, p)] = if used {
-                        (cov * norm).clamp(-1.0, 1.0)
-                    } else {
-                        0.0
-                    };
-                    f[layout.pair_complete(scale, p)] = if used { 1.0 } else { 0.0 };
-                }
+}
+
+/// The features of window size `scale` (radius `radius`) of grid row `row` into `out_row`
+/// (`[col][dim]`): every camera's texture and completeness, every pair's ZNCC and
+/// completeness. The first size's statistics are kept in `s.mean` and `s.inv_std` for the
+/// centre differences.
+fn window_features(
+    band: &Band,
+    pairs: &[(usize, usize)],
+    layout: &FeatureLayout,
+    (row, scale, radius): (usize, usize, usize),
+    s: &mut BandScratch,
+    current: &mut WindowStats,
+    out_row: &mut [f32],
+) {
+    let (w, ncam) = (band.w, band.ncam);
+    let dim = layout.dim();
+    let inv_n = window_sums(s, row, radius, band.w0, band.h, w, band.nq);
+    for x in 0..w {
+        let q = |quantity: usize| s.boxsum[quantity * w + x];
+        let f = &mut out_row[x * dim..][..dim];
+        for cam in 0..ncam {
+            let mu = q(cam) * inv_n;
+            let var = (q(ncam + cam) * inv_n - mu * mu).max(0.0);
+            let complete = q(2 * ncam + cam) < 0.5;
+            current.mean[cam] = mu;
+            current.inv_std[cam] = if complete {
+                1.0 / (var + ZNCC_VARIANCE_EPS).sqrt()
+            } else {
+                0.0
+            };
+            f[layout.texture(scale, cam)] = if complete {
+                0.25 * (var + ZNCC_VARIANCE_EPS).ln()
+            } else {
+                0.0
+            };
+            f[layout.camera_complete(scale, cam)] = if complete { 1.0 } else { 0.0 };
+        }
+        for (p, &(a, b)) in pairs.iter().enumerate() {
+            let norm = current.inv_std[a] * current.inv_std[b];
+            let used = norm > 0.0;
+            let cov = q(3 * ncam + p) * inv_n - current.mean[a] * current.mean[b];
+            f[layout.zncc(scale, p)] = if used {
+                (cov * norm).clamp(-1.0, 1.0)
+            } else {
+                0.0
+            };
+            f[layout.pair_complete(scale, p)] = if used { 1.0 } else { 0.0 };
+        }
+        if scale == 0 {
+            for cam in 0..ncam {
+                s.mean[cam * w + x] = current.mean[cam];
+                s.inv_std[cam * w + x] = current.inv_std[cam];
             }
         }
-        // Centre samples, normalised by the first window's statistics.
-        let k = row - w0;
-        for x in 0..w {
-            let f = &mut out[(o * w + x) * dim..][..dim];
-            for (p, &(a, b)) in pairs.iter().enumerate() {
-                let (ia, ib) = (s.inv_std[a * w + x], s.inv_std[b * w + x]);
-                f[layout.center_difference(p)] = if ia > 0.0 && ib > 0.0 {
-                    let za = (s.values[(a * nwarp + k) * w + x] - s.mean[a * w + x]) * ia;
-                    let zb = (s.values[(b * nwarp + k) * w + x] - s.mean[b * w + x]) * ib;
-                    za - zb
-                } else {
-                    0.0
+    }
+}
+
+/// The pairs' differences of their centre samples of grid row `row`, normalised by the first
+/// window's statistics, into `out_row`.
+fn center_differences(
+    band: &Band,
+    pairs: &[(usize, usize)],
+    layout: &FeatureLayout,
+    row: usize,
+    s: &BandScratch,
+    out_row: &mut [f32],
+) {
+    let (w, nwarp) = (band.w, band.nwarp);
+    let dim = layout.dim();
+    let k = row - band.w0;
+    for x in 0..w {
+        let f = &mut out_row[x * dim..][..dim];
+        for (p, &(a, b)) in pairs.iter().enumerate() {
+            let (ia, ib) = (s.inv_std[a * w + x], s.inv_std[b * w + x]);
+            f[layout.center_difference(p)] = if ia > 0.0 && ib > 0.0 {
+                let za = (s.values[(a * nwarp + k) * w + x] - s.mean[a * w + x]) * ia;
+                let zb = (s.values[(b * nwarp + k) * w + x] - s.mean[b * w + x]) * ib;
+                za - zb
+            } else {
+                0.0
+            };
+        }
+    }
+}
+
+/// Every pair's best ZNCC among the 8 windows shifted by `shift` around grid row `row`'s
+/// (from `s.shifted`, whose rows start at `e0`) into `out_row`, with whether any was seen.
+fn best_shifted(
+    band: &Band,
+    pairs: &[(usize, usize)],
+    layout: &FeatureLayout,
+    (row, shift, e0): (usize, usize, usize),
+    s: &BandScratch,
+    out_row: &mut [f32],
+) {
+    let (w, h, np) = (band.w, band.h, pairs.len());
+    let dim = layout.dim();
+    for x in 0..w {
+        let f = &mut out_row[x * dim..][..dim];
+        for p in 0..np {
+            let mut best = f32::NEG_INFINITY;
+            for dy in [-1isize, 0, 1] {
+                let Some(r) = row.checked_add_signed(dy * shift as isize) else {
+                    continue;
                 };
-            }
-        }
-        if !spec.shifted {
-            continue;
-        }
-        for x in 0..w {
-            let f = &mut out[(o * w + x) * dim..][..dim];
-            for p in 0..np {
-                let mut best = f32::NEG_INFINITY;
-                for dy in [-1isize, 0, 1] {
-                    let Some(r) = row.checked_add_signed(dy * shift as isize) else {
-                        continue;
-                    };
-                    if r >= h {
+                if r >= h {
+                    continue;
+                }
+                let line = &s.shifted[((r - e0) * np + p) * w..][..w];
+                for dx in [w - shift, 0, shift] {
+                    if dy == 0 && dx == 0 {
                         continue;
                     }
-                    let line = &s.shifted[((r - e0) * np + p) * w..][..w];
-                    for dx in [w - shift, 0, shift] {
-                        if dy == 0 && dx == 0 {
-                            continue;
-                        }
-                        let v = line[(x + dx) % w];
-                        if v > best {
-                            best = v;
-                        }
+                    let v = line[(x + dx) % w];
+                    if v > best {
+                        best = v;
                     }
                 }
-                let seen = best.is_finite();
-                f[layout.shifted_zncc(p)] = if seen { best } else { 0.0 };
-                f[layout.shifted_complete(p)] = if seen { 1.0 } else { 0.0 };
             }
+            let seen = best.is_finite();
+            f[layout.shifted_zncc(p)] = if seen { best } else { 0.0 };
+            f[layout.shifted_complete(p)] = if seen { 1.0 } else { 0.0 };
         }
     }
 }

@@ -292,63 +292,8 @@ impl DatasetWriter {
             let p = out.join(dir);
             std::fs::create_dir_all(&p).map_err(io(&p, "cannot create folder"))?;
         }
-        let settings_path = out.join("synth.json");
-        let settings_json =
-            serde_json::to_string_pretty(&settings).map_err(|e| SynthError::Json {
-                path: settings_path.clone(),
-                message: e.to_string(),
-            })?;
-        if settings_path.exists() {
-            let text = std::fs::read_to_string(&settings_path)
-                .map_err(io(&settings_path, "cannot read"))?;
-            let old: SynthSettings = serde_json::from_str(&text).map_err(|e| SynthError::Json {
-                path: settings_path.clone(),
-                message: e.to_string(),
-            })?;
-            if old != settings {
-                return Err(SynthError::SettingsMismatch {
-                    path: settings_path,
-                    message: describe_difference(&old, &settings),
-                });
-            }
-        } else {
-            omnimvs_camera::fs::write_atomic(&settings_path, settings_json.as_bytes())
-                .map_err(io(&settings_path, "cannot write"))?;
-        }
-        let config_path = out.join("config.yaml");
-        let covered = covered_frames(&config_path, frames)?;
-        let config = DatasetConfig {
-            min_depth_m: rig.min_depth_m,
-            img_fmt: IMG_FMT.to_string(),
-            frames: covered,
-            gt_fmt: Some(GT_FMT.to_string()),
-            // The reference implementation's train/test frames (`split.rs`).
-            split: Some(crate::split::published_split(kind, &covered, GT_PHI_DEG)),
-        };
-        // Every camera names its `invalid_mask` (the reference's reader needs the field) and
-        // the mask is written: non-zero outside the field of view, what a reader derives
-        // from `max_fov` alone anyway.
-        let mut rig_with_masks = rig.rig.clone();
-        for (i, camera) in rig_with_masks.cameras.iter_mut().enumerate() {
-            let name = format!("mask{}.png", i + 1);
-            let mask = omnimvs_camera::ValidityMask::from_fov(&camera.model);
-            let pixels: Vec<u8> = mask
-                .valid
-                .iter()
-                .map(|&v| if v { 0 } else { 255 })
-                .collect();
-            omnimvs_data::image_io::write_png_u8(
-                &out.join(&name),
-                mask.width as usize,
-                mask.height as usize,
-                1,
-                &pixels,
-            )?;
-            camera.invalid_mask = Some(name);
-        }
-        let text = write_config_yaml(&rig_with_masks, &config)?;
-        omnimvs_camera::fs::write_atomic(&config_path, text.as_bytes())
-            .map_err(io(&config_path, "cannot write"))?;
+        write_or_check_settings(&out.join("synth.json"), &settings)?;
+        write_config_and_masks(out, rig, kind, frames)?;
         Ok(Self {
             out: out.to_path_buf(),
             rig: rig.rig.clone(),
@@ -529,6 +474,76 @@ pub fn render_scene(
         .collect();
     let inv_depth = render_inverse_depth(&tracer, grid);
     Ok((images, inv_depth))
+}
+
+/// Writes `settings` to `path` (`synth.json`), or, when the dataset is already there, checks
+/// that its settings are the same (a resumed generation must not mix two kinds of frames).
+fn write_or_check_settings(path: &Path, settings: &SynthSettings) -> Result<(), SynthError> {
+    let settings_json = serde_json::to_string_pretty(settings).map_err(|e| SynthError::Json {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    if path.exists() {
+        let text = std::fs::read_to_string(path).map_err(io(path, "cannot read"))?;
+        let old: SynthSettings = serde_json::from_str(&text).map_err(|e| SynthError::Json {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        if old != *settings {
+            return Err(SynthError::SettingsMismatch {
+                path: path.to_path_buf(),
+                message: describe_difference(&old, settings),
+            });
+        }
+        Ok(())
+    } else {
+        omnimvs_camera::fs::write_atomic(path, settings_json.as_bytes())
+            .map_err(io(path, "cannot write"))
+    }
+}
+
+/// Writes `out/config.yaml` (the rig, the minimum depth, every frame written so far and
+/// `frames`, the published split) and every camera's mask `out/maskN.png`.
+fn write_config_and_masks(
+    out: &Path,
+    rig: &RigSource,
+    kind: SceneKind,
+    frames: &FrameRange,
+) -> Result<(), SynthError> {
+    let config_path = out.join("config.yaml");
+    let covered = covered_frames(&config_path, frames)?;
+    let config = DatasetConfig {
+        min_depth_m: rig.min_depth_m,
+        img_fmt: IMG_FMT.to_string(),
+        frames: covered,
+        gt_fmt: Some(GT_FMT.to_string()),
+        // The reference implementation's train/test frames (`split.rs`).
+        split: Some(crate::split::published_split(kind, &covered, GT_PHI_DEG)),
+    };
+    // Every camera names its `invalid_mask` (the reference's reader needs the field) and
+    // the mask is written: non-zero outside the field of view, what a reader derives
+    // from `max_fov` alone anyway.
+    let mut rig_with_masks = rig.rig.clone();
+    for (i, camera) in rig_with_masks.cameras.iter_mut().enumerate() {
+        let name = format!("mask{}.png", i + 1);
+        let mask = omnimvs_camera::ValidityMask::from_fov(&camera.model);
+        let pixels: Vec<u8> = mask
+            .valid
+            .iter()
+            .map(|&v| if v { 0 } else { 255 })
+            .collect();
+        omnimvs_data::image_io::write_png_u8(
+            &out.join(&name),
+            mask.width as usize,
+            mask.height as usize,
+            1,
+            &pixels,
+        )?;
+        camera.invalid_mask = Some(name);
+    }
+    let text = write_config_yaml(&rig_with_masks, &config)?;
+    omnimvs_camera::fs::write_atomic(&config_path, text.as_bytes())
+        .map_err(io(&config_path, "cannot write"))
 }
 
 #[cfg(test)]

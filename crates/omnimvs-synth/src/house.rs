@@ -134,6 +134,8 @@ fn legs(w: f64, d: f64, h: f64, t: f64, tex: usize) -> Vec<(Part, usize)> {
         .collect()
 }
 
+/// A random piece of furniture (or a person, a plant, a rug) with two random textures: part
+/// textures index 0 (wood) and 1 (fabric).
 fn random_item(rng: &mut Rng) -> Item {
     let (r1, r2) = (rng.range(0.5, 1.0), rng.range(0.3, 1.0));
     let wood = TextureSpec::random(rng, r1);
@@ -141,155 +143,177 @@ fn random_item(rng: &mut Rng) -> Item {
     let textures = vec![wood, fabric];
     let mut parts = Vec::new();
     let footprint = match rng.below(11) {
-        0 => {
-            // Table.
-            let (w, d, h) = (
-                rng.range(0.8, 1.8),
-                rng.range(0.6, 1.0),
-                rng.range(0.7, 0.78),
-            );
-            parts.push((
-                Part::Box([-w / 2.0, -h, -d / 2.0], [w / 2.0, -h + 0.04, d / 2.0]),
-                0,
-            ));
-            parts.extend(legs(w, d, h - 0.04, 0.05, 0));
-            (w / 2.0, d / 2.0)
-        }
-        1 => {
-            // Chair.
-            let (w, h) = (rng.range(0.4, 0.5), rng.range(0.42, 0.48));
-            parts.push((
-                Part::Box([-w / 2.0, -h, -w / 2.0], [w / 2.0, -h + 0.05, w / 2.0]),
-                1,
-            ));
-            parts.push((
-                Part::Box([-w / 2.0, -h - 0.5, w / 2.0 - 0.05], [w / 2.0, -h, w / 2.0]),
-                0,
-            ));
-            parts.extend(legs(w, w, h, 0.04, 0));
-            (w / 2.0, w / 2.0)
-        }
-        2 => {
-            // Bed.
-            let (w, l) = (rng.range(1.0, 1.8), rng.range(1.9, 2.1));
-            parts.push((
-                Part::Box([-w / 2.0, -0.5, -l / 2.0], [w / 2.0, 0.0, l / 2.0]),
-                1,
-            ));
-            parts.push((
-                Part::Box([-w / 2.0, -1.0, l / 2.0 - 0.06], [w / 2.0, 0.0, l / 2.0]),
-                0,
-            ));
-            parts.push((
-                Part::Box(
-                    [-w / 2.0 + 0.1, -0.62, l / 2.0 - 0.5],
-                    [w / 2.0 - 0.1, -0.5, l / 2.0 - 0.1],
-                ),
-                1,
-            ));
-            (w / 2.0, l / 2.0)
-        }
-        3 => {
-            // Sofa.
-            let (w, d) = (rng.range(1.5, 2.3), rng.range(0.8, 0.95));
-            parts.push((
-                Part::Box([-w / 2.0, -0.42, -d / 2.0], [w / 2.0, 0.0, d / 2.0]),
-                1,
-            ));
-            parts.push((
-                Part::Box([-w / 2.0, -0.85, d / 2.0 - 0.2], [w / 2.0, -0.42, d / 2.0]),
-                1,
-            ));
-            for s in [-1.0, 1.0] {
-                let x0 = s * (w / 2.0 - 0.1);
-                parts.push((
-                    Part::Box([x0 - 0.1, -0.62, -d / 2.0], [x0 + 0.1, -0.42, d / 2.0]),
-                    1,
-                ));
-            }
-            (w / 2.0, d / 2.0)
-        }
-        4 => {
-            // Cabinet or bookshelf.
-            let (w, d, h) = (
-                rng.range(0.5, 1.4),
-                rng.range(0.3, 0.6),
-                rng.range(0.7, 2.1),
-            );
-            parts.push((
-                Part::Box([-w / 2.0, -h, -d / 2.0], [w / 2.0, 0.0, d / 2.0]),
-                0,
-            ));
-            (w / 2.0, d / 2.0)
-        }
-        5 => {
-            // Round table.
-            let (r, h) = (rng.range(0.35, 0.65), rng.range(0.7, 0.76));
-            parts.push((Part::Cylinder(0.0, 0.0, r, h - 0.04, h), 0));
-            parts.push((Part::Cylinder(0.0, 0.0, 0.05, 0.0, h - 0.04), 0));
-            parts.push((Part::Cylinder(0.0, 0.0, r * 0.5, 0.0, 0.03), 0));
-            (r, r)
-        }
-        6 => {
-            // Floor lamp.
-            let h = rng.range(1.4, 1.8);
-            parts.push((Part::Cylinder(0.0, 0.0, 0.15, 0.0, 0.03), 0));
-            parts.push((Part::Cylinder(0.0, 0.0, 0.015, 0.03, h - 0.2), 0));
-            parts.push((Part::Cone(0.0, 0.0, 0.22, h - 0.3, h), 1));
-            (0.22, 0.22)
-        }
-        7 => {
-            // A person, roughly.
-            let h = rng.range(1.55, 1.9);
-            parts.push((
-                Part::Box([-0.17, -0.85 * h / 1.75, -0.1], [0.17, 0.0, 0.1]),
-                1,
-            ));
-            parts.push((
-                Part::Cylinder(0.0, 0.0, 0.2, 0.85 * h / 1.75, 1.45 * h / 1.75),
-                1,
-            ));
-            parts.push((Part::Sphere(0.0, 1.6 * h / 1.75, 0.0, 0.11), 0));
-            (0.25, 0.25)
-        }
-        8 => {
-            // TV on a stand.
-            let w = rng.range(0.9, 1.6);
-            parts.push((
-                Part::Box([-w / 2.0 - 0.1, -0.5, -0.22], [w / 2.0 + 0.1, 0.0, 0.22]),
-                0,
-            ));
-            parts.push((
-                Part::Box([-w / 2.0, -0.5 - w * 0.58, -0.03], [w / 2.0, -0.5, 0.03]),
-                1,
-            ));
-            (w / 2.0 + 0.1, 0.22)
-        }
-        9 => {
-            // Plant.
-            let r = rng.range(0.15, 0.3);
-            parts.push((Part::Cylinder(0.0, 0.0, r, 0.0, 2.0 * r), 0));
-            parts.push((
-                Part::Blob(0.0, 2.0 * r + 1.5 * r, 0.0, 1.8 * r, rng.seed_i32()),
-                1,
-            ));
-            (1.8 * r, 1.8 * r)
-        }
-        _ => {
-            // Rug.
-            let (w, d) = (rng.range(1.0, 2.5), rng.range(0.8, 2.0));
-            parts.push((
-                Part::Box([-w / 2.0, -0.012, -d / 2.0], [w / 2.0, 0.0, d / 2.0]),
-                1,
-            ));
-            (w / 2.0, d / 2.0)
-        }
+        0 => table(rng, &mut parts),
+        1 => chair(rng, &mut parts),
+        2 => bed(rng, &mut parts),
+        3 => sofa(rng, &mut parts),
+        4 => cabinet(rng, &mut parts),
+        5 => round_table(rng, &mut parts),
+        6 => floor_lamp(rng, &mut parts),
+        7 => person(rng, &mut parts),
+        8 => tv_on_stand(rng, &mut parts),
+        9 => plant(rng, &mut parts),
+        _ => rug(rng, &mut parts),
     };
     Item {
         parts,
         textures,
         footprint,
     }
+}
+
+/// Table: its parts pushed onto `parts`, its footprint's half extents returned.
+fn table(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let (w, d, h) = (
+        rng.range(0.8, 1.8),
+        rng.range(0.6, 1.0),
+        rng.range(0.7, 0.78),
+    );
+    parts.push((
+        Part::Box([-w / 2.0, -h, -d / 2.0], [w / 2.0, -h + 0.04, d / 2.0]),
+        0,
+    ));
+    parts.extend(legs(w, d, h - 0.04, 0.05, 0));
+    (w / 2.0, d / 2.0)
+}
+
+/// Chair: its parts pushed onto `parts`, its footprint's half extents returned.
+fn chair(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let (w, h) = (rng.range(0.4, 0.5), rng.range(0.42, 0.48));
+    parts.push((
+        Part::Box([-w / 2.0, -h, -w / 2.0], [w / 2.0, -h + 0.05, w / 2.0]),
+        1,
+    ));
+    parts.push((
+        Part::Box([-w / 2.0, -h - 0.5, w / 2.0 - 0.05], [w / 2.0, -h, w / 2.0]),
+        0,
+    ));
+    parts.extend(legs(w, w, h, 0.04, 0));
+    (w / 2.0, w / 2.0)
+}
+
+/// Bed: its parts pushed onto `parts`, its footprint's half extents returned.
+fn bed(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let (w, l) = (rng.range(1.0, 1.8), rng.range(1.9, 2.1));
+    parts.push((
+        Part::Box([-w / 2.0, -0.5, -l / 2.0], [w / 2.0, 0.0, l / 2.0]),
+        1,
+    ));
+    parts.push((
+        Part::Box([-w / 2.0, -1.0, l / 2.0 - 0.06], [w / 2.0, 0.0, l / 2.0]),
+        0,
+    ));
+    parts.push((
+        Part::Box(
+            [-w / 2.0 + 0.1, -0.62, l / 2.0 - 0.5],
+            [w / 2.0 - 0.1, -0.5, l / 2.0 - 0.1],
+        ),
+        1,
+    ));
+    (w / 2.0, l / 2.0)
+}
+
+/// Sofa: its parts pushed onto `parts`, its footprint's half extents returned.
+fn sofa(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let (w, d) = (rng.range(1.5, 2.3), rng.range(0.8, 0.95));
+    parts.push((
+        Part::Box([-w / 2.0, -0.42, -d / 2.0], [w / 2.0, 0.0, d / 2.0]),
+        1,
+    ));
+    parts.push((
+        Part::Box([-w / 2.0, -0.85, d / 2.0 - 0.2], [w / 2.0, -0.42, d / 2.0]),
+        1,
+    ));
+    for s in [-1.0, 1.0] {
+        let x0 = s * (w / 2.0 - 0.1);
+        parts.push((
+            Part::Box([x0 - 0.1, -0.62, -d / 2.0], [x0 + 0.1, -0.42, d / 2.0]),
+            1,
+        ));
+    }
+    (w / 2.0, d / 2.0)
+}
+
+/// Cabinet or bookshelf: its parts pushed onto `parts`, its footprint's half extents returned.
+fn cabinet(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let (w, d, h) = (
+        rng.range(0.5, 1.4),
+        rng.range(0.3, 0.6),
+        rng.range(0.7, 2.1),
+    );
+    parts.push((
+        Part::Box([-w / 2.0, -h, -d / 2.0], [w / 2.0, 0.0, d / 2.0]),
+        0,
+    ));
+    (w / 2.0, d / 2.0)
+}
+
+/// Round table: its parts pushed onto `parts`, its footprint's half extents returned.
+fn round_table(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let (r, h) = (rng.range(0.35, 0.65), rng.range(0.7, 0.76));
+    parts.push((Part::Cylinder(0.0, 0.0, r, h - 0.04, h), 0));
+    parts.push((Part::Cylinder(0.0, 0.0, 0.05, 0.0, h - 0.04), 0));
+    parts.push((Part::Cylinder(0.0, 0.0, r * 0.5, 0.0, 0.03), 0));
+    (r, r)
+}
+
+/// Floor lamp: its parts pushed onto `parts`, its footprint's half extents returned.
+fn floor_lamp(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let h = rng.range(1.4, 1.8);
+    parts.push((Part::Cylinder(0.0, 0.0, 0.15, 0.0, 0.03), 0));
+    parts.push((Part::Cylinder(0.0, 0.0, 0.015, 0.03, h - 0.2), 0));
+    parts.push((Part::Cone(0.0, 0.0, 0.22, h - 0.3, h), 1));
+    (0.22, 0.22)
+}
+
+/// A person, roughly: its parts pushed onto `parts`, its footprint's half extents returned.
+fn person(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let h = rng.range(1.55, 1.9);
+    parts.push((
+        Part::Box([-0.17, -0.85 * h / 1.75, -0.1], [0.17, 0.0, 0.1]),
+        1,
+    ));
+    parts.push((
+        Part::Cylinder(0.0, 0.0, 0.2, 0.85 * h / 1.75, 1.45 * h / 1.75),
+        1,
+    ));
+    parts.push((Part::Sphere(0.0, 1.6 * h / 1.75, 0.0, 0.11), 0));
+    (0.25, 0.25)
+}
+
+/// TV on a stand: its parts pushed onto `parts`, its footprint's half extents returned.
+fn tv_on_stand(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let w = rng.range(0.9, 1.6);
+    parts.push((
+        Part::Box([-w / 2.0 - 0.1, -0.5, -0.22], [w / 2.0 + 0.1, 0.0, 0.22]),
+        0,
+    ));
+    parts.push((
+        Part::Box([-w / 2.0, -0.5 - w * 0.58, -0.03], [w / 2.0, -0.5, 0.03]),
+        1,
+    ));
+    (w / 2.0 + 0.1, 0.22)
+}
+
+/// Plant: its parts pushed onto `parts`, its footprint's half extents returned.
+fn plant(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let r = rng.range(0.15, 0.3);
+    parts.push((Part::Cylinder(0.0, 0.0, r, 0.0, 2.0 * r), 0));
+    parts.push((
+        Part::Blob(0.0, 2.0 * r + 1.5 * r, 0.0, 1.8 * r, rng.seed_i32()),
+        1,
+    ));
+    (1.8 * r, 1.8 * r)
+}
+
+/// Rug: its parts pushed onto `parts`, its footprint's half extents returned.
+fn rug(rng: &mut Rng, parts: &mut Vec<(Part, usize)>) -> (f64, f64) {
+    let (w, d) = (rng.range(1.0, 2.5), rng.range(0.8, 2.0));
+    parts.push((
+        Part::Box([-w / 2.0, -0.012, -d / 2.0], [w / 2.0, 0.0, d / 2.0]),
+        1,
+    ));
+    (w / 2.0, d / 2.0)
 }
 
 /// The objects of an item placed at `(x, z)` on the floor, turned by `yaw`.
@@ -393,160 +417,20 @@ impl House {
 pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
     let mut rng = Rng::for_frame(seed, "house", frame);
     let k = params.clearance_m();
-    let height = rng.range(2.5, 3.2).max(2.0 * k + 0.3);
-    let min_w = (2.0 * k + WALL_THICKNESS_M + 0.6).max(3.0);
-    let (mut nx, nz) = (1 + rng.below(3), 1 + rng.below(3));
-    if nx * nz == 1 {
-        nx = 2;
-    }
-    let mut grid = |n: usize| -> Vec<f64> {
-        let mut v = vec![0.0];
-        for _ in 0..n {
-            let last = *v.last().unwrap_or(&0.0);
-            v.push(last + rng.range(min_w, min_w + 3.5));
-        }
-        v
-    };
-    let xs = grid(nx);
-    let zs = grid(nz);
+    let rooms = Rooms::random(&mut rng, k);
     let mut house = House {
         objects: Vec::new(),
         wall_textures: (0..3).map(|_| low_texture(&mut rng)).collect(),
     };
-
-    // Walls on every grid line, doorways inside, windows outside.
-    for (along_x, lines, spans) in [(false, &xs, &zs), (true, &zs, &xs)] {
-        for (i, &fixed) in lines.iter().enumerate() {
-            let exterior = i == 0 || i == lines.len() - 1;
-            for j in 0..spans.len() - 1 {
-                let (s0, s1) = (spans[j], spans[j + 1]);
-                let opening = if !exterior && rng.chance(0.85) {
-                    let w = rng.range(0.8, 1.4).min(s1 - s0 - 0.6);
-                    let o0 = rng.range(s0 + 0.3, s1 - 0.3 - w);
-                    Some((o0, o0 + w, 0.0, rng.range(2.0, 2.2).min(height - 0.2)))
-                } else if exterior && rng.chance(0.5) {
-                    let w = rng.range(0.8, 2.5).min(s1 - s0 - 0.6);
-                    let o0 = rng.range(s0 + 0.3, s1 - 0.3 - w);
-                    Some((o0, o0 + w, rng.range(0.6, 1.0), (height - 0.3).min(2.2)))
-                } else {
-                    None
-                };
-                house.wall(&mut rng, along_x, fixed, (s0, s1), height, opening);
-            }
-        }
-    }
-
-    // Floors and ceilings, one per room.
-    for i in 0..nx {
-        for j in 0..nz {
-            let c = [(xs[i] + xs[i + 1]) / 2.0, 0.0, (zs[j] + zs[j + 1]) / 2.0];
-            let h = [(xs[i + 1] - xs[i]) / 2.0, 1.0, (zs[j + 1] - zs[j]) / 2.0];
-            let floor = floor_texture(&mut rng);
-            house.objects.push(obj(
-                ShapeSpec::Rect,
-                Placement::at(c, h),
-                floor,
-                rng.range(0.5, 1.5),
-            ));
-            let mut ceiling = TextureSpec::flat(rng.range(0.75, 0.95) as f32);
-            ceiling.detail = rng.range(0.0, 0.02) as f32;
-            ceiling.detail_seed = rng.seed_i32();
-            house.objects.push(obj(
-                ShapeSpec::Rect,
-                Placement::at([c[0], -height, c[2]], h),
-                ceiling,
-                2.0,
-            ));
-        }
-    }
-    // The ground outside, just below the floors.
-    let (cx, cz) = (xs[nx] / 2.0, zs[nz] / 2.0);
-    let ground = TextureSpec {
-        pattern: Pattern::Noise {
-            freq: rng.range(0.3, 1.0) as f32,
-            octaves: 5,
-            seed: rng.seed_i32(),
-        },
-        lo: 0.15,
-        hi: rng.range(0.4, 0.6) as f32,
-        detail: 0.08,
-        detail_freq: 8.0,
-        detail_seed: rng.seed_i32(),
-    };
-    house.objects.push(obj(
-        ShapeSpec::Rect,
-        Placement::at([cx, 0.005, cz], [80.0, 1.0, 80.0]),
-        ground,
-        1.0,
-    ));
-
-    // The rig: a random room, clear of walls, floor and ceiling by `k`.
-    let (ri, rj) = (rng.below(nx), rng.below(nz));
-    let margin = k + WALL_THICKNESS_M / 2.0;
-    let rig_pos = Vector3::new(
-        rng.range(xs[ri] + margin, xs[ri + 1] - margin),
-        -rng.range(k, height - k),
-        rng.range(zs[rj] + margin, zs[rj + 1] - margin),
-    );
-    let tilt = 8f64.to_radians();
-    let rotation =
-        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), rng.range(0.0, std::f64::consts::TAU))
-            * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), rng.range(-tilt, tilt))
-            * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), rng.range(-tilt, tilt));
-    let world_from_rig = Placement::new(&rotation, rig_pos, [1.0; 3]);
-
-    // Furniture: 2-6 items per room, not overlapping, clear of the rig.
-    for i in 0..nx {
-        for j in 0..nz {
-            let mut footprints: Vec<(f64, f64, f64, f64)> = Vec::new();
-            for _ in 0..2 + rng.below(5) {
-                let item = random_item(&mut rng);
-                for _attempt in 0..20 {
-                    let quarter = rng.below(4);
-                    let yaw = quarter as f64 * std::f64::consts::FRAC_PI_2 + rng.range(-0.15, 0.15);
-                    let (fx, fz) = if quarter.is_multiple_of(2) {
-                        item.footprint
-                    } else {
-                        (item.footprint.1, item.footprint.0)
-                    };
-                    let (fx, fz) = (fx * 1.1 + 0.05, fz * 1.1 + 0.05);
-                    let lo_x = xs[i] + WALL_THICKNESS_M / 2.0 + fx;
-                    let hi_x = xs[i + 1] - WALL_THICKNESS_M / 2.0 - fx;
-                    let lo_z = zs[j] + WALL_THICKNESS_M / 2.0 + fz;
-                    let hi_z = zs[j + 1] - WALL_THICKNESS_M / 2.0 - fz;
-                    if lo_x >= hi_x || lo_z >= hi_z {
-                        break;
-                    }
-                    // Against a wall half of the time.
-                    let (x, z) = match rng.below(6) {
-                        0 => (lo_x, rng.range(lo_z, hi_z)),
-                        1 => (hi_x, rng.range(lo_z, hi_z)),
-                        2 => (rng.range(lo_x, hi_x), lo_z),
-                        _ => (rng.range(lo_x, hi_x), rng.range(lo_z, hi_z)),
-                    };
-                    let fp = (x - fx, x + fx, z - fz, z + fz);
-                    let overlaps = footprints
-                        .iter()
-                        .any(|o| fp.0 < o.1 && o.0 < fp.1 && fp.2 < o.3 && o.2 < fp.3);
-                    if overlaps {
-                        continue;
-                    }
-                    let objs = place_item(&item, x, z, yaw);
-                    if objs
-                        .iter()
-                        .any(|o| aabb_distance(&o.placement, &rig_pos) < k)
-                    {
-                        continue;
-                    }
-                    footprints.push(fp);
-                    house.objects.extend(objs);
-                    break;
-                }
-            }
-        }
-    }
+    house.walls(&mut rng, &rooms);
+    house.floors_and_ceilings(&mut rng, &rooms);
+    house.ground(&mut rng, &rooms);
+    let (ri, rj) = (rng.below(rooms.nx()), rng.below(rooms.nz()));
+    let (rig_pos, world_from_rig) = place_rig(&mut rng, &rooms, (ri, rj), k);
+    house.furnish(&mut rng, &rooms, &rig_pos, k);
 
     let sky = random_sky(&mut rng);
+    let (xs, zs, height) = (&rooms.xs, &rooms.zs, rooms.height);
     let light = LightSpec {
         position_m: [
             (xs[ri] + xs[ri + 1]) / 2.0 + rng.range(-0.5, 0.5),
@@ -559,7 +443,7 @@ pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
         range_m: None,
     };
     let (light, extra_lights) = if params.difficulty.is_hard() {
-        hard_lights(&mut rng, light, &xs, &zs, height)
+        hard_lights(&mut rng, light, xs, zs, height)
     } else {
         (light, Vec::new())
     };
@@ -575,6 +459,219 @@ pub fn generate(seed: u64, frame: u32, params: &GenParams) -> SceneSpec {
         meshes: Vec::new(),
         extra_lights,
         camera_effects: Vec::new(),
+    }
+}
+
+/// The floor plan: a grid of rooms, `xs` and `zs` the walls' positions (m) along x and z,
+/// every room `height` m high.
+struct Rooms {
+    height: f64,
+    xs: Vec<f64>,
+    zs: Vec<f64>,
+}
+
+impl Rooms {
+    /// 1-3 by 1-3 rooms (at least two), each wide enough to hold the rig `k` m clear of its
+    /// walls.
+    fn random(rng: &mut Rng, k: f64) -> Self {
+        let height = rng.range(2.5, 3.2).max(2.0 * k + 0.3);
+        let min_w = (2.0 * k + WALL_THICKNESS_M + 0.6).max(3.0);
+        let (mut nx, nz) = (1 + rng.below(3), 1 + rng.below(3));
+        if nx * nz == 1 {
+            nx = 2;
+        }
+        let mut grid = |n: usize| -> Vec<f64> {
+            let mut v = vec![0.0];
+            for _ in 0..n {
+                let last = *v.last().unwrap_or(&0.0);
+                v.push(last + rng.range(min_w, min_w + 3.5));
+            }
+            v
+        };
+        let xs = grid(nx);
+        let zs = grid(nz);
+        Self { height, xs, zs }
+    }
+
+    /// Rooms along x.
+    fn nx(&self) -> usize {
+        self.xs.len() - 1
+    }
+
+    /// Rooms along z.
+    fn nz(&self) -> usize {
+        self.zs.len() - 1
+    }
+}
+
+/// The rig in room `(ri, rj)`, clear of walls, floor and ceiling by `k` m, turned about the
+/// vertical at random and tilted by up to 8 degrees: its position and `world_from_rig`.
+fn place_rig(
+    rng: &mut Rng,
+    rooms: &Rooms,
+    (ri, rj): (usize, usize),
+    k: f64,
+) -> (Vector3<f64>, Placement) {
+    let (xs, zs) = (&rooms.xs, &rooms.zs);
+    let margin = k + WALL_THICKNESS_M / 2.0;
+    let rig_pos = Vector3::new(
+        rng.range(xs[ri] + margin, xs[ri + 1] - margin),
+        -rng.range(k, rooms.height - k),
+        rng.range(zs[rj] + margin, zs[rj + 1] - margin),
+    );
+    let tilt = 8f64.to_radians();
+    let rotation =
+        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), rng.range(0.0, std::f64::consts::TAU))
+            * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), rng.range(-tilt, tilt))
+            * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), rng.range(-tilt, tilt));
+    (rig_pos, Placement::new(&rotation, rig_pos, [1.0; 3]))
+}
+
+impl House {
+    /// Walls on every grid line, doorways inside, windows outside.
+    fn walls(&mut self, rng: &mut Rng, rooms: &Rooms) {
+        let height = rooms.height;
+        for (along_x, lines, spans) in [(false, &rooms.xs, &rooms.zs), (true, &rooms.zs, &rooms.xs)]
+        {
+            for (i, &fixed) in lines.iter().enumerate() {
+                let exterior = i == 0 || i == lines.len() - 1;
+                for j in 0..spans.len() - 1 {
+                    let (s0, s1) = (spans[j], spans[j + 1]);
+                    let opening = if !exterior && rng.chance(0.85) {
+                        let w = rng.range(0.8, 1.4).min(s1 - s0 - 0.6);
+                        let o0 = rng.range(s0 + 0.3, s1 - 0.3 - w);
+                        Some((o0, o0 + w, 0.0, rng.range(2.0, 2.2).min(height - 0.2)))
+                    } else if exterior && rng.chance(0.5) {
+                        let w = rng.range(0.8, 2.5).min(s1 - s0 - 0.6);
+                        let o0 = rng.range(s0 + 0.3, s1 - 0.3 - w);
+                        Some((o0, o0 + w, rng.range(0.6, 1.0), (height - 0.3).min(2.2)))
+                    } else {
+                        None
+                    };
+                    self.wall(rng, along_x, fixed, (s0, s1), height, opening);
+                }
+            }
+        }
+    }
+
+    /// Floors and ceilings, one per room.
+    fn floors_and_ceilings(&mut self, rng: &mut Rng, rooms: &Rooms) {
+        let (xs, zs) = (&rooms.xs, &rooms.zs);
+        for i in 0..rooms.nx() {
+            for j in 0..rooms.nz() {
+                let c = [(xs[i] + xs[i + 1]) / 2.0, 0.0, (zs[j] + zs[j + 1]) / 2.0];
+                let h = [(xs[i + 1] - xs[i]) / 2.0, 1.0, (zs[j + 1] - zs[j]) / 2.0];
+                let floor = floor_texture(rng);
+                self.objects.push(obj(
+                    ShapeSpec::Rect,
+                    Placement::at(c, h),
+                    floor,
+                    rng.range(0.5, 1.5),
+                ));
+                let mut ceiling = TextureSpec::flat(rng.range(0.75, 0.95) as f32);
+                ceiling.detail = rng.range(0.0, 0.02) as f32;
+                ceiling.detail_seed = rng.seed_i32();
+                self.objects.push(obj(
+                    ShapeSpec::Rect,
+                    Placement::at([c[0], -rooms.height, c[2]], h),
+                    ceiling,
+                    2.0,
+                ));
+            }
+        }
+    }
+
+    /// The ground outside, just below the floors.
+    fn ground(&mut self, rng: &mut Rng, rooms: &Rooms) {
+        let (cx, cz) = (rooms.xs[rooms.nx()] / 2.0, rooms.zs[rooms.nz()] / 2.0);
+        let ground = TextureSpec {
+            pattern: Pattern::Noise {
+                freq: rng.range(0.3, 1.0) as f32,
+                octaves: 5,
+                seed: rng.seed_i32(),
+            },
+            lo: 0.15,
+            hi: rng.range(0.4, 0.6) as f32,
+            detail: 0.08,
+            detail_freq: 8.0,
+            detail_seed: rng.seed_i32(),
+        };
+        self.objects.push(obj(
+            ShapeSpec::Rect,
+            Placement::at([cx, 0.005, cz], [80.0, 1.0, 80.0]),
+            ground,
+            1.0,
+        ));
+    }
+
+    /// Furniture: 2-6 items per room, not overlapping, at least `k` m from the rig at
+    /// `rig_pos`.
+    fn furnish(&mut self, rng: &mut Rng, rooms: &Rooms, rig_pos: &Vector3<f64>, k: f64) {
+        for i in 0..rooms.nx() {
+            for j in 0..rooms.nz() {
+                let mut footprints: Vec<(f64, f64, f64, f64)> = Vec::new();
+                for _ in 0..2 + rng.below(5) {
+                    let item = random_item(rng);
+                    self.place_in_room(rng, rooms, (i, j), &item, &mut footprints, (rig_pos, k));
+                }
+            }
+        }
+    }
+
+    /// Up to 20 tries to put `item` in room `(i, j)`, turned by a quarter turn and a little,
+    /// against a wall half of the time, where it overlaps none of `footprints` and stays `k`
+    /// m from the rig at `rig_pos`; its footprint is added when it is placed.
+    fn place_in_room(
+        &mut self,
+        rng: &mut Rng,
+        rooms: &Rooms,
+        (i, j): (usize, usize),
+        item: &Item,
+        footprints: &mut Vec<(f64, f64, f64, f64)>,
+        (rig_pos, k): (&Vector3<f64>, f64),
+    ) {
+        let (xs, zs) = (&rooms.xs, &rooms.zs);
+        for _attempt in 0..20 {
+            let quarter = rng.below(4);
+            let yaw = quarter as f64 * std::f64::consts::FRAC_PI_2 + rng.range(-0.15, 0.15);
+            let (fx, fz) = if quarter.is_multiple_of(2) {
+                item.footprint
+            } else {
+                (item.footprint.1, item.footprint.0)
+            };
+            let (fx, fz) = (fx * 1.1 + 0.05, fz * 1.1 + 0.05);
+            let lo_x = xs[i] + WALL_THICKNESS_M / 2.0 + fx;
+            let hi_x = xs[i + 1] - WALL_THICKNESS_M / 2.0 - fx;
+            let lo_z = zs[j] + WALL_THICKNESS_M / 2.0 + fz;
+            let hi_z = zs[j + 1] - WALL_THICKNESS_M / 2.0 - fz;
+            if lo_x >= hi_x || lo_z >= hi_z {
+                break;
+            }
+            // Against a wall half of the time.
+            let (x, z) = match rng.below(6) {
+                0 => (lo_x, rng.range(lo_z, hi_z)),
+                1 => (hi_x, rng.range(lo_z, hi_z)),
+                2 => (rng.range(lo_x, hi_x), lo_z),
+                _ => (rng.range(lo_x, hi_x), rng.range(lo_z, hi_z)),
+            };
+            let fp = (x - fx, x + fx, z - fz, z + fz);
+            let overlaps = footprints
+                .iter()
+                .any(|o| fp.0 < o.1 && o.0 < fp.1 && fp.2 < o.3 && o.2 < fp.3);
+            if overlaps {
+                continue;
+            }
+            let objs = place_item(item, x, z, yaw);
+            if objs
+                .iter()
+                .any(|o| aabb_distance(&o.placement, rig_pos) < k)
+            {
+                continue;
+            }
+            footprints.push(fp);
+            self.objects.extend(objs);
+            break;
+        }
     }
 }
 

@@ -158,8 +158,8 @@ pub fn rows(
     Ok(rows)
 }
 
-pub fn run(args: &Args) -> Result<()> {
-    let ds = crate::dataset::open_dataset(&args.data)?;
+pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
+    let ds = datasets.open(&args.data)?;
     let frames: Vec<u32> = args
         .frames
         .indices()

@@ -282,9 +282,9 @@ pub fn finish(net: &NetEstimator, run: DepthRun) -> Result<()> {
     Ok(())
 }
 
-pub fn run(args: &Args) -> Result<()> {
+pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
     let device = args.backend.device()?;
-    let ds = crate::dataset::open_dataset(&args.dataset)?;
+    let ds = datasets.open(&args.dataset)?;
     let mut net = args.weights.load_family(args.preset.name(), &device)?;
     if let Some(size) = input_size(args.input_size, &args.weights, &ds)? {
         net.set_input_size(size)

@@ -6,7 +6,6 @@ use anyhow::Result;
 use omnimvs_camera::Pixel;
 use omnimvs_data::Dataset;
 
-use crate::dataset::{open_dataset, pose_unit};
 
 /// Show a dataset's rig, frames and ground truth.
 ///
@@ -20,13 +19,13 @@ pub struct Args {
     pub dataset: PathBuf,
 }
 
-pub fn run(args: &Args) -> Result<()> {
-    let ds = open_dataset(&args.dataset)?;
+pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
+    let ds = datasets.open(&args.dataset)?;
     let cfg = &ds.config;
     outln!("dataset      {}", ds.root.display());
     outln!("config       {}", ds.config_path.display());
     if Dataset::is_released_layout(&args.dataset) {
-        let unit = pose_unit().unwrap_or_default();
+        let unit = datasets.pose_unit().unwrap_or_default();
         outln!(
             "poses        poses.txt, translations read in {unit} (--pose-unit), shown in metres"
         );

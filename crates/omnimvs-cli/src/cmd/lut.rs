@@ -28,8 +28,8 @@ pub struct Args {
     pub out: PathBuf,
 }
 
-pub fn run(args: &Args) -> Result<()> {
-    let ds = crate::dataset::open_dataset(&args.dataset)?;
+pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
+    let ds = datasets.open(&args.dataset)?;
     if args.sweep.ndepth < 2 || (!args.all_spheres && !args.sweep.ndepth.is_multiple_of(2)) {
         bail!(
             "--ndepth {}: expected an even number of at least 2 (the file holds every other sphere)",

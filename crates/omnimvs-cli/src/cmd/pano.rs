@@ -44,8 +44,8 @@ pub struct Args {
     pub out: PathBuf,
 }
 
-pub fn run(args: &Args) -> Result<()> {
-    let ds = crate::dataset::open_dataset(&args.dataset)?;
+pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
+    let ds = datasets.open(&args.dataset)?;
     let images = ds.read_frame(args.frame)?;
     let masks = ds.masks()?;
     let map;

@@ -77,8 +77,8 @@ struct Report {
     rows: Vec<Row>,
 }
 
-pub fn run(args: &Args) -> Result<()> {
-    let ds = crate::dataset::open_dataset(&args.dataset)?;
+pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
+    let ds = datasets.open(&args.dataset)?;
     let images = ds
         .read_frame(args.frame)
         .with_context(|| format!("frame {}", args.frame))?;

@@ -223,8 +223,8 @@ pub fn finish(ds: &Dataset, stereo: &SgmEstimator, run: ConfidenceRun, out: &Pat
     Ok(())
 }
 
-pub fn run(args: &Args) -> Result<()> {
-    let ds = crate::dataset::open_dataset(&args.dataset)?;
+pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
+    let ds = datasets.open(&args.dataset)?;
     let frames: Vec<u32> = match &args.frames {
         Some(range) => range.indices(),
         None => ds.frames_found(),

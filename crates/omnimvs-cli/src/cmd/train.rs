@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::FrameRange;
 use omnimvs_data::metrics::Metrics;
-use omnimvs_net::{Backend, CascadeNet, Family, OmniMvsNet};
+use omnimvs_net::{Backend, CascadeNet, Family, NetConfig, OmniMvsNet};
 use omnimvs_train::mccnn::{CostTrainConfig, CostTrainer};
 use omnimvs_train::sweepnet::{SweepTrainConfig, SweepTrainer};
 use omnimvs_train::trainer::read_run_config;
@@ -590,180 +590,198 @@ pub fn run(args: &Args) -> Result<()> {
 }
 
 fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result<()> {
-    let device = device.clone();
     let mut trainer = match &args.resume {
-        Some(dir) => {
-            let mut trainer = Trainer::<M>::resume(dir, args.epochs, &device)
-                .with_context(|| format!("resuming {}", dir.display()))?;
-            if args.column_window.is_some() {
-                trainer.set_column_window(args.column_window)?;
-            }
-            if let Some(threads) = args.loader_threads {
-                trainer.set_loader_threads(threads)?;
-            }
-            match args.photometric {
-                // Keep the ranges of a run that has them.
-                Some(Switch::On) if trainer.config.photometric.is_none() => {
-                    trainer.set_photometric(Some(PhotometricAugment::default()))?;
-                }
-                Some(Switch::Off) => trainer.set_photometric(None)?,
-                _ => {}
-            }
-            trainer
-        }
+        Some(dir) => resume_trainer::<M>(args, dir, device)?,
         None => {
             let Some(out) = &args.out else {
                 bail!("--out RUN_DIR is required for a new run");
             };
-            let mut net = args.preset.config();
-            if args.context_pairs.is_some()
-                || args.stage_gates.is_some()
-                || args.zncc_cue.is_some()
-                || args.coarse_distribution.is_some()
-                || args.refine_distribution.is_some()
-                || args.sky_weight.is_some()
-                || args.convex_upsampling.is_some()
-                || args.stage_intervals.is_some()
-                || args.neighbour_extremes.is_some()
-                || args.neighbour_hypotheses.is_some()
-                || args.neighbour_start_score.is_some()
-                || args.neighbour_gain.is_some()
-                || args.coarse_feature_channels.is_some()
-                || args.coarse_cue_oversample.is_some()
-                || args.coarse_cue_depths.is_some()
-                || args.coarse_scale.is_some()
-                || args.coarse_spheres.is_some()
-                || args.coarse_stride4.is_some()
-                || args.same_grid_selector.is_some()
-                || args.coarse_squeeze.is_some()
-                || args.coarse_cue_sgm.is_some()
-                || args.mid_cue_sgm.is_some()
-            {
-                if net.family != Family::Cascade {
-                    bail!(
-                        "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
-                         --refine-distribution, --sky-weight, --convex-upsampling, \
-                         --stage-intervals, --neighbour-extremes, --neighbour-hypotheses, \
-                         --neighbour-start-score, --neighbour-gain, \
-                         --coarse-feature-channels, \
-                         --coarse-scale, --coarse-spheres, --coarse-stride4, \
-                         --same-grid-selector, --coarse-squeeze, \
-                         --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
-                         --mid-cue-sgm are options of --preset cascade"
-                    );
-                }
-                if let Some(up) = args.convex_upsampling {
-                    net.cascade.convex_upsampling = up != UpsamplingArg::Off;
-                    net.cascade.convex_upsampling_full = up == UpsamplingArg::On;
-                }
-                if let Some(weight) = args.coarse_distribution {
-                    net.cascade.coarse_distribution_weight = weight;
-                }
-                if let Some(weight) = args.refine_distribution {
-                    net.cascade.refine_distribution_weight = weight;
-                }
-                if let Some(weight) = args.sky_weight {
-                    net.cascade.sky_loss_weight = weight;
-                }
-                if let Some(intervals) = args.stage_intervals {
-                    net.cascade.stage_intervals = intervals;
-                }
-                if let Some(radii) = args.neighbour_extremes {
-                    net.cascade.neighbour_extremes = radii;
-                }
-                if let Some(radii) = args.neighbour_hypotheses {
-                    net.cascade.neighbour_hypotheses = radii;
-                }
-                if let Some(score) = args.neighbour_start_score {
-                    net.cascade.neighbour_start_score = score;
-                }
-                if let Some(gain) = args.neighbour_gain {
-                    net.cascade.neighbour_gain = gain;
-                }
-                if let Some(factor) = args.coarse_cue_oversample {
-                    net.cascade.coarse_cue_oversample = factor;
-                }
-                if let Some(depths) = args.coarse_cue_depths {
-                    net.cascade.coarse_cue_depths = depths;
-                }
-                if let Some(scale) = args.coarse_scale {
-                    net.cascade.coarse_scale = scale;
-                }
-                if let Some(spheres) = args.coarse_spheres {
-                    net.cascade.coarse_spheres = spheres;
-                }
-                if let Some(stride4) = args.coarse_stride4 {
-                    net.cascade.coarse_stride4 = stride4 == Switch::On;
-                }
-                if let Some(selector) = args.same_grid_selector {
-                    net.cascade.same_grid_selector = selector == Switch::On;
-                }
-                if let Some(channels) = args.coarse_squeeze {
-                    net.cascade.coarse_squeeze = channels;
-                }
-                if let Some(sgm) = args.coarse_cue_sgm {
-                    net.cascade.coarse_cue_sgm = sgm == Switch::On;
-                }
-                if let Some(sgm) = args.mid_cue_sgm {
-                    net.cascade.mid_cue_sgm = sgm == Switch::On;
-                }
-                if let Some(channels) = args.coarse_feature_channels {
-                    net.cascade.feature_channels[2] = channels;
-                }
-                if let Some(pairs) = args.context_pairs {
-                    net.cascade.context_pairs = pairs;
-                }
-                if let Some(gates) = args.stage_gates {
-                    net.cascade.stage_gates = gates == Switch::On;
-                }
-                if let Some(cue) = args.zncc_cue {
-                    net.cascade.zncc_cue = cue == Switch::On;
-                }
-            }
-            let config = TrainConfig {
-                net,
-                data: args.data.clone(),
-                train_frames: args.train_frames.map(|f| (f.start, f.end)),
-                val_frames: args.val_frames.map(|f| (f.start, f.end)),
-                epochs: args.epochs.unwrap_or(30),
-                lr: args.lr,
-                lr_low: args.lr_low.unwrap_or(args.lr / 10.0),
-                low_lr_epochs: args.low_lr_epochs,
-                optimizer: match args.optimizer {
-                    OptimizerArg::Sgd => Optimizer::Sgd,
-                    OptimizerArg::Adam => Optimizer::Adam,
-                },
-                momentum: args.momentum,
-                seed: args.seed,
-                rotations: args.rotations,
-                max_rotation_deg: args.max_rotation_deg,
-                permute_cameras: !args.no_permute,
-                max_steps_per_epoch: args.max_steps,
-                max_val_frames: args.max_val_frames,
-                loader_threads: args.loader_threads.unwrap_or(1),
-                init: args.init.clone(),
-                column_window: args.column_window,
-                photometric: (args.photometric == Some(Switch::On))
-                    .then(PhotometricAugment::default),
-                frozen_norm_stats: args.frozen_norm_stats == Some(Switch::On),
-                select_by: match args.select_by {
-                    Some(SelectArg::Reference) => Selection::Reference,
-                    Some(SelectArg::WithSky) | None => Selection::WithSky,
-                },
-                train_only: match args.train_only {
-                    Some(PartsArg::Upsampling) => TrainParts::Upsampling,
-                    Some(PartsArg::Coarse) => TrainParts::Coarse,
-                    Some(PartsArg::Mid) => TrainParts::Mid,
-                    Some(PartsArg::Fine) => TrainParts::Fine,
-                    Some(PartsArg::All) | None => TrainParts::All,
-                },
-                ..TrainConfig::default()
-            };
-            Trainer::<M>::create(config, out, &device)
+            let config = train_config(args, net_config(args)?);
+            Trainer::<M>::create(config, out, device)
                 .with_context(|| format!("starting a run in {}", out.display()))?
         }
     };
     record_backend(&trainer.run_dir, backend)?;
+    print_run(&trainer, backend);
+    run_epochs(args, &mut trainer)
+}
+
+/// The run in `dir` resumed, with the options that may change on the way (the column window,
+/// loader threads, photometric augmentation) applied.
+fn resume_trainer<M: Trainable>(args: &Args, dir: &Path, device: &Device) -> Result<Trainer<M>> {
+    let mut trainer = Trainer::<M>::resume(dir, args.epochs, &device)
+        .with_context(|| format!("resuming {}", dir.display()))?;
+    if args.column_window.is_some() {
+        trainer.set_column_window(args.column_window)?;
+    }
+    if let Some(threads) = args.loader_threads {
+        trainer.set_loader_threads(threads)?;
+    }
+    match args.photometric {
+        // Keep the ranges of a run that has them.
+        Some(Switch::On) if trainer.config.photometric.is_none() => {
+            trainer.set_photometric(Some(PhotometricAugment::default()))?;
+        }
+        Some(Switch::Off) => trainer.set_photometric(None)?,
+        _ => {}
+    }
+    Ok(trainer)
+}
+
+/// The network of a new run: the preset's, with the cascade options given.
+fn net_config(args: &Args) -> Result<NetConfig> {
+    let mut net = args.preset.config();
+    if args.context_pairs.is_some()
+        || args.stage_gates.is_some()
+        || args.zncc_cue.is_some()
+        || args.coarse_distribution.is_some()
+        || args.refine_distribution.is_some()
+        || args.sky_weight.is_some()
+        || args.convex_upsampling.is_some()
+        || args.stage_intervals.is_some()
+        || args.neighbour_extremes.is_some()
+        || args.neighbour_hypotheses.is_some()
+        || args.neighbour_start_score.is_some()
+        || args.neighbour_gain.is_some()
+        || args.coarse_feature_channels.is_some()
+        || args.coarse_cue_oversample.is_some()
+        || args.coarse_cue_depths.is_some()
+        || args.coarse_scale.is_some()
+        || args.coarse_spheres.is_some()
+        || args.coarse_stride4.is_some()
+        || args.same_grid_selector.is_some()
+        || args.coarse_squeeze.is_some()
+        || args.coarse_cue_sgm.is_some()
+        || args.mid_cue_sgm.is_some()
+    {
+        if net.family != Family::Cascade {
+            bail!(
+                "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
+                 --refine-distribution, --sky-weight, --convex-upsampling, \
+                 --stage-intervals, --neighbour-extremes, --neighbour-hypotheses, \
+                 --neighbour-start-score, --neighbour-gain, \
+                 --coarse-feature-channels, \
+                 --coarse-scale, --coarse-spheres, --coarse-stride4, \
+                 --same-grid-selector, --coarse-squeeze, \
+                 --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
+                 --mid-cue-sgm are options of --preset cascade"
+            );
+        }
+        if let Some(up) = args.convex_upsampling {
+            net.cascade.convex_upsampling = up != UpsamplingArg::Off;
+            net.cascade.convex_upsampling_full = up == UpsamplingArg::On;
+        }
+        if let Some(weight) = args.coarse_distribution {
+            net.cascade.coarse_distribution_weight = weight;
+        }
+        if let Some(weight) = args.refine_distribution {
+            net.cascade.refine_distribution_weight = weight;
+        }
+        if let Some(weight) = args.sky_weight {
+            net.cascade.sky_loss_weight = weight;
+        }
+        if let Some(intervals) = args.stage_intervals {
+            net.cascade.stage_intervals = intervals;
+        }
+        if let Some(radii) = args.neighbour_extremes {
+            net.cascade.neighbour_extremes = radii;
+        }
+        if let Some(radii) = args.neighbour_hypotheses {
+            net.cascade.neighbour_hypotheses = radii;
+        }
+        if let Some(score) = args.neighbour_start_score {
+            net.cascade.neighbour_start_score = score;
+        }
+        if let Some(gain) = args.neighbour_gain {
+            net.cascade.neighbour_gain = gain;
+        }
+        if let Some(factor) = args.coarse_cue_oversample {
+            net.cascade.coarse_cue_oversample = factor;
+        }
+        if let Some(depths) = args.coarse_cue_depths {
+            net.cascade.coarse_cue_depths = depths;
+        }
+        if let Some(scale) = args.coarse_scale {
+            net.cascade.coarse_scale = scale;
+        }
+        if let Some(spheres) = args.coarse_spheres {
+            net.cascade.coarse_spheres = spheres;
+        }
+        if let Some(stride4) = args.coarse_stride4 {
+            net.cascade.coarse_stride4 = stride4 == Switch::On;
+        }
+        if let Some(selector) = args.same_grid_selector {
+            net.cascade.same_grid_selector = selector == Switch::On;
+        }
+        if let Some(channels) = args.coarse_squeeze {
+            net.cascade.coarse_squeeze = channels;
+        }
+        if let Some(sgm) = args.coarse_cue_sgm {
+            net.cascade.coarse_cue_sgm = sgm == Switch::On;
+        }
+        if let Some(sgm) = args.mid_cue_sgm {
+            net.cascade.mid_cue_sgm = sgm == Switch::On;
+        }
+        if let Some(channels) = args.coarse_feature_channels {
+            net.cascade.feature_channels[2] = channels;
+        }
+        if let Some(pairs) = args.context_pairs {
+            net.cascade.context_pairs = pairs;
+        }
+        if let Some(gates) = args.stage_gates {
+            net.cascade.stage_gates = gates == Switch::On;
+        }
+        if let Some(cue) = args.zncc_cue {
+            net.cascade.zncc_cue = cue == Switch::On;
+        }
+    }
+    Ok(net)
+}
+
+/// The training configuration of a new run of network `net`.
+fn train_config(args: &Args, net: NetConfig) -> TrainConfig {
+    TrainConfig {
+        net,
+        data: args.data.clone(),
+        train_frames: args.train_frames.map(|f| (f.start, f.end)),
+        val_frames: args.val_frames.map(|f| (f.start, f.end)),
+        epochs: args.epochs.unwrap_or(30),
+        lr: args.lr,
+        lr_low: args.lr_low.unwrap_or(args.lr / 10.0),
+        low_lr_epochs: args.low_lr_epochs,
+        optimizer: match args.optimizer {
+            OptimizerArg::Sgd => Optimizer::Sgd,
+            OptimizerArg::Adam => Optimizer::Adam,
+        },
+        momentum: args.momentum,
+        seed: args.seed,
+        rotations: args.rotations,
+        max_rotation_deg: args.max_rotation_deg,
+        permute_cameras: !args.no_permute,
+        max_steps_per_epoch: args.max_steps,
+        max_val_frames: args.max_val_frames,
+        loader_threads: args.loader_threads.unwrap_or(1),
+        init: args.init.clone(),
+        column_window: args.column_window,
+        photometric: (args.photometric == Some(Switch::On)).then(PhotometricAugment::default),
+        frozen_norm_stats: args.frozen_norm_stats == Some(Switch::On),
+        select_by: match args.select_by {
+            Some(SelectArg::Reference) => Selection::Reference,
+            Some(SelectArg::WithSky) | None => Selection::WithSky,
+        },
+        train_only: match args.train_only {
+            Some(PartsArg::Upsampling) => TrainParts::Upsampling,
+            Some(PartsArg::Coarse) => TrainParts::Coarse,
+            Some(PartsArg::Mid) => TrainParts::Mid,
+            Some(PartsArg::Fine) => TrainParts::Fine,
+            Some(PartsArg::All) | None => TrainParts::All,
+        },
+        ..TrainConfig::default()
+    }
+}
+
+/// Prints what the run trains on and how.
+fn print_run<M: Trainable>(trainer: &Trainer<M>, backend: Backend) {
     let config = trainer.config.clone();
     let (train, val): (usize, usize) = trainer
         .splits
@@ -797,6 +815,12 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
             Selection::Reference => "; best epoch by the reference protocol's MAE",
         }
     );
+}
+
+/// Trains the epochs left (or `--stop-after` of them) with a progress bar, printing every
+/// epoch's figures and, at the end, where the weights are.
+fn run_epochs<M: Trainable>(args: &Args, trainer: &mut Trainer<M>) -> Result<()> {
+    let config = trainer.config.clone();
     let last = match args.stop_after {
         Some(n) => (trainer.state.epochs_done + n).min(config.epochs),
         None => config.epochs,
