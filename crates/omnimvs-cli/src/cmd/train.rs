@@ -609,7 +609,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
 /// The run in `dir` resumed, with the options that may change on the way (the column window,
 /// loader threads, photometric augmentation) applied.
 fn resume_trainer<M: Trainable>(args: &Args, dir: &Path, device: &Device) -> Result<Trainer<M>> {
-    let mut trainer = Trainer::<M>::resume(dir, args.epochs, &device)
+    let mut trainer = Trainer::<M>::resume(dir, args.epochs, device)
         .with_context(|| format!("resuming {}", dir.display()))?;
     if args.column_window.is_some() {
         trainer.set_column_window(args.column_window)?;
