@@ -69,6 +69,8 @@ fn documented(root: &Path) -> Vec<(String, BTreeSet<String>)> {
         .expect("ARCHITECTURE.md has a dependency-graph:end marker");
     text[start..end]
         .lines()
+        .skip(1) // the marker itself
+        .filter(|line| line.starts_with("omnimvs-"))
         .filter_map(|line| line.split_once("->"))
         .map(|(krate, deps)| {
             let deps = deps
