@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
-"""360-degree depth of the real `itbt_sample` frame with omnimvs from Python: the classical
-method (ZNCC + SGM) and the default bundled network (the cascade), side by side in one
-matplotlib figure.
+"""360-degree depth of a real frame with omnimvs from Python: the classical method
+(ZNCC + SGM) and the default bundled network (the cascade), side by side in one matplotlib
+figure with the camera images.
 
     pip install ./crates/omnimvs-py matplotlib
-    python examples/python/itbt_demo.py [DATASET] [--frame 1] [--out itbt_demo.png]
+    python examples/python/itbt_demo.py DATASET [--frame 1] [--out itbt_demo.png]
 
-DATASET defaults to ../shared/data/omnimvs-samples/itbt_sample beside the repository.
+DATASET is a folder with config.yaml and the cameras' images, e.g. the reference
+implementation's real sample `itbt_sample` (four cameras, three frames).
 """
 
 import argparse
@@ -21,13 +22,10 @@ import numpy as np  # noqa: E402
 
 import omnimvs  # noqa: E402
 
-REPO = Path(__file__).resolve().parents[2]
-DEFAULT = REPO.parent / "shared" / "data" / "omnimvs-samples" / "itbt_sample"
-
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("dataset", nargs="?", type=Path, default=DEFAULT)
+    parser.add_argument("dataset", type=Path, help="dataset folder (with config.yaml)")
     parser.add_argument("--frame", type=int, default=1)
     parser.add_argument("--out", type=Path, default=Path("itbt_demo.png"))
     args = parser.parse_args()

@@ -92,9 +92,10 @@ pub struct CascadeParams {
     /// its first 3x3 convolution (`0`, and left out of the file: none, the 3x3 convolution
     /// reads every sphere's evidence itself). That first convolution is the coarse stage's
     /// largest layer: at 80 x 320 with 16 spheres it maps 240 channels to 48 in 0.080 s of
-    /// the stage's 0.22 s, and through 64 channels the pair takes 0.027 s (2 cores,
-    /// `examples/lowrank_bench.rs`). A trained network is factorised into it by a truncated
-    /// SVD of that layer's weights ([`crate::cascade::CascadeNet::with_coarse_squeeze`]).
+    /// the stage's 0.22 s, and through 64 channels the pair takes 0.027 s (2 cores, the
+    /// `lowrank_bench` study, `research/study-programs.md`). A trained network is factorised
+    /// into it by a truncated SVD of that layer's weights
+    /// ([`crate::cascade::CascadeNet::with_coarse_squeeze`]).
     #[serde(default, skip_serializing_if = "is_zero_usize")]
     pub coarse_squeeze: usize,
     /// Channels of the coarse 2D encoder-decoder (full, half and quarter resolution).

@@ -9,8 +9,8 @@
 //! `warp_and_cost` (the matcher: warp, window sums, ZNCC and the volume in
 //! one pass; the cost stage is its time minus `warp`'s), `aggregation_8_paths`
 //! and `wta`, then the whole method. The stage split of one frame is printed
-//! before the measurements; `examples/full_size.rs` prints it per frame
-//! with the CPU time and peak memory.
+//! before the measurements (the `full_size` study, `research/study-programs.md`,
+//! printed it per frame with the CPU time and peak memory).
 
 #[path = "../tests/support/scenes.rs"]
 mod scenes;

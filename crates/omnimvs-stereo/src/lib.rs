@@ -20,7 +20,7 @@
 //! * [`filter`]: median filter and confidence-based invalidation of the index map.
 //! * [`winner_take_all`]: index with parabola refinement, and confidence.
 //!
-//! Tests, examples and benchmarks render their scenes with `omnimvs-synth`
+//! Tests and benchmarks render their scenes with `omnimvs-synth`
 //! (a dev-dependency; `tests/support/scenes.rs`).
 //!
 //! Frames and units follow `FORMATS.md`: rig frame, inverse depth in 1/m,

@@ -17,7 +17,7 @@ pub fn cost_units(cost: f32) -> u16 {
 
 /// Default `P1` (small inverse-depth changes), in matching-cost units
 /// (`(1 - zncc) / 2`, in `[0, 1]`). Tuned on generated validation rooms only
-/// (`examples/tune_sgm.rs`, README of this crate).
+/// (the `tune_sgm` study, `research/study-programs.md`; README of this crate).
 pub const DEFAULT_P1: f32 = 0.1;
 
 /// Default `P2` (jumps of more than one hypothesis), in matching-cost units.

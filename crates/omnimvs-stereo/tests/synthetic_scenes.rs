@@ -1,6 +1,6 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 //! Accuracy on scenes of `omnimvs-synth` with exact ground truth (seeds below
-//! 1000; `examples/tune_sgm.rs` tunes the penalties on seeds 1000 and up).
+//! 1000; the penalties were tuned on seeds 1000 and up, `research/study-programs.md`).
 
 mod support;
 

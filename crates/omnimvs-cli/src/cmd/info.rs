@@ -6,7 +6,6 @@ use anyhow::Result;
 use omnimvs_camera::Pixel;
 use omnimvs_data::Dataset;
 
-
 /// Show a dataset's rig, frames and ground truth.
 ///
 /// Prints each camera (image size, FOV, position, optical axis), the baselines

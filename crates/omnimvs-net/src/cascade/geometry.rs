@@ -723,7 +723,8 @@ impl CascadeNet {
     /// features are dropped): burn-flex computes a convolution's weight gradient as a
     /// convolution whose input channels are the batch, and below 5 of them, with at most 16
     /// output channels, it takes a direct path with the whole output map as the kernel, 2-3
-    /// times slower per image than with 5 (`--example conv_grad_bench`).
+    /// times slower per image than with 5 (the `conv_grad_bench` study,
+    /// `research/study-programs.md`).
     ///
     /// # Errors
     /// See [`CascadeNet::forward`]; a window that does not fit the grid.

@@ -1,3 +1,3 @@
-//! Fixtures shared by the integration tests (and, by path, the examples and benchmarks).
+//! Fixtures shared by the integration tests (and, by path, the benchmarks).
 
 pub mod scenes;

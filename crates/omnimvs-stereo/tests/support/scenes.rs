@@ -1,4 +1,4 @@
-//! Scenes for the classical method's tests, examples and benchmarks, made by
+//! Scenes for the classical method's tests and benchmarks, made by
 //! `omnimvs-synth` (the workspace's one renderer): the published rig at a
 //! chosen size, a noise-textured sphere centred on the rig, generated rooms.
 #![allow(dead_code, clippy::expect_used)] // each user takes what it needs; fixtures
