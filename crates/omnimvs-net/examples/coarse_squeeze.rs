@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use burn::tensor::Device;
-use omnimvs_net::cascade::model::read_values;
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::weights;
 
 fn main() -> ExitCode {

@@ -11,7 +11,8 @@
 use std::time::Instant;
 
 use burn::tensor::{Device, Distribution, Tensor};
-use omnimvs_net::cascade::model::{PanoConv2d, read_values};
+use omnimvs_net::cascade::model::PanoConv2d;
+use omnimvs_net::tensor::read_values;
 use rayon::prelude::*;
 
 /// Direct 3x3 convolution, stride 1, rows zero-padded, columns circular. `x` is `[ci, h, w]`,

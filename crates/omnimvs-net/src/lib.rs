@@ -36,6 +36,7 @@ pub mod pick;
 pub mod sweepnet;
 pub mod synthetic;
 pub mod taps;
+pub mod tensor;
 pub mod weights;
 
 pub use backend::Backend;

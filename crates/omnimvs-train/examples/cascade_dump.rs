@@ -18,7 +18,7 @@ use burn::tensor::Device;
 use omnimvs_camera::fs::write_atomic;
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::CascadeGeometry;
-use omnimvs_net::cascade::model::read_values;
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::weights::load_cascade;
 use omnimvs_train::SampleSource;
 use omnimvs_train::augment::RotationSet;

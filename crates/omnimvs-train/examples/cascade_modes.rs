@@ -18,8 +18,8 @@ use std::path::PathBuf;
 
 use burn::tensor::Device;
 use omnimvs_data::gt::GroundTruth;
-use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::{CascadeGeometry, SeedChoice};
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::weights::load_cascade;
 use omnimvs_train::SampleSource;
 use omnimvs_train::augment::RotationSet;

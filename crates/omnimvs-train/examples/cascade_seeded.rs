@@ -16,8 +16,8 @@ use std::path::PathBuf;
 
 use burn::tensor::Device;
 use omnimvs_data::gt::read_tiff_f32;
-use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::{CascadeGeometry, SeedChoice};
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::weights::load_cascade;
 use omnimvs_sweep::{EquirectGrid, resample_map};
 use omnimvs_train::SampleSource;

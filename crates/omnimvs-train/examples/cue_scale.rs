@@ -12,9 +12,9 @@ use std::path::PathBuf;
 
 use burn::tensor::Device;
 use omnimvs_data::Dataset;
-use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::photo::ImagePyramid;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet, ColumnWindow};
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::weights::load_cascade;
 use omnimvs_train::SampleSource;
 use omnimvs_train::augment::RotationSet;

@@ -10,12 +10,11 @@ use std::time::Instant;
 
 use burn::tensor::{Device, Tensor};
 use omnimvs_data::Dataset;
-use omnimvs_net::cascade::model::{
-    UPSAMPLE_TAPS, bilinear_prior, read_values, upsampling_candidates,
-};
+use omnimvs_net::cascade::model::{UPSAMPLE_TAPS, bilinear_prior, upsampling_candidates};
 use omnimvs_net::cascade::photo::ImagePyramid;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet, StageTaps};
 use omnimvs_net::infer::input_tensors;
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::weights;
 
 fn main() {

@@ -11,11 +11,12 @@ use omnimvs_data::{Dataset, DepthEstimate, StageObserver};
 use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec, resample_map};
 
 use super::geometry::CascadeGeometry;
-use super::model::{CascadeNet, StageOutput, read_values};
+use super::model::{CascadeNet, StageOutput};
 use super::sampler::PixelSampler;
 use crate::error::NetError;
 use crate::infer::{input_tensors, sweep_spec};
 use crate::pick::{CoarseModes, PickRefiner};
+use crate::tensor::read_values;
 
 /// A cascade network ready to run on the frames of one rig.
 pub struct CascadeInference {

@@ -19,6 +19,7 @@ use crate::error::NetError;
 use crate::hostconv::{HostConv, host_forward};
 use crate::model::blocks::{ConvBn2d, fold_into_conv2d};
 use crate::model::softargmin::entropy;
+use crate::tensor::read_values;
 
 /// Gray input images: one channel.
 const INPUT_CHANNELS: usize = 1;
@@ -1667,55 +1668,6 @@ fn gather_rows(table: Tensor<2>, taps: &crate::model::SweepTaps) -> Tensor<2> {
     }
     let [_, c] = table.dims();
     out.unwrap_or_else(|| Tensor::zeros([0, c], &table.device()))
-}
-
-/// Reads a `[B, H, W]` (or any) tensor's values.
-///
-/// # Errors
-/// [`NetError::Shape`] when the data cannot be read as `f32`.
-pub fn read_values<const D: usize>(t: Tensor<D>, what: &str) -> Result<Vec<f32>, NetError> {
-    t.into_data()
-        .try_into_vec_as::<f32>()
-        .map_err(|e| NetError::Shape {
-            what: format!("{what} ({e:?})"),
-            expected: vec![],
-            actual: vec![],
-        })
-}
-
-/// `f` on the values of `t` as `f32`, borrowed from the tensor's buffer: no copy when the
-/// tensor holds its values alone, one when it shares them (where [`read_values`] of a shared
-/// tensor copies twice).
-///
-/// # Errors
-/// [`NetError::Shape`] when the data cannot be read as `f32`.
-pub fn with_values<const D: usize, R>(
-    t: Tensor<D>,
-    what: &str,
-    f: impl FnOnce(&[f32]) -> R,
-) -> Result<R, NetError> {
-    let data = t.into_data();
-    if let Ok(values) = data.as_slice::<f32>() {
-        return Ok(f(values));
-    }
-    // Another dtype, or bytes not aligned for f32: converted in a copy.
-    let values = data.try_into_vec_as::<f32>().map_err(|e| NetError::Shape {
-        what: format!("{what} ({e:?})"),
-        expected: vec![],
-        actual: vec![],
-    })?;
-    Ok(f(&values))
-}
-
-/// A `[1, K, H, W]` tensor of hypothesis indices from `[K, H * W]` values.
-pub fn hypothesis_tensor(
-    values: Vec<f32>,
-    k: usize,
-    h: usize,
-    w: usize,
-    device: &Device,
-) -> Tensor<4> {
-    Tensor::from_data(TensorData::new(values, [1, k, h, w]), device)
 }
 
 #[cfg(test)]

@@ -24,10 +24,10 @@ use omnimvs_stereo::params::{COST_SCALE, Directions, cost_units};
 use omnimvs_stereo::{ZNCC_VARIANCE_EPS, camera_pairs};
 use rayon::prelude::*;
 
-use super::model::with_values;
 use super::score_sgm::aggregate_eight;
 use crate::error::NetError;
 use crate::taps::{SweepGrid, bilinear_taps};
+use crate::tensor::with_values;
 
 /// Half the side of the ZNCC window (5 x 5 samples of a stage's grid).
 pub const ZNCC_RADIUS: usize = 2;
