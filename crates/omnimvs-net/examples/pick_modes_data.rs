@@ -38,13 +38,14 @@ fn main() {
         false,
     )
     .unwrap();
-    let NetEstimator::Cascade(inference) = estimator else {
+    let NetEstimator::Cascade(picked) = estimator else {
         panic!("the bundled model is a cascade");
     };
     let layout = PickLayout {
         coarse_modes: k,
         ..PickLayout::default()
     };
+    let inference = picked.inference();
     let sampler = PixelSampler::new(&ds.rig, inference.grid(), inference.hypotheses()).unwrap();
     for frame in first..=last {
         let dst = out.join(format!("{frame:05}.f32"));
@@ -52,7 +53,7 @@ fn main() {
             continue;
         }
         let images = ds.read_frame(frame).unwrap();
-        let (est, modes) = inference
+        let (est, modes) = picked
             .run_with_modes(&images, &mut StageTimes::default(), k)
             .unwrap();
         let spread = est.spread.clone().unwrap();

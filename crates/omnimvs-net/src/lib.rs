@@ -33,6 +33,7 @@ pub mod learned_sgm;
 pub mod mccnn;
 pub mod model;
 pub mod pick;
+pub mod pixel;
 pub mod sweepnet;
 pub mod synthetic;
 pub mod taps;

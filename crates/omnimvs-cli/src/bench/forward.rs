@@ -287,7 +287,7 @@ pub fn bench_cascade_forward(
             let index = read_values(fine.index, "index map")?;
             let spread = vec![0f32; index.len()];
             let start = std::time::Instant::now();
-            let modes = omnimvs_net::cascade::infer::coarse_modes(
+            let modes = omnimvs_net::estimator::coarse_modes(
                 &coarse,
                 pick.coarse_modes(),
                 geometry.samplers[2].grid(),

@@ -17,11 +17,12 @@ use super::model::{
     same_grid_prior, upsampling_candidates,
 };
 use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
-use super::sampler::{PixelSampler, coarse_indices, hypotheses_around, stretch_to_neighbours};
+use super::sampler::{coarse_indices, hypotheses_around, stretch_to_neighbours};
 use super::score_sgm::aggregated_scores;
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;
+use crate::pixel::PixelSampler;
 use crate::taps::{SweepGrid, Taps, grid_taps};
 use crate::tensor::{hypothesis_tensor, read_values};
 use rayon::prelude::*;
