@@ -1,7 +1,14 @@
 //! One way to run a network of either family on a dataset's frames: the paper's network
 //! through its lookup tables ([`Inference`]), the cascade through its per-pixel sampler
-//! ([`CascadeInference`]), both behind the workspace's one depth interface,
-//! [`DepthEstimator`], answering with a [`DepthEstimate`] on their output grid.
+//! ([`CascadeInference`]) with the learnt pick after it when one is set ([`PickedCascade`]),
+//! all behind the workspace's one depth interface, [`DepthEstimator`], answering with a
+//! [`DepthEstimate`] on their output grid.
+//!
+//! The pick chain is composed here, above both: the cascade answers ([`CascadeAnswer`]), the
+//! coarse modes the pick asks for are read from that answer ([`coarse_modes`]), and the pick
+//! ([`PickRefiner`]) replaces the index map.
+
+use std::time::Instant;
 
 use burn::tensor::Device;
 use omnimvs_camera::ValidityMask;
@@ -10,20 +17,21 @@ use omnimvs_sweep::{
     CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache, SweepSpec,
 };
 
-use crate::cascade::CascadeInference;
+use crate::cascade::{CascadeAnswer, CascadeInference, StageOutput};
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::hostconv;
 use crate::infer::Inference;
-use crate::pick::PickRefiner;
+use crate::pick::{CoarseModes, PickRefiner};
+use crate::tensor::read_values;
 use crate::weights::AnyNet;
 
 /// A network of either family, prepared for one rig.
 pub enum NetEstimator {
     /// The paper's network.
     OmniMvs(Box<Inference>),
-    /// The coarse-to-fine network.
-    Cascade(Box<CascadeInference>),
+    /// The coarse-to-fine network, with the learnt pick after it when one is set.
+    Cascade(Box<PickedCascade>),
 }
 
 impl NetEstimator {
@@ -57,7 +65,7 @@ impl NetEstimator {
                 (Self::OmniMvs(Box::new(inference)), Some(status))
             }
             AnyNet::Cascade(net) => (
-                Self::Cascade(Box::new(CascadeInference::new(
+                Self::Cascade(Box::new(PickedCascade::new(CascadeInference::new(
                     if host_convs {
                         (*net).fold_batch_norm().with_host_convs()
                     } else {
@@ -66,7 +74,7 @@ impl NetEstimator {
                     dataset,
                     device,
                     !sweep_on_device,
-                )?)),
+                )?))),
                 None,
             ),
         })
@@ -79,7 +87,7 @@ impl NetEstimator {
     /// for another number of cameras.
     pub fn with_pick(self, pick: PickRefiner) -> Result<Self, NetError> {
         match self {
-            Self::Cascade(i) => Ok(Self::Cascade(Box::new(i.with_pick(pick)?))),
+            Self::Cascade(i) => Ok(Self::Cascade(Box::new((*i).with_pick(pick)?))),
             Self::OmniMvs(_) => Err(NetError::InvalidConfig {
                 field: "pick",
                 message: "the learnt pick runs after the cascade network only".into(),
@@ -96,7 +104,7 @@ impl NetEstimator {
     pub fn config(&self) -> &NetConfig {
         match self {
             Self::OmniMvs(i) => &i.net().config,
-            Self::Cascade(i) => &i.net().config,
+            Self::Cascade(i) => &i.inference().net().config,
         }
     }
 
@@ -104,7 +112,7 @@ impl NetEstimator {
     pub fn spec(&self) -> &SweepSpec {
         match self {
             Self::OmniMvs(i) => i.spec(),
-            Self::Cascade(i) => i.spec(),
+            Self::Cascade(i) => i.inference().spec(),
         }
     }
 
@@ -122,7 +130,7 @@ impl NetEstimator {
     pub fn masks(&self) -> &[ValidityMask] {
         match self {
             Self::OmniMvs(i) => i.masks(),
-            Self::Cascade(i) => i.masks(),
+            Self::Cascade(i) => i.inference().masks(),
         }
     }
 
@@ -146,9 +154,130 @@ impl NetEstimator {
     pub fn order(&self) -> Vec<usize> {
         match self {
             Self::OmniMvs(i) => i.order().to_vec(),
-            Self::Cascade(i) => (0..i.net().config.num_cameras).collect(),
+            Self::Cascade(i) => (0..i.inference().net().config.num_cameras).collect(),
         }
     }
+}
+
+/// The cascade with the learnt pick after it when one is set ([`crate::pick`]): the pick runs
+/// on the cascade's answer, with the coarse stage's modes it reads.
+pub struct PickedCascade {
+    inference: CascadeInference,
+    pick: Option<PickRefiner>,
+}
+
+impl PickedCascade {
+    /// The cascade alone, without a pick.
+    pub fn new(inference: CascadeInference) -> Self {
+        Self {
+            inference,
+            pick: None,
+        }
+    }
+
+    /// Runs `pick` after the network on every frame ([`crate::pick`]; it was trained on one
+    /// network's answers: the bundled pick on the bundled cascade's).
+    ///
+    /// # Errors
+    /// [`NetError::Shape`] when the pick was made for another number of cameras than the rig's.
+    pub fn with_pick(mut self, pick: PickRefiner) -> Result<Self, NetError> {
+        let cameras = self.inference.full_sampler().num_cameras();
+        if pick.cameras() != cameras {
+            return Err(NetError::Shape {
+                what: "pick: cameras of the rig".into(),
+                expected: vec![pick.cameras()],
+                actual: vec![cameras],
+            });
+        }
+        self.pick = Some(pick);
+        Ok(self)
+    }
+
+    /// The cascade.
+    pub fn inference(&self) -> &CascadeInference {
+        &self.inference
+    }
+
+    /// Whether the learnt pick runs after the network.
+    pub fn has_pick(&self) -> bool {
+        self.pick.is_some()
+    }
+
+    /// Runs the network, then the pick when one is set, on one frame's gray images (rig
+    /// order); each stage's time (the pick's as `pick`) given to `observer` when it wants them.
+    ///
+    /// # Errors
+    /// [`NetError`] for a wrong number of images or a mask of another size.
+    pub fn run(
+        &self,
+        images: &[GrayImage],
+        observer: &mut dyn StageObserver,
+    ) -> Result<DepthEstimate, NetError> {
+        self.run_with_modes(images, observer, 0)
+            .map(|(estimate, _)| estimate)
+    }
+
+    /// [`Self::run`], with the coarse stage's `modes` most probable modes on the output grid
+    /// ([`CoarseModes`]; none for 0). The pick reads those its layout asks for whatever
+    /// `modes` is; this is for the data a pick trains on.
+    ///
+    /// # Errors
+    /// As [`Self::run`].
+    pub fn run_with_modes(
+        &self,
+        images: &[GrayImage],
+        observer: &mut dyn StageObserver,
+        modes: usize,
+    ) -> Result<(DepthEstimate, CoarseModes), NetError> {
+        let mut answer = self.inference.answer(images, observer.wants_timings())?;
+        let start = Instant::now();
+        let wanted = modes.max(self.pick.as_ref().map_or(0, PickRefiner::coarse_modes));
+        let coarse_modes = coarse_modes(&answer.coarse, wanted, self.inference.grid())?;
+        let modes_seconds = start.elapsed().as_secs_f64();
+        if let Some(pick) = &self.pick {
+            let start = Instant::now();
+            answer.index = self.refine(pick, &answer, &coarse_modes, images)?;
+            let seconds = start.elapsed().as_secs_f64() + modes_seconds;
+            answer.stages.push(("pick", seconds));
+            answer.seconds += seconds;
+        }
+        Ok((self.inference.estimate(answer, observer), coarse_modes))
+    }
+
+    /// `pick`'s index map (`N` units, output grid) from the cascade's `answer`.
+    fn refine(
+        &self,
+        pick: &PickRefiner,
+        answer: &CascadeAnswer,
+        modes: &CoarseModes,
+        images: &[GrayImage],
+    ) -> Result<Vec<f32>, NetError> {
+        let sampler = self.inference.full_sampler();
+        pick.refine(&answer.index, &answer.spread, modes, sampler, images)
+    }
+}
+
+/// The `count` most probable modes of a coarse stage's distribution on the output `grid`
+/// ([`CoarseModes::from_distribution`]; none for 0).
+///
+/// # Errors
+/// [`NetError`] when the stage's tensors cannot be read.
+pub fn coarse_modes(
+    coarse: &StageOutput,
+    count: usize,
+    grid: &EquirectGrid,
+) -> Result<CoarseModes, NetError> {
+    if count == 0 {
+        return Ok(CoarseModes::none());
+    }
+    let [_, k, h, w] = coarse.prob.dims();
+    CoarseModes::from_distribution(
+        &read_values(coarse.prob.clone(), "coarse distribution")?,
+        &read_values(coarse.hypotheses.clone(), "coarse spheres")?,
+        [k, h, w],
+        count,
+        [grid.height, grid.width],
+    )
 }
 
 impl From<NetError> for EstimateError {

@@ -23,8 +23,8 @@ use burn::nn::{PaddingConfig2d, PaddingConfig3d};
 use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 
-use crate::cascade::model::read_values;
 use crate::error::NetError;
+use crate::tensor::read_values;
 
 /// Padding of a host convolution: zero rows above and below; zero columns left and right, or
 /// the columns of the other side when they wrap around (a panorama's longitude).

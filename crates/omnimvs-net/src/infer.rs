@@ -11,11 +11,11 @@ use omnimvs_sweep::{
 use rayon::prelude::*;
 
 pub use crate::backend::device_from_name;
-use crate::cascade::model::read_values;
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::{OmniMvsNet, SweepInput, SweepTaps};
 use crate::taps::SweepGrid;
+use crate::tensor::read_values;
 
 /// Downscale factor above which the input is low-pass filtered before resampling.
 const ANTIALIAS_FACTOR: f64 = 1.5;

@@ -32,10 +32,10 @@ use omnimvs_stereo::camera_pairs;
 use omnimvs_sweep::GrayImage;
 use rayon::prelude::*;
 
-use crate::cascade::PixelSampler;
-use crate::cascade::photo::box_sum;
 use crate::error::NetError;
 use crate::hostconv::{HostConv, Padding};
+use crate::pixel::PixelSampler;
+use crate::pixel::box_sum;
 
 /// Which candidates a pick scores and which inputs it reads. A pick's safetensors carry it in
 /// their metadata (`candidate_radii`, `depth_radii`, `zncc`: comma-separated integers, as

@@ -10,8 +10,8 @@ use burn::module::Module;
 use burn::tensor::Device;
 use omnimvs_camera::Rig;
 use omnimvs_data::Dataset;
-use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::{CascadeGeometry, ColumnWindow, PixelSampler, SeedChoice};
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::{CascadeNet, NetConfig, weights};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LookupTable, SphereSet};
 

@@ -10,7 +10,7 @@ use burn::optim::GradientsParams;
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::CascadeGeometry;
-use omnimvs_net::cascade::model::read_values;
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::{CascadeNet, NetConfig, NetError, weights};
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]

@@ -11,10 +11,10 @@ use omnimvs_camera::{Pixel, Rig};
 use omnimvs_data::Dataset;
 use omnimvs_net::NetConfig;
 use omnimvs_net::cascade::geometry::coarse_cue_spheres;
-use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::photo::ImagePyramid;
 use omnimvs_net::cascade::sampler::coarse_indices;
 use omnimvs_net::cascade::{CascadeGeometry, ColumnWindow};
+use omnimvs_net::tensor::read_values;
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]
 mod samples;

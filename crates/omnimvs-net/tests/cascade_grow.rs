@@ -9,9 +9,9 @@ use burn::nn::conv::Conv2d;
 use burn::optim::GradientsParams;
 use burn::tensor::Device;
 use omnimvs_data::Dataset;
-use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::photo::ImagePyramid;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeOutput};
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::{CascadeNet, NetConfig, weights};
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]

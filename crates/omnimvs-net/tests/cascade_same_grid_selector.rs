@@ -12,8 +12,9 @@ use burn::tensor::activation::softmax;
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::CascadeGeometry;
 use omnimvs_net::cascade::model::{
-    UPSAMPLE_TAPS, neighbourhood_candidates, read_values, same_grid_prior, upsampling_candidates,
+    UPSAMPLE_TAPS, neighbourhood_candidates, same_grid_prior, upsampling_candidates,
 };
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::{CascadeNet, NetConfig, NetError, weights};
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]

@@ -12,8 +12,8 @@ use burn::tensor::activation::relu;
 use burn::tensor::{Device, Distribution, Tensor};
 use omnimvs_data::Dataset;
 use omnimvs_net::cascade::CascadeGeometry;
-use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::hostconv::{HostConv, Padding};
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::{CascadeNet, NetConfig, NetError};
 
 #[path = "../../omnimvs-camera/tests/support/samples.rs"]

@@ -11,7 +11,7 @@ use omnimvs_camera::Rig;
 use omnimvs_data::Dataset;
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::cascade::CascadeGeometry;
-use omnimvs_net::cascade::model::read_values;
+use omnimvs_net::tensor::read_values;
 use omnimvs_net::{CascadeNet, NetConfig};
 use omnimvs_sweep::InvDepthHypotheses;
 use omnimvs_train::{Learner, Optimizer, Sample, TrainConfig, TrainParts};

@@ -4,12 +4,12 @@ use anyhow::Result;
 use burn::module::Module;
 use burn::tensor::Device;
 use omnimvs_camera::Rig;
-use omnimvs_net::cascade::model::read_values;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet, CascadeTimings};
 use omnimvs_net::config::NetConfig;
 use omnimvs_net::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
 use omnimvs_net::pick::PickRefiner;
 use omnimvs_net::synthetic::synthetic_grids;
+use omnimvs_net::tensor::read_values;
 use omnimvs_sweep::{GrayImage, InvDepthHypotheses};
 use serde::Serialize;
 
@@ -287,7 +287,7 @@ pub fn bench_cascade_forward(
             let index = read_values(fine.index, "index map")?;
             let spread = vec![0f32; index.len()];
             let start = std::time::Instant::now();
-            let modes = omnimvs_net::cascade::infer::coarse_modes(
+            let modes = omnimvs_net::estimator::coarse_modes(
                 &coarse,
                 pick.coarse_modes(),
                 geometry.samplers[2].grid(),

@@ -13,16 +13,18 @@ use omnimvs_data::edges::neighbour_min_max;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
 use super::model::{
-    CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, hypothesis_tensor,
-    neighbourhood_candidates, read_values, same_grid_prior, upsampling_candidates,
+    CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, neighbourhood_candidates,
+    same_grid_prior, upsampling_candidates,
 };
 use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
-use super::sampler::{PixelSampler, coarse_indices, hypotheses_around, stretch_to_neighbours};
+use super::sampler::{coarse_indices, hypotheses_around, stretch_to_neighbours};
 use super::score_sgm::aggregated_scores;
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;
+use crate::pixel::PixelSampler;
 use crate::taps::{SweepGrid, Taps, grid_taps};
+use crate::tensor::{hypothesis_tensor, read_values};
 use rayon::prelude::*;
 
 /// One stage's sampling positions on the device: every camera's taps, the hypotheses, and

@@ -12,8 +12,8 @@ use burn::tensor::{Device, Tensor, TensorData};
 use rayon::prelude::*;
 
 use super::geometry::HostTaps;
-use super::model::with_values;
 use crate::error::NetError;
+use crate::tensor::with_values;
 
 /// Most feature channels the kernel takes (its per-sample sums live on the stack).
 pub const MAX_CHANNELS: usize = 64;

@@ -10,14 +10,14 @@
 //!    (groups x spheres), soft argmax;
 //! 3. at half (`80 x 320`) and full resolution, a few hypotheses per pixel around the
 //!    previous estimate, sampled through the camera model at per-pixel inverse depths
-//!    ([`sampler`]), correlated and scored by three 2D convolutions over (groups x
-//!    hypotheses) channels, soft argmax.
+//!    ([`crate::pixel::PixelSampler`]), correlated and scored by three 2D convolutions over
+//!    (groups x hypotheses) channels, soft argmax.
 //!
 //! Every convolution on the panorama wraps around in longitude. See `crates/omnimvs-net/README.md` for the
 //! design choices, FLOPs, time and memory per stage.
 //!
-//! - [`sampler`]: per-pixel projection into every camera, hypothesis placement, resampling
-//!   between grids.
+//! - [`sampler`]: hypothesis placement: the coarse spheres, a refinement stage's hypotheses
+//!   around each pixel's estimate.
 //! - [`geometry`]: a stage's taps on the device, a rig's geometry, the forward pass.
 //! - [`host`]: the correlation of a stage on the host, for inference on a CPU.
 //! - [`model`]: the burn modules.
@@ -35,9 +35,9 @@ pub mod photo;
 pub mod sampler;
 pub mod score_sgm;
 
+pub use crate::pixel::PixelSampler;
 pub use geometry::{
     CascadeGeometry, CascadeOutput, CascadeTimings, ColumnWindow, HostTaps, SeedChoice, StageTaps,
 };
-pub use infer::CascadeInference;
+pub use infer::{CascadeAnswer, CascadeInference};
 pub use model::{CascadeNet, StageOutput};
-pub use sampler::PixelSampler;

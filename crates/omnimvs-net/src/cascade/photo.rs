@@ -24,10 +24,11 @@ use omnimvs_stereo::params::{COST_SCALE, Directions, cost_units};
 use omnimvs_stereo::{ZNCC_VARIANCE_EPS, camera_pairs};
 use rayon::prelude::*;
 
-use super::model::with_values;
 use super::score_sgm::aggregate_eight;
 use crate::error::NetError;
+use crate::pixel::box_sum;
 use crate::taps::{SweepGrid, bilinear_taps};
+use crate::tensor::with_values;
 
 /// Half the side of the ZNCC window (5 x 5 samples of a stage's grid).
 pub const ZNCC_RADIUS: usize = 2;
@@ -407,48 +408,6 @@ fn sample_plane(coords: &[f32], image: &[f32], rows: usize, cols: usize) -> (Vec
         .unzip()
 }
 
-/// Window sums of a `h x w` map over `(2 r + 1)^2` windows: rows beyond the top and bottom
-/// are not there (clipped), columns wrap around (longitude is a ring). `f32` here; the learnt
-/// pick's ZNCC (`crate::pick`) sums in `f64`.
-pub(crate) fn box_sum<T>(map: &[T], h: usize, w: usize, r: usize) -> Vec<T>
-where
-    T: Copy + Default + std::ops::AddAssign,
-{
-    let mut vertical = vec![T::default(); h * w];
-    for y in 0..h {
-        let dst = &mut vertical[y * w..(y + 1) * w];
-        for src in y.saturating_sub(r)..(y + r + 1).min(h) {
-            for (d, &s) in dst.iter_mut().zip(&map[src * w..(src + 1) * w]) {
-                *d += s;
-            }
-        }
-    }
-    // Along each row, through a copy with `r` columns of the other end on each side, one
-    // offset of the window at a time over the whole row (vectorised): every sum still adds
-    // its window's values from left to right, as modulo indexing would.
-    let mut out = vec![T::default(); h * w];
-    let mut ring = vec![T::default(); w + 2 * r];
-    for (row, dst) in vertical.chunks_exact(w).zip(out.chunks_exact_mut(w)) {
-        if w >= r {
-            ring[..r].copy_from_slice(&row[w - r..]);
-            ring[r..r + w].copy_from_slice(row);
-            ring[r + w..].copy_from_slice(&row[..r]);
-        } else {
-            // A window wider than the row (a narrow training window) wraps more than once.
-            for (j, v) in ring.iter_mut().enumerate() {
-                *v = row[(j + w * r - r) % w];
-            }
-        }
-        dst.copy_from_slice(&ring[..w]);
-        for offset in 1..=2 * r {
-            for (d, &s) in dst.iter_mut().zip(&ring[offset..offset + w]) {
-                *d += s;
-            }
-        }
-    }
-    out
-}
-
 /// One camera's window statistics over a plane of samples.
 struct WindowStats<'a> {
     /// The samples themselves.
@@ -532,56 +491,6 @@ fn window_count(y: usize, h: usize, r: usize) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn box_sums_clip_rows_and_wrap_columns() {
-        let (h, w) = (3, 5);
-        let map: Vec<f32> = (0..h * w).map(|i| i as f32).collect();
-        let sums = box_sum(&map, h, w, 1);
-        // Row 0, column 0: rows 0-1, columns 4, 0, 1.
-        let expected = [4.0, 0.0, 1.0, 9.0, 5.0, 6.0].iter().sum::<f32>();
-        assert_eq!(sums[0], expected);
-        // Row 1, column 2: rows 0-2, columns 1-3.
-        let expected: f32 = (0..3)
-            .flat_map(|y| (1..4).map(move |x| (y * w + x) as f32))
-            .sum();
-        assert_eq!(sums[w + 2], expected);
-    }
-
-    #[test]
-    fn box_sums_add_each_window_left_to_right_as_modulo_indexing_does() {
-        // The reading the vectorised sums replaced: bit for bit, narrow rows included (a
-        // training window of one column wraps its window several times).
-        let naive = |map: &[f32], h: usize, w: usize, r: usize| -> Vec<f32> {
-            let mut out = vec![0f32; h * w];
-            for y in 0..h {
-                for x in 0..w {
-                    let mut column = [0f32; 16];
-                    for (j, c) in column.iter_mut().enumerate().take(2 * r + 1) {
-                        let xx = (x + w * r + j - r) % w;
-                        for yy in y.saturating_sub(r)..(y + r + 1).min(h) {
-                            *c += map[yy * w + xx];
-                        }
-                    }
-                    out[y * w + x] = column[..2 * r + 1].iter().sum();
-                }
-            }
-            out
-        };
-        for (h, w, r) in [(7, 13, 2), (5, 1, 2), (4, 2, 2), (6, 3, 1), (9, 40, 3)] {
-            let map: Vec<f32> = (0..h * w)
-                .map(|i| ((i * 7919 + 13) % 101) as f32 * 0.173 - 5.0)
-                .collect();
-            let fast = box_sum(&map, h, w, r);
-            let slow = naive(&map, h, w, r);
-            assert!(
-                fast.iter()
-                    .zip(&slow)
-                    .all(|(a, b)| a.to_bits() == b.to_bits()),
-                "{h}x{w} r {r}: {fast:?} against {slow:?}"
-            );
-        }
-    }
 
     #[test]
     fn identical_views_score_one_and_unseen_windows_zero() {

@@ -1,0 +1,467 @@
+//! Growth of a trained cascade: each `with_*` method switches one option of the
+//! configuration on and adds the weights it needs so that the network answers as before (or
+//! nearly) until training moves them.
+
+use burn::module::Param;
+use burn::nn::conv::Conv2d;
+use burn::tensor::{Tensor, TensorData};
+
+use super::CascadeNet;
+use super::regularize::squeeze_conv;
+use super::upsample::{CandidateSelector, UPSAMPLE_TAPS};
+use crate::config::CascadeParams;
+use crate::error::NetError;
+use crate::tensor::read_values;
+
+impl CascadeNet {
+    /// The network with the photometric cue switched on (`zncc_cue`): the first convolution
+    /// of every stage gets the cue's input channels (one per hypothesis, after the existing
+    /// ones) with zero weights, so it answers exactly as before until training moves them.
+    /// A network that has the cue already is returned as it is.
+    #[must_use]
+    pub fn with_zncc_cue(mut self) -> Self {
+        if self.config.cascade.zncc_cue {
+            return self;
+        }
+        let p = &self.config.cascade;
+        let ks = [
+            p.coarse_spheres,
+            p.stage_hypotheses[0],
+            p.stage_hypotheses[1],
+        ];
+        // The coarse stage's cue goes before its stride-4 correlation (`coarse_stride4`).
+        let tail = self.coarse_stride4_inputs();
+        insert_zero_inputs(self.coarse.input_conv(), tail, ks[0]);
+        let mut firsts = vec![
+            (&mut self.mid.convs[0], ks[1]),
+            (&mut self.fine.convs[0], ks[2]),
+        ];
+        for selector in [&mut self.up_mid, &mut self.up_fine].into_iter().flatten() {
+            firsts.push((&mut selector.hidden, UPSAMPLE_TAPS));
+        }
+        for (first, k) in firsts {
+            append_zero_inputs(&mut first.conv, k);
+        }
+        self.config.cascade.zncc_cue = true;
+        self
+    }
+
+    /// The network with the coarse stage's aggregated cue switched on (`coarse_cue_sgm`; the
+    /// network must have `zncc_cue`): the coarse stage's first convolution gets one input
+    /// channel per sphere, after the existing ones, with zero weights, so that it answers
+    /// exactly as before until training moves them. A network that has it is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when the network has no `zncc_cue`.
+    pub fn with_coarse_cue_sgm(self) -> Result<Self, NetError> {
+        let tail = self.coarse_stride4_inputs();
+        self.with_cue_channel(
+            |p| &mut p.coarse_cue_sgm,
+            |net| net.coarse.input_conv(),
+            |p| p.coarse_spheres,
+            tail,
+        )
+    }
+
+    /// The input channels of the coarse stage's first convolution that read the stride-4
+    /// correlation (`coarse_stride4`; the last ones): `groups[1]` per sphere, or 0.
+    fn coarse_stride4_inputs(&self) -> usize {
+        let p = &self.config.cascade;
+        p.coarse_stride4_groups() * p.coarse_spheres
+    }
+
+    /// The network with the half-resolution stage's aggregated cue switched on
+    /// (`mid_cue_sgm`; the network must have `zncc_cue` with `coarse_cue_oversample: 2`): the
+    /// stage's first convolution gets one input channel per hypothesis, after the existing
+    /// ones, with zero weights, so that it answers exactly as before until training moves
+    /// them. A network that has it is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when the network cannot have it.
+    pub fn with_mid_cue_sgm(self) -> Result<Self, NetError> {
+        self.with_cue_channel(
+            |p| &mut p.mid_cue_sgm,
+            |net| &mut net.mid.convs[0].conv,
+            |p| p.stage_hypotheses[0],
+            0,
+        )
+    }
+
+    /// The network with the cue channel that `flag` switches on: unless it is on already, the
+    /// configuration with it must validate, and the convolution `first` reads `k` more input
+    /// channels (one per hypothesis of its stage) with zero weights, before its last `tail`.
+    fn with_cue_channel(
+        mut self,
+        flag: fn(&mut CascadeParams) -> &mut bool,
+        first: fn(&mut Self) -> &mut Conv2d,
+        k: fn(&CascadeParams) -> usize,
+        tail: usize,
+    ) -> Result<Self, NetError> {
+        let mut config = self.config.clone();
+        if *flag(&mut config.cascade) {
+            return Ok(self);
+        }
+        *flag(&mut config.cascade) = true;
+        config.validate()?;
+        insert_zero_inputs(first(&mut self), tail, k(&config.cascade));
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with the two neighbour hypotheses of refinement stage `stage` (1: half,
+    /// 2: full resolution) within `radius` pixels (`neighbour_hypotheses`): the stage's first
+    /// convolution reads their evidence (after all of the evenly spaced hypotheses') with zero
+    /// weights, and its scoring convolution scores them with zero weights and a bias of
+    /// `neighbour_start_score` (by default -5: the network answers nearly as before, the two
+    /// holding a small share of each pixel's weight, until training moves them). A stage that
+    /// has them already takes the new radius.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] for another stage, a radius of 0 for a stage that has them,
+    /// or when the configuration with them is not valid.
+    pub fn with_neighbour_hypotheses(
+        mut self,
+        stage: usize,
+        radius: usize,
+    ) -> Result<Self, NetError> {
+        if !(1..=2).contains(&stage) {
+            return Err(NetError::InvalidConfig {
+                field: "neighbour_hypotheses",
+                message: format!("stage {stage}: the refinement stages are 1 and 2"),
+            });
+        }
+        let i = stage - 1;
+        let mut config = self.config.clone();
+        let had = config.cascade.neighbour_count(i) > 0;
+        config.cascade.neighbour_hypotheses[i] = radius;
+        config.validate()?;
+        if had && radius == 0 {
+            return Err(NetError::InvalidConfig {
+                field: "neighbour_hypotheses",
+                message: format!("stage {stage} has them already; they cannot be taken out"),
+            });
+        }
+        if !had && radius > 0 {
+            let p = &config.cascade;
+            let channels = p.stage_evidence_channels(i);
+            let regularizer = if stage == 1 {
+                &mut self.mid
+            } else {
+                &mut self.fine
+            };
+            append_zero_inputs(&mut regularizer.convs[0].conv, 2 * channels);
+            // Scores leave the stage times `neighbour_gain`: the bias starts at score / gain.
+            let score = (p.neighbour_start_score / p.neighbour_gain) as f32;
+            append_zero_outputs(&mut regularizer.out.conv, 2, score);
+        }
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with its stride-8 features widened to `c8` channels (see
+    /// [`super::CascadeFeatures::widen8`]): it answers as before but for a small perturbation of
+    /// the coarse correlation, and the coarse stage can learn from the new channels.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when `c8` is narrower than the network's stride-8 width, not
+    /// a multiple of its coarse groups, or the widened configuration is not valid.
+    pub fn with_coarse_feature_channels(mut self, c8: usize) -> Result<Self, NetError> {
+        let mut config = self.config.clone();
+        config.cascade.feature_channels[2] = c8;
+        config.validate()?;
+        let device = self.features.out8.conv.weight.val().device();
+        self.features = self
+            .features
+            .widen8(c8, config.cascade.groups[2], &device)?;
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with the coarse stage also correlating the stride-4 features
+    /// (`coarse_stride4`): its first convolution reads `groups[1]` more channels per sphere,
+    /// after all of the others, with zero weights, so that it answers exactly as before until
+    /// training moves them. A network that has them is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when the configuration with them is not valid.
+    pub fn with_coarse_stride4(mut self) -> Result<Self, NetError> {
+        if self.config.cascade.coarse_stride4 {
+            return Ok(self);
+        }
+        let mut config = self.config.clone();
+        config.cascade.coarse_stride4 = true;
+        config.validate()?;
+        self.config = config;
+        let inputs = self.coarse_stride4_inputs();
+        append_zero_inputs(self.coarse.input_conv(), inputs);
+        Ok(self)
+    }
+
+    /// The network with its coarse stage moved to the grid `scale` times coarser than the
+    /// output (`coarse_scale`) and over `spheres` spheres (`coarse_spheres`), from a trained
+    /// one: every weight is kept but the coarse stage's first convolution, which reads each
+    /// evidence channel per sphere, and its scoring convolution, which writes one score per
+    /// sphere. Those are resampled along the spheres ([`sphere_resampling`]): the new first
+    /// convolution gives the old one's output for evidence that varies linearly over inverse
+    /// depth, and each new score is the old scores interpolated at the new sphere's inverse
+    /// depth. The 2D convolutions keep their kernels, now over pixels half the size with
+    /// `scale` 2; with `scale` 2 the half grid's selector (`up_mid`) goes: the half stage
+    /// centres on the coarse answer itself. A starting point for training, not an answer.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when the configuration with them is not valid.
+    pub fn with_coarse_grid(mut self, scale: usize, spheres: usize) -> Result<Self, NetError> {
+        let mut config = self.config.clone();
+        let old = config.cascade.coarse_spheres;
+        config.cascade.coarse_scale = scale;
+        config.cascade.coarse_spheres = spheres;
+        config.validate()?;
+        if spheres != old {
+            let n = config.num_invdepth;
+            let conv = self.coarse.input_conv();
+            conv.weight = Param::from_tensor(resample_axis(
+                conv.weight.val(),
+                1,
+                &sphere_resampling(old, spheres, n, true),
+                spheres,
+            )?);
+            let out = &mut self.coarse.out.conv;
+            let to_new = sphere_resampling(old, spheres, n, false);
+            out.weight = Param::from_tensor(resample_axis(out.weight.val(), 0, &to_new, spheres)?);
+            if let Some(bias) = out.bias.take() {
+                let bias = bias.val().reshape([old, 1, 1, 1]);
+                let bias = resample_axis(bias, 0, &to_new, spheres)?;
+                out.bias = Some(Param::from_tensor(bias.reshape([spheres])));
+            }
+        }
+        if !config.cascade.half_grid_selector() || scale != self.config.cascade.coarse_scale {
+            // A selector that upsampled 40 x 160 does not choose on the half grid.
+            self.up_mid = None;
+        }
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with its half stage centred on a learnt choice among the 3 x 3 coarse
+    /// answers around each pixel (`same_grid_selector`; the coarse stage on the half grid):
+    /// a new selector whose last convolution has zero weights, so that it starts at each
+    /// pixel's own answer (the 8 neighbours keeping about 5 % of the weight,
+    /// [`super::same_grid_prior`]). A network that has it is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] unless the network has `coarse_scale` 2 and
+    /// `convex_upsampling`.
+    pub fn with_same_grid_selector(mut self) -> Result<Self, NetError> {
+        if self.config.cascade.same_grid_selector && self.up_mid.is_some() {
+            return Ok(self);
+        }
+        let mut config = self.config.clone();
+        config.cascade.same_grid_selector = true;
+        config.validate()?;
+        let device = self.coarse.out.conv.weight.val().device();
+        self.up_mid = Some(CandidateSelector::for_stage(&config.cascade, 0, &device));
+        self.config = config;
+        Ok(self)
+    }
+
+    /// The network with its coarse evidence squeezed through `channels` channels
+    /// (`coarse_squeeze`) before the first 3x3 convolution, from a trained one. That
+    /// convolution's weights `W[o, i, y, x]`, as a matrix with a row per `(o, y, x)` and a
+    /// column per input `i`, are replaced by their best approximation of rank `channels` (a
+    /// truncated SVD `U S V^T`, the largest singular values kept): the squeeze, a 1x1
+    /// convolution without bias, takes `V^T`, and the 3x3 convolution reads its `channels`
+    /// outputs through `U S`, keeping its bias and batch norm. With `channels` at least the
+    /// matrix's rank the network answers as before up to rounding; below it, as nearly as
+    /// a layer of that rank can. A network with that squeeze, or with none when `channels` is
+    /// 0, is returned as it is.
+    ///
+    /// # Errors
+    /// [`NetError::InvalidConfig`] when `channels` is more than the evidence channels, or the
+    /// network has a squeeze of another width (a squeeze is not undone); [`NetError::Shape`]
+    /// when the weights cannot be read.
+    pub fn with_coarse_squeeze(mut self, channels: usize) -> Result<Self, NetError> {
+        let have = self.config.cascade.coarse_squeeze;
+        if have == channels {
+            return Ok(self);
+        }
+        if have != 0 {
+            return Err(NetError::InvalidConfig {
+                field: "cascade.coarse_squeeze",
+                message: format!(
+                    "cannot squeeze to {channels} channels a network whose squeeze has {have}: \
+                     factorise a network without one"
+                ),
+            });
+        }
+        let mut config = self.config.clone();
+        config.cascade.coarse_squeeze = channels;
+        config.validate()?;
+        let first = &mut self.coarse.c0[0].conv;
+        let weight = first.weight.val();
+        let device = weight.device();
+        let [outputs, inputs, kh, kw] = weight.dims();
+        let values = read_values(weight, "coarse stage weights")?;
+        let taps = kh * kw;
+        let rows = outputs * taps;
+        // M[(o, y, x), i] = W[o, i, y, x].
+        let mut m = nalgebra::DMatrix::<f64>::zeros(rows, inputs);
+        for o in 0..outputs {
+            for i in 0..inputs {
+                for t in 0..taps {
+                    m[(o * taps + t, i)] = f64::from(values[(o * inputs + i) * taps + t]);
+                }
+            }
+        }
+        let svd = m.svd(true, true);
+        let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+            return Err(NetError::Shape {
+                what: "SVD of the coarse stage's first convolution".into(),
+                expected: vec![rows, inputs],
+                actual: vec![],
+            });
+        };
+        // `svd` sorts the singular values in descending order: the first `channels` are the
+        // largest. Ranks beyond the matrix's own get zero weights on both sides.
+        let mut three = vec![0f32; outputs * channels * taps]; // [o, k, y, x] = U S
+        let mut squeeze = vec![0f32; channels * inputs]; // [k, i] = V^T
+        for (k, &sigma) in svd.singular_values.iter().take(channels).enumerate() {
+            for o in 0..outputs {
+                for t in 0..taps {
+                    three[(o * channels + k) * taps + t] = (u[(o * taps + t, k)] * sigma) as f32;
+                }
+            }
+            for i in 0..inputs {
+                squeeze[k * inputs + i] = v_t[(k, i)] as f32;
+            }
+        }
+        first.weight = Param::from_tensor(Tensor::from_data(
+            TensorData::new(three, [outputs, channels, kh, kw]),
+            &device,
+        ));
+        let mut conv = squeeze_conv(inputs, channels, &device);
+        conv.weight = Param::from_tensor(Tensor::from_data(
+            TensorData::new(squeeze, [channels, inputs, 1, 1]),
+            &device,
+        ));
+        self.coarse.squeeze = Some(conv);
+        self.config = config;
+        Ok(self)
+    }
+}
+
+/// `conv` writing `k` more output channels, after its own, with zero weights and `bias`.
+fn append_zero_outputs(conv: &mut Conv2d, k: usize, bias: f32) {
+    let weight = conv.weight.val(); // [C_out, C_in, kh, kw]
+    let [_, c_in, kh, kw] = weight.dims();
+    let device = weight.device();
+    let zeros = Tensor::zeros([k, c_in, kh, kw], &device);
+    conv.weight = Param::from_tensor(Tensor::cat(vec![weight, zeros], 0).detach());
+    if let Some(b) = conv.bias.take() {
+        let new = Tensor::<1>::full([k], bias, &device);
+        conv.bias = Some(Param::from_tensor(
+            Tensor::cat(vec![b.val(), new], 0).detach(),
+        ));
+    }
+}
+
+/// The matrix that carries a per-sphere quantity from `from` coarse spheres to `to`
+/// ([`crate::cascade::sampler::coarse_indices`] over `N = num_invdepth`), row-major `[to, from]` when
+/// `transpose` is false: each new sphere's value interpolated linearly between the two old
+/// spheres around its inverse depth (scores). With `transpose`, `[from, to]`'s transpose laid
+/// out as `[to, from]` too: the weight that a new sphere's evidence takes over from each old
+/// sphere's, so that `sum_old w_old e_old = sum_new w_new e_new` whenever the old evidence is
+/// the new one interpolated linearly (first-layer weights).
+pub fn sphere_resampling(from: usize, to: usize, num_invdepth: usize, transpose: bool) -> Vec<f32> {
+    let interpolate = |at: &[f64], grid: &[f64]| -> Vec<f32> {
+        // Rows: positions `at`; columns: the `grid` spheres.
+        let spacing = crate::cascade::sampler::coarse_spacing(grid.len(), num_invdepth);
+        let mut m = vec![0f32; at.len() * grid.len()];
+        for (r, &x) in at.iter().enumerate() {
+            let u = (x / spacing).clamp(0.0, (grid.len() - 1) as f64);
+            let i0 = (u.floor() as usize).min(grid.len() - 1);
+            let i1 = (i0 + 1).min(grid.len() - 1);
+            let f = (u - i0 as f64) as f32;
+            m[r * grid.len() + i0] += 1.0 - f;
+            m[r * grid.len() + i1] += f;
+        }
+        m
+    };
+    let old = crate::cascade::sampler::coarse_indices(from, num_invdepth);
+    let new = crate::cascade::sampler::coarse_indices(to, num_invdepth);
+    if !transpose {
+        return interpolate(&new, &old);
+    }
+    // Old positions from new spheres, `[from, to]`, transposed to `[to, from]`.
+    let m = interpolate(&old, &new);
+    let mut t = vec![0f32; to * from];
+    for i in 0..from {
+        for j in 0..to {
+            t[j * from + i] = m[i * to + j];
+        }
+    }
+    t
+}
+
+/// `weight` (`[O, I, kh, kw]`) with the sphere axis inside `axis` (0 or 1; that axis is
+/// `groups x from` with the sphere fastest, as [`super::stages::fold_volume`] lays a volume out) carried to
+/// `to` spheres by `matrix` (`[to, from]`, [`sphere_resampling`]).
+///
+/// # Errors
+/// [`NetError`] when the weights cannot be read back from the device.
+fn resample_axis(
+    weight: Tensor<4>,
+    axis: usize,
+    matrix: &[f32],
+    to: usize,
+) -> Result<Tensor<4>, NetError> {
+    let dims = weight.dims();
+    let device = weight.device();
+    let values = read_values(weight, "coarse stage weights")?;
+    let from = matrix.len() / to;
+    let groups = dims[axis] / from;
+    let mut out_dims = dims;
+    out_dims[axis] = groups * to;
+    // Row-major strides of `dims` and of the output.
+    let inner: usize = dims[axis + 1..].iter().product();
+    let outer: usize = dims[..axis].iter().product();
+    let mut out = vec![0f32; outer * groups * to * inner];
+    for o in 0..outer {
+        for g in 0..groups {
+            for j in 0..to {
+                let dst = ((o * groups + g) * to + j) * inner;
+                for i in 0..from {
+                    let m = matrix[j * from + i];
+                    if m == 0.0 {
+                        continue;
+                    }
+                    let src = ((o * groups + g) * from + i) * inner;
+                    for e in 0..inner {
+                        out[dst + e] += m * values[src + e];
+                    }
+                }
+            }
+        }
+    }
+    Ok(Tensor::from_data(TensorData::new(out, out_dims), &device))
+}
+
+/// `first` reading `k` more input channels, after its own, with zero weights: the network
+/// answers as before until training moves them.
+fn append_zero_inputs(first: &mut Conv2d, k: usize) {
+    insert_zero_inputs(first, 0, k);
+}
+
+/// `first` reading `k` more input channels with zero weights, placed before its last `tail`
+/// input channels (after all of them with `tail` 0).
+fn insert_zero_inputs(first: &mut Conv2d, tail: usize, k: usize) {
+    let weight = first.weight.val(); // [C_out, C_in, 3, 3]
+    let [c_out, c_in, kh, kw] = weight.dims();
+    let zeros = Tensor::zeros([c_out, k, kh, kw], &weight.device());
+    let head = c_in - tail.min(c_in);
+    let mut parts = vec![weight.clone().narrow(1, 0, head), zeros];
+    if head < c_in {
+        parts.push(weight.narrow(1, head, c_in - head));
+    }
+    let widened = Tensor::cat(parts, 1).detach(); // a leaf again
+    first.weight = Param::from_tensor(widened);
+}
