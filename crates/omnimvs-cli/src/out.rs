@@ -1,7 +1,7 @@
 //! Standard output and error reports with the manners of the tools people know.
 //!
 //! `println!` panics when stdout is a pipe that the reader has closed
-//! (`omnimvs info DATASET | head -5`); [`line`] and [`text`] (behind the `outln!` and
+//! (`omnimvs info DATASET | head -5`); [`line()`] and [`text()`] (behind the `outln!` and
 //! `out!` macros) end the program instead with the status of a process stopped by
 //! `SIGPIPE`, and print nothing. [`error_chain`] says each cause of an error once.
 

@@ -1,6 +1,6 @@
 //! Per-pixel helpers on an output panorama, shared by the cascade's stages and the learnt pick
 //! after it: where each camera sees the point of an output ray at a per-pixel inverse depth
-//! ([`PixelSampler`]), and window sums over the panorama that wrap in longitude ([`box_sum`]).
+//! ([`PixelSampler`]), and window sums over the panorama that wrap in longitude (`box_sum`).
 //!
 //! A lookup table holds fixed spheres only; the refinement stages of the cascade test a few
 //! hypotheses around each pixel's own estimate, so their positions are projected on the fly

@@ -4,11 +4,11 @@
 //!
 //! Every function calls the library crates exactly as the `omnimvs` command does, releases
 //! the GIL while it computes, and turns library errors into `ValueError`,
-//! `FileNotFoundError` or `OSError` carrying the library's message ([`error`]).
+//! `FileNotFoundError` or `OSError` carrying the library's message (`error`).
 //!
-//! - [`dataset`]: `Dataset` and `Rig`, the geometry every other function takes.
-//! - [`images`]: numpy arrays to and from gray images, with checks that name the argument.
-//! - [`lut`], [`sgm`], [`infer`], [`evaluate`], [`synth`]: one Python function each.
+//! - `dataset`: `Dataset` and `Rig`, the geometry every other function takes.
+//! - `images`: numpy arrays to and from gray images, with checks that name the argument.
+//! - `lut`, `sgm`, `infer`, `evaluate`, `synth`: one Python function each.
 
 mod dataset;
 mod error;

@@ -443,7 +443,7 @@ fn stage_loss(
 /// Mean cross-entropy, over the pixels of `mask`, between a stage's distribution `prob` over
 /// its hypotheses `hypotheses` (both `[1, K, H, W]`, hypotheses in `N` units) and a Laplacian
 /// of `scale` around each pixel's exact ground-truth index `target` (`[1, H, W]`, with `mask`
-/// as [`target_tensors`] makes them): it asks for one peak at the truth, where the L1 of the
+/// as `target_tensors` makes them): it asks for one peak at the truth, where the L1 of the
 /// mean is content with any spread whose mean is right (AcfNet's unimodal supervision). Where
 /// the truth lies outside the hypotheses, the target piles on the nearest one. The target
 /// carries no gradient.

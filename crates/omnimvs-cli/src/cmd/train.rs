@@ -276,8 +276,8 @@ pub struct Args {
     /// Matching-cost training: sample pairs per step.
     #[arg(long, default_value_t = 128)]
     pub batch: usize,
-    /// Compute backend (see the README): cpu (burn flex), libtorch, libtorch-cuda[:N],
-    /// wgpu[:N], vulkan or wgpu-cpu; all but cpu need a build with the `libtorch` or `wgpu`
+    /// Compute backend (see the README): cpu (burn flex), libtorch, `libtorch-cuda[:N]`,
+    /// `wgpu[:N]`, vulkan or wgpu-cpu; all but cpu need a build with the `libtorch` or `wgpu`
     /// Cargo feature. A new run defaults to cpu; --resume defaults to the backend the run last
     /// ran on (its `backend.txt`).
     #[arg(long, value_parser = parse_backend)]

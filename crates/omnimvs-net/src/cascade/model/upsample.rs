@@ -142,7 +142,7 @@ pub fn bilinear_prior(rows: usize, cols: &std::ops::Range<usize>, device: &Devic
 }
 
 /// The prior logits of a selector on the coarse grid itself (`same_grid_selector`),
-/// `[1, 9, rows, cols.len()]`: 0 for the pixel's own answer (tap 4), [`UNUSED_TAP_LOGIT`] for
+/// `[1, 9, rows, cols.len()]`: 0 for the pixel's own answer (tap 4), `UNUSED_TAP_LOGIT` (-5) for
 /// its 8 neighbours', so that a grown selector starts at the pixel's own answer (the
 /// neighbours together keep about 5 % of the weight).
 pub fn same_grid_prior(rows: usize, cols: &std::ops::Range<usize>, device: &Device) -> Tensor<4> {
