@@ -666,6 +666,13 @@ impl NetConfig {
     }
 
     fn validate_cascade(&self) -> Result<(), NetError> {
+        self.validate_cascade_grid()?;
+        self.validate_cascade_cues()?;
+        self.validate_cascade_sizes()
+    }
+
+    /// The output grid and the coarse stage's grid, selector and squeeze.
+    fn validate_cascade_grid(&self) -> Result<(), NetError> {
         let invalid =
             |field: &'static str, message: String| NetError::InvalidConfig { field, message };
         let p = &self.cascade;
@@ -720,6 +727,14 @@ impl NetConfig {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// The photometric cues' settings and the neighbour hypotheses and extremes.
+    fn validate_cascade_cues(&self) -> Result<(), NetError> {
+        let invalid =
+            |field: &'static str, message: String| NetError::InvalidConfig { field, message };
+        let p = &self.cascade;
         if !matches!(p.coarse_cue_oversample, 1 | 2) {
             return Err(invalid(
                 "cascade.coarse_cue_oversample",
@@ -772,6 +787,15 @@ impl NetConfig {
                     .into(),
             ));
         }
+        Ok(())
+    }
+
+    /// The stages' sizes (spheres, channels, groups, hypotheses) and the losses' weights and
+    /// the refinement spacing.
+    fn validate_cascade_sizes(&self) -> Result<(), NetError> {
+        let invalid =
+            |field: &'static str, message: String| NetError::InvalidConfig { field, message };
+        let p = &self.cascade;
         if p.coarse_spheres < 2 || p.coarse_spheres > self.num_invdepth {
             return Err(invalid(
                 "cascade.coarse_spheres",
