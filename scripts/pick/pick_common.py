@@ -1,4 +1,6 @@
 # The parts of the pick trainer that need numpy and scipy only (train_pick.py re-exports them):
+#   - minmax(): the minimum and maximum over a window wrapping in longitude, which the
+#     candidates and pick_inputs.py's depths share;
 #   - candidates(): the answers a pick chooses among, per pixel: the answer v, then the minimum
 #     and maximum of the answers over the (2 r + 1)^2 pixels around for each radius r (columns
 #     wrap in longitude, rows stop at the border); `PickLayout::candidate_maps` in Rust;
@@ -17,16 +19,23 @@ import numpy as np
 from scipy import ndimage
 
 
+def minmax(v, k):
+    """The minimum and maximum of v (..., H, W) over the k x k pixels around each pixel (k odd),
+    each leading axis on its own: columns wrap in longitude, rows stop at the border."""
+    p = k // 2
+    size = (1,) * (v.ndim - 2) + (k, k)
+    vp = np.concatenate([v[..., -p:], v, v[..., :p]], -1)
+    mn = ndimage.minimum_filter(vp, size=size, mode="nearest")[..., p:-p]
+    mx = ndimage.maximum_filter(vp, size=size, mode="nearest")[..., p:-p]
+    return mn, mx
+
+
 def candidates(v, radii):
     """v (B, H, W) -> (B, 1 + 2 len(radii), H, W): v, then the minimum and maximum over
-    (2 r + 1)^2 pixels for each r in radii (columns wrapping in longitude, rows cut at the
-    border)."""
+    (2 r + 1)^2 pixels for each r in radii (minmax)."""
     out = [v]
     for r in radii:
-        k, p = 2 * r + 1, r
-        vp = np.concatenate([v[..., -p:], v, v[..., :p]], -1)
-        out.append(ndimage.minimum_filter(vp, size=(1, k, k), mode="nearest")[..., p:-p])
-        out.append(ndimage.maximum_filter(vp, size=(1, k, k), mode="nearest")[..., p:-p])
+        out.extend(minmax(v, 2 * r + 1))
     return np.stack(out, 1)
 
 

@@ -30,22 +30,12 @@ import os
 import sys
 
 import numpy as np
-from scipy import ndimage
 
 import geometry
+from pick_common import minmax
 
 DEPTH_RADII = tuple(int(r) for r in os.environ.get("PICK_DEPTH_RADII", "2").split(","))
 ZNCC = int(os.environ.get("PICK_ZNCC", "0"))
-
-
-def minmax(v, k):
-    """The minimum and maximum of v (H x W) over the k x k pixels around each pixel (k odd):
-    columns wrap in longitude, rows stop at the border."""
-    pad = k // 2
-    vp = np.concatenate([v[:, -pad:], v, v[:, :pad]], 1)
-    mn = ndimage.minimum_filter(vp, size=k, mode="nearest")[:, pad:-pad]
-    mx = ndimage.maximum_filter(vp, size=k, mode="nearest")[:, pad:-pad]
-    return mn, mx
 
 
 def normalise(im):
