@@ -16,7 +16,7 @@
 #         read from DATA/out-SET).
 # SET     training sets (default: all ten below); the validation sets are always made.
 #
-# Sets (name: kind, difficulty, frames, seed), as `scripts/train/make-data.sh pick` names them:
+# Sets (name: kind, difficulty, frames, seed):
 #   things-s201 (things, standard, 1..150, 201)   house-s202 (house, standard, 1..100, 202)
 #   things-hard-s203 (things, hard, 1..60, 203)   house-hard-s207 (house, hard, 1..60, 207)
 #   things-s208 (things, standard, 1..300, 208)   things-hard-s209 (things, hard, 1..120, 209)

@@ -5,13 +5,12 @@
 #
 #   DATA=path/to/data scripts/train/make-data.sh [GROUP ...]
 #
-# GROUP is one of (default: train test):
+# GROUP is one of (default: train test; the learnt picks' sets are made, with the network's
+# answers and the picks' inputs, by scripts/pick/make_data.sh):
 #   train   the cascade's training and validation sets: things-s101, house-s102 (frames
 #           1..500; 481..500 are the validation frames), things-hard-s103, house-hard-s104,
 #           and two hard sets on the real itbt_sample rig's geometry (house-hard-itbtrig-s105,
 #           things-hard-itbtrig-s106; needs ITBT=path/to/itbt_sample/config.yaml)
-#   pick    the learnt picks' training sets (seeds 201-213) and house-hard-s107's validation
-#           frames 481..500
 #   test    the held-out test sets, frames 1..20, seeds no training or tuning used:
 #           test-things-s7001, test-house-s7002, test-things-hard-s7003, test-house-hard-s7004
 #   tiny    the `tiny` network's sets at its input size 192x200
@@ -43,19 +42,6 @@ for group in "${groups[@]}"; do
       synth house-hard-itbtrig-s105 house hard 1..200 105 --rig "$ITBT" --size 766x800
       synth things-hard-itbtrig-s106 things hard 1..200 106 --rig "$ITBT" --size 766x800
       ;;
-    pick)
-      synth house-hard-s107 house hard 481..500 107
-      synth things-s201 things standard 1..150 201
-      synth house-s202 house standard 1..100 202
-      synth things-hard-s203 things hard 1..60 203
-      synth house-hard-s207 house hard 1..60 207
-      synth things-s208 things standard 1..300 208
-      synth things-hard-s209 things hard 1..120 209
-      synth house-s210 house standard 1..150 210
-      synth things-s211 things standard 1..300 211
-      synth things-hard-s212 things hard 1..120 212
-      synth house-s213 house standard 1..150 213
-      ;;
     test)
       synth test-things-s7001 things standard 1..20 7001
       synth test-house-s7002 house standard 1..20 7002
@@ -70,7 +56,7 @@ for group in "${groups[@]}"; do
       synth house-s1 house standard 1..110 1 --rig sunny --size 192x200
       ;;
     *)
-      echo "error: unknown group '$group' (train, pick, test, tiny)" >&2
+      echo "error: unknown group '$group' (train, test, tiny; the picks' sets: scripts/pick/make_data.sh)" >&2
       exit 2
       ;;
   esac
