@@ -1,4 +1,6 @@
-//! Reader and writer for the reference `config.yaml` (the `cameras:` list).
+//! The one reader and writer of the reference `config.yaml`: every section, typed
+//! ([`ConfigFile`]). This crate turns `cameras:` into a [`Rig`]; the dataset crate reads
+//! `config:` and `dataset:` from the same parse.
 
 use std::path::Path;
 
@@ -65,10 +67,114 @@ impl ConfigCamera {
     }
 }
 
-/// The `cameras:` section.
+/// A reference `config.yaml`, every section of it, as one parse reads it and the writer
+/// writes it (sections in the reference's order: `config`, `dataset`, `cameras`).
 #[derive(Debug, Serialize, Deserialize)]
-struct CamerasSection {
-    cameras: Vec<ConfigCamera>,
+pub struct ConfigFile {
+    /// `config:`, the sweep's settings.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub config: Option<SweepSection>,
+    /// `dataset:`, where the images and ground truth are and the frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dataset: Option<DatasetSection>,
+    /// `cameras:`, the rig.
+    pub cameras: Vec<ConfigCamera>,
+}
+
+/// The `config:` section.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SweepSection {
+    /// The sweep's minimum depth, metres.
+    pub omnimvs_sweep_min_depth: f64,
+}
+
+/// The `dataset:` section as written (patterns quoted, index lists in flow style; the
+/// wrappers are transparent when reading). The dataset crate checks and interprets it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct DatasetSection {
+    /// printf pattern of an image by camera and frame, e.g. `cam%d/%05d.png`.
+    pub img_fmt: DoubleQuoted<String>,
+    /// printf pattern of a ground-truth file by frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gt_fmt: Option<DoubleQuoted<String>>,
+    pub start: Option<u32>,
+    pub step: Option<u32>,
+    pub end: Option<u32>,
+    /// `gt` where the reference should load ground truth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dtype: Option<String>,
+    /// Latitude range of the ground truth, degrees.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gt_phi: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub train_idx: Option<FlowSeq<Vec<u32>>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub test_idx: Option<FlowSeq<Vec<u32>>>,
+}
+
+impl ConfigFile {
+    /// Reads a `config.yaml`.
+    ///
+    /// # Errors
+    /// [`CameraError`] naming the file and the field: unreadable file, invalid YAML, a
+    /// field missing or of the wrong type.
+    pub fn read(path: &Path) -> Result<Self, CameraError> {
+        let text = std::fs::read_to_string(path).map_err(|source| CameraError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(path, &text)
+    }
+
+    /// Parses the text of a `config.yaml`; `path` is used in errors.
+    ///
+    /// # Errors
+    /// As [`Self::read`].
+    pub fn parse(path: &Path, text: &str) -> Result<Self, CameraError> {
+        let value = omnimvs_core::yaml::parse_yaml(path, text)?;
+        Ok(omnimvs_core::yaml::from_value(path, value)?)
+    }
+
+    /// The file with the cameras of `rig` and no other section.
+    pub fn of_rig(rig: &Rig) -> Self {
+        Self {
+            config: None,
+            dataset: None,
+            cameras: ConfigCamera::of_rig(rig),
+        }
+    }
+
+    /// The rig of `cameras:`; `path` is used in errors.
+    ///
+    /// # Errors
+    /// [`CameraError`] naming the field: an empty list, a polynomial whose leading count
+    /// disagrees with its coefficients, an unknown camera model, a non-positive image size or
+    /// field of view.
+    pub fn rig(&self, path: &Path) -> Result<Rig, CameraError> {
+        if self.cameras.is_empty() {
+            return Err(CameraError::field(
+                path,
+                "cameras",
+                "expected at least one camera, found an empty list",
+            ));
+        }
+        let cameras = self
+            .cameras
+            .iter()
+            .enumerate()
+            .map(|(i, entry)| camera_from_entry(path, i, entry))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Rig::new(cameras))
+    }
+
+    /// The text of the file: block-style YAML with the reference's layout, numbers at full
+    /// precision (reading it back gives the same values bit for bit).
+    ///
+    /// # Errors
+    /// [`CameraError::Yaml`] if the serialiser fails (it does not for a valid rig).
+    pub fn to_yaml(&self) -> Result<String, CameraError> {
+        Ok(omnimvs_core::yaml::to_yaml("a config.yaml", self)?)
+    }
 }
 
 /// Reads the rig from a reference `config.yaml`.
@@ -79,11 +185,7 @@ struct CamerasSection {
 /// disagrees with its coefficients, an unknown camera model, a non-positive
 /// image size or field of view.
 pub fn read_config_rig(path: &Path) -> Result<Rig, CameraError> {
-    let text = std::fs::read_to_string(path).map_err(|source| CameraError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    parse_config_rig(path, &text)
+    ConfigFile::read(path)?.rig(path)
 }
 
 /// Parses the rig from the text of a `config.yaml`; `path` is used in errors.
@@ -91,22 +193,7 @@ pub fn read_config_rig(path: &Path) -> Result<Rig, CameraError> {
 /// # Errors
 /// As [`read_config_rig`].
 pub fn parse_config_rig(path: &Path, text: &str) -> Result<Rig, CameraError> {
-    let value = crate::yaml::parse_yaml(path, text)?;
-    let section: CamerasSection = crate::yaml::from_value(path, value)?;
-    if section.cameras.is_empty() {
-        return Err(CameraError::field(
-            path,
-            "cameras",
-            "expected at least one camera, found an empty list",
-        ));
-    }
-    let cameras = section
-        .cameras
-        .into_iter()
-        .enumerate()
-        .map(|(i, entry)| camera_from_entry(path, i, entry))
-        .collect::<Result<Vec<_>, _>>()?;
-    Ok(Rig::new(cameras))
+    ConfigFile::parse(path, text)?.rig(path)
 }
 
 /// Splits a `[count, a0, a1, ...]` polynomial and checks the count.
@@ -190,7 +277,7 @@ pub(crate) fn validate_ocam(path: &Path, prefix: &str, m: &OcamModel) -> Result<
 fn camera_from_entry(
     path: &Path,
     index: usize,
-    entry: ConfigCamera,
+    entry: &ConfigCamera,
 ) -> Result<Camera, CameraError> {
     let prefix = format!("cameras[{index}].");
     let model_name = entry.model.as_deref().unwrap_or("ocam");
@@ -230,7 +317,8 @@ fn camera_from_entry(
     let id = entry.cam_id.unwrap_or(index as u32 + 1);
     let img_dir = entry
         .img_dir
-        .map_or_else(|| format!("cam{id}"), |dir| dir.0);
+        .as_ref()
+        .map_or_else(|| format!("cam{id}"), |dir| dir.0.clone());
     Ok(Camera::new(
         id,
         img_dir,
@@ -239,7 +327,7 @@ fn camera_from_entry(
             rvec: [rx, ry, rz],
             t_m: [tx, ty, tz],
         },
-        entry.invalid_mask.map(|mask| mask.0),
+        entry.invalid_mask.as_ref().map(|mask| mask.0.clone()),
     ))
 }
 
@@ -248,12 +336,7 @@ fn camera_from_entry(
 /// the text back gives the same rig bit for bit.
 ///
 /// # Errors
-/// [`CameraError::YamlWrite`] if the serialiser fails (it does not for a valid rig).
+/// [`CameraError::Yaml`] if the serialiser fails (it does not for a valid rig).
 pub fn config_cameras_yaml(rig: &Rig) -> Result<String, CameraError> {
-    crate::yaml::to_yaml(
-        "the cameras of a config.yaml",
-        &CamerasSection {
-            cameras: ConfigCamera::of_rig(rig),
-        },
-    )
+    ConfigFile::of_rig(rig).to_yaml()
 }

@@ -10,10 +10,9 @@ pub enum CameraError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{path}: not valid YAML: {message}")]
-    Yaml { path: PathBuf, message: String },
-    #[error("cannot write {what} as YAML: {message}")]
-    YamlWrite { what: String, message: String },
+    /// Malformed YAML, a field of the wrong type, or a value the writer refuses.
+    #[error(transparent)]
+    Yaml(#[from] omnimvs_core::yaml::YamlError),
     #[error("{path}: field `{field}`: {message}")]
     Field {
         path: PathBuf,

@@ -14,7 +14,6 @@
 
 mod config_yaml;
 mod error;
-pub mod fs;
 mod mask;
 mod model;
 mod ocam;
@@ -23,15 +22,16 @@ mod pixel;
 mod pose;
 mod radial;
 mod rig;
-pub mod rng;
-pub mod yaml;
 
 // The unit tests' camera, shared with the property tests.
 #[cfg(test)]
 #[path = "../tests/support/sunny_cam1.rs"]
 mod sunny_cam1;
 
-pub use config_yaml::{ConfigCamera, config_cameras_yaml, parse_config_rig, read_config_rig};
+pub use config_yaml::{
+    ConfigCamera, ConfigFile, DatasetSection, SweepSection, config_cameras_yaml, parse_config_rig,
+    read_config_rig,
+};
 pub use error::CameraError;
 pub use mask::ValidityMask;
 pub use model::CameraModel;

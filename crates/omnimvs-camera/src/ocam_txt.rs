@@ -253,7 +253,7 @@ pub fn read_ocam_txt_rig_in(
 pub fn write_ocam_txt_rig(rig: &Rig, dir: &Path) -> Result<(), CameraError> {
     let write = |name: String, text: String| {
         let path = dir.join(name);
-        crate::fs::write_atomic(&path, text.as_bytes())
+        omnimvs_core::fs::write_atomic(&path, text.as_bytes())
             .map_err(|source| CameraError::Io { path, source })
     };
     let join = |v: &[f64]| {

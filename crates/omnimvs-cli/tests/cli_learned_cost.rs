@@ -15,7 +15,8 @@ use omnimvs_data::Dataset;
 use omnimvs_data::gt::read_inv_depth;
 use omnimvs_data::metrics::eval_metrics;
 use omnimvs_net::mccnn::{self, McCnnExtractor};
-use omnimvs_stereo::{CameraView, SphereProjector, SweepStep, feature_cost_volume};
+use omnimvs_stereo::{CameraView, SweepStep, feature_cost_volume};
+use omnimvs_sweep::SphereProjector;
 use support::{constant_guess_mae, read_json, run_ok, synth_dataset};
 
 /// `omnimvs sgm DATA --frames FRAME --size SIZE --ndepth N ARGS.. --out OUT`: its standard

@@ -1,8 +1,6 @@
 use std::path::Path;
 
-use omnimvs_camera::yaml::{from_value, parse_yaml, to_yaml};
-use omnimvs_camera::{ConfigCamera, Rig};
-use serde::{Deserialize, Serialize};
+use omnimvs_camera::{ConfigCamera, ConfigFile, DatasetSection, Rig, SweepSection};
 use serde_saphyr::{DoubleQuoted, FlowSeq};
 
 use crate::DataError;
@@ -124,59 +122,53 @@ pub struct Split {
     pub gt_phi_deg: Option<f64>,
 }
 
-#[derive(Deserialize)]
-struct ConfigSection {
-    omnimvs_sweep_min_depth: f64,
-}
-
-#[derive(Deserialize)]
-struct DatasetSection {
-    img_fmt: String,
-    start: Option<u32>,
-    step: Option<u32>,
-    end: Option<u32>,
-    gt_fmt: Option<String>,
-    train_idx: Option<Vec<u32>>,
-    test_idx: Option<Vec<u32>>,
-    gt_phi: Option<f64>,
-}
-
-#[derive(Deserialize)]
-struct Sections {
-    config: ConfigSection,
-    dataset: DatasetSection,
-}
-
 impl DatasetConfig {
     /// Parses the `config:` and `dataset:` sections.
     ///
     /// # Errors
     /// [`DataError`] naming the file and the field.
     pub fn parse(path: &Path, text: &str) -> Result<Self, DataError> {
-        let value = parse_yaml(path, text)?;
-        let s: Sections = from_value(path, value)?;
+        Self::of_file(path, &ConfigFile::parse(path, text)?)
+    }
+
+    /// The `config:` and `dataset:` sections of a parsed file; `path` is used in errors.
+    ///
+    /// # Errors
+    /// [`DataError::Field`] naming the file and the field: a section missing, a
+    /// non-positive depth, a pattern without its integer fields, a bad frame range.
+    pub fn of_file(path: &Path, file: &ConfigFile) -> Result<Self, DataError> {
         let field = |field: &str, message: String| DataError::Field {
             path: path.to_path_buf(),
             field: field.to_string(),
             message,
         };
-        let min_depth_m = s.config.omnimvs_sweep_min_depth;
+        let (Some(config), Some(dataset)) = (&file.config, &file.dataset) else {
+            let missing = if file.config.is_none() {
+                "config"
+            } else {
+                "dataset"
+            };
+            return Err(field(missing, format!("missing section `{missing}:`")));
+        };
+        let img_fmt = &dataset.img_fmt.0;
+        let gt_fmt = dataset.gt_fmt.as_ref().map(|g| &g.0);
+        let min_depth_m = config.omnimvs_sweep_min_depth;
         if !(min_depth_m.is_finite() && min_depth_m > 0.0) {
             return Err(field(
                 "config.omnimvs_sweep_min_depth",
                 format!("expected a positive depth in metres, found {min_depth_m}"),
             ));
         }
-        if crate::format_printf(&s.dataset.img_fmt, &[1, 1]).is_none() {
+        if crate::format_printf(img_fmt, &[1, 1]).is_none() {
             return Err(field(
                 "dataset.img_fmt",
                 format!(
                     "expected a pattern with two integer fields (camera, frame) such as \"cam%d/%05d.png\", found {:?}",
-                    s.dataset.img_fmt
+                    img_fmt
                 ),
             ));
         }
-        if let Some(g) = &s.dataset.gt_fmt
+        if let Some(g) = gt_fmt
             && crate::format_printf(g, &[1]).is_none()
         {
             return Err(field(
@@ -184,9 +176,9 @@ impl DatasetConfig {
                 format!("expected a pattern with one integer field (frame), found {g:?}"),
             ));
         }
-        let start = s.dataset.start.unwrap_or(1);
-        let step = s.dataset.step.unwrap_or(1);
-        let end = s.dataset.end.unwrap_or(start);
+        let start = dataset.start.unwrap_or(1);
+        let step = dataset.step.unwrap_or(1);
+        let end = dataset.end.unwrap_or(start);
         if step == 0 {
             return Err(field(
                 "dataset.step",
@@ -199,53 +191,23 @@ impl DatasetConfig {
                 format!("expected end >= start ({start}), found {end}"),
             ));
         }
-        let split = match (s.dataset.train_idx, s.dataset.test_idx) {
+        let list = |l: &Option<FlowSeq<Vec<u32>>>| l.as_ref().map(|l| l.0.clone());
+        let split = match (list(&dataset.train_idx), list(&dataset.test_idx)) {
             (None, None) => None,
             (train, test) => Some(Split {
                 train: train.unwrap_or_default(),
                 test: test.unwrap_or_default(),
-                gt_phi_deg: s.dataset.gt_phi,
+                gt_phi_deg: dataset.gt_phi,
             }),
         };
         Ok(Self {
             min_depth_m,
-            img_fmt: s.dataset.img_fmt,
+            img_fmt: img_fmt.clone(),
             frames: FrameRange { start, step, end },
-            gt_fmt: s.dataset.gt_fmt,
+            gt_fmt: gt_fmt.cloned(),
             split,
         })
     }
-}
-
-/// `config.yaml` as [`write_config_yaml`] writes it: the sections in the reference's order.
-#[derive(Serialize)]
-struct ConfigFile<'a> {
-    config: ConfigSectionOut,
-    dataset: DatasetSectionOut<'a>,
-    cameras: Vec<ConfigCamera>,
-}
-
-#[derive(Serialize)]
-struct ConfigSectionOut {
-    omnimvs_sweep_min_depth: f64,
-}
-
-#[derive(Serialize)]
-struct DatasetSectionOut<'a> {
-    img_fmt: DoubleQuoted<&'a str>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    gt_fmt: Option<DoubleQuoted<&'a str>>,
-    start: u32,
-    step: u32,
-    end: u32,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    dtype: Option<&'static str>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    gt_phi: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    train_idx: Option<FlowSeq<&'a [u32]>>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    test_idx: Option<FlowSeq<&'a [u32]>>,
 }
 
 /// The text of a reference-layout `config.yaml` for `rig` (the inverse of
@@ -255,25 +217,23 @@ struct DatasetSectionOut<'a> {
 /// # Errors
 /// [`DataError::Camera`] if the serialiser fails (it does not for a valid rig).
 pub fn write_config_yaml(rig: &Rig, config: &DatasetConfig) -> Result<String, DataError> {
+    let split = config.split.as_ref();
     let file = ConfigFile {
-        config: ConfigSectionOut {
+        config: Some(SweepSection {
             omnimvs_sweep_min_depth: config.min_depth_m,
-        },
-        dataset: DatasetSectionOut {
-            img_fmt: DoubleQuoted(&config.img_fmt),
-            gt_fmt: config.gt_fmt.as_deref().map(DoubleQuoted),
-            start: config.frames.start,
-            step: config.frames.step,
-            end: config.frames.end,
-            dtype: config.split.as_ref().map(|_| "gt"),
-            gt_phi: config.split.as_ref().and_then(|s| s.gt_phi_deg),
-            train_idx: config.split.as_ref().map(|s| FlowSeq(s.train.as_slice())),
-            test_idx: config.split.as_ref().map(|s| FlowSeq(s.test.as_slice())),
-        },
+        }),
+        dataset: Some(DatasetSection {
+            img_fmt: DoubleQuoted(config.img_fmt.clone()),
+            gt_fmt: config.gt_fmt.clone().map(DoubleQuoted),
+            start: Some(config.frames.start),
+            step: Some(config.frames.step),
+            end: Some(config.frames.end),
+            dtype: split.map(|_| "gt".to_string()),
+            gt_phi: split.and_then(|s| s.gt_phi_deg),
+            train_idx: split.map(|s| FlowSeq(s.train.clone())),
+            test_idx: split.map(|s| FlowSeq(s.test.clone())),
+        }),
         cameras: ConfigCamera::of_rig(rig),
     };
-    Ok(format!(
-        "# written by omnimvs\n{}",
-        to_yaml("a dataset's config.yaml", &file)?
-    ))
+    Ok(format!("# written by omnimvs\n{}", file.to_yaml()?))
 }

@@ -1,7 +1,8 @@
 use std::path::{Path, PathBuf};
 
-use omnimvs_camera::{Rig, ValidityMask, parse_config_rig};
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec};
+use omnimvs_camera::{ConfigFile, Rig, ValidityMask};
+use omnimvs_core::GrayImage;
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, SweepSpec};
 use rayon::prelude::*;
 
 use crate::gt::{EvalTruth, GroundTruth, InvDepthMap, eval_truth_on_grid, read_inv_depth};
@@ -81,8 +82,9 @@ impl Dataset {
                 ),
             });
         }
-        let rig = parse_config_rig(&config_path, &text)?;
-        let config = DatasetConfig::parse(&config_path, &text)?;
+        let file = ConfigFile::parse(&config_path, &text)?;
+        let rig = file.rig(&config_path)?;
+        let config = DatasetConfig::of_file(&config_path, &file)?;
         Ok(Self {
             root,
             config_path,

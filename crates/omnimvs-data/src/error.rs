@@ -11,6 +11,8 @@ pub enum DataError {
     Camera(#[from] CameraError),
     #[error(transparent)]
     Sweep(#[from] SweepError),
+    #[error(transparent)]
+    Yaml(#[from] omnimvs_core::yaml::YamlError),
     #[error("{path}: {source}")]
     Io {
         path: PathBuf,

@@ -5,7 +5,8 @@
 use std::error::Error;
 use std::fmt;
 
-use omnimvs_sweep::{GrayImage, SweepSpec};
+use omnimvs_core::GrayImage;
+use omnimvs_sweep::SweepSpec;
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
 /// One frame's depth on a sweep: every map is row-major on `spec.grid`.

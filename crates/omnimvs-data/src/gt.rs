@@ -207,7 +207,7 @@ fn write_tiff_pages(
         .with_compression(Compression::Deflate(DeflateLevel::Balanced))
         .write_image::<colortype::Gray32Float>(width as u32, height as u32, data)
         .map_err(bad)?;
-    omnimvs_camera::fs::write_atomic(path, buf.get_ref()).map_err(|e| DataError::io(path, e))
+    omnimvs_core::fs::write_atomic(path, buf.get_ref()).map_err(|e| DataError::io(path, e))
 }
 
 /// Writes a ground-truth inverse-depth panorama (1/m) the way the released datasets store it,

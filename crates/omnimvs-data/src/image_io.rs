@@ -5,7 +5,7 @@ use std::path::Path;
 
 use image::{DynamicImage, ExtendedColorType, ImageEncoder};
 use omnimvs_camera::ValidityMask;
-use omnimvs_sweep::GrayImage;
+use omnimvs_core::GrayImage;
 
 use crate::DataError;
 
@@ -156,7 +156,7 @@ pub fn write_png_u8(
     image::codecs::png::PngEncoder::new(&mut buf)
         .write_image(pixels, width as u32, height as u32, color)
         .map_err(|e| DataError::format(path, format!("cannot encode PNG: {e}")))?;
-    omnimvs_camera::fs::write_atomic(path, &buf).map_err(|e| DataError::io(path, e))
+    omnimvs_core::fs::write_atomic(path, &buf).map_err(|e| DataError::io(path, e))
 }
 
 /// Writes a gray f32 image as an 8-bit PNG, values clamped to `[0, 255]`.

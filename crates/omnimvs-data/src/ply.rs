@@ -16,7 +16,7 @@ pub struct ColoredPoint {
 /// # Errors
 /// [`DataError::Io`] naming the file.
 pub fn write_ply(path: &Path, points: &[ColoredPoint]) -> Result<(), DataError> {
-    omnimvs_camera::fs::write_atomic_with(path, |w| {
+    omnimvs_core::fs::write_atomic_with(path, |w| {
         write!(
             w,
             "ply\nformat binary_little_endian 1.0\ncomment omnimvs point cloud, rig frame, metres\n\

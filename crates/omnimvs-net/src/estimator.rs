@@ -12,10 +12,9 @@ use std::time::Instant;
 
 use burn::tensor::Device;
 use omnimvs_camera::ValidityMask;
+use omnimvs_core::GrayImage;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, EstimateError, StageObserver};
-use omnimvs_sweep::{
-    CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache, SweepSpec,
-};
+use omnimvs_sweep::{CacheStatus, EquirectGrid, InvDepthHypotheses, LutCache, SweepSpec};
 
 use crate::cascade::{CascadeAnswer, CascadeInference, StageOutput};
 use crate::config::NetConfig;

@@ -3,22 +3,22 @@
 
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::ValidityMask;
+use omnimvs_core::GrayImage;
 use omnimvs_data::image_io::normalize_for_network;
 use omnimvs_data::{Dataset, DepthEstimate, NoTimings, StageObserver};
 use omnimvs_sweep::{
-    CacheStatus, EquirectGrid, GrayImage, InvDepthHypotheses, LutCache, SphereSet, SweepSpec,
+    CacheStatus, EquirectGrid, InvDepthHypotheses, LutCache, SphereSet, SweepSpec,
 };
 use rayon::prelude::*;
 
 pub use crate::backend::device_from_name;
 use crate::config::NetConfig;
+use omnimvs_core::interp::resize_align_corners;
+
 use crate::error::NetError;
 use crate::model::{OmniMvsNet, SweepInput, SweepTaps};
 use crate::taps::SweepGrid;
 use crate::tensor::read_values;
-
-/// Downscale factor above which the input is low-pass filtered before resampling.
-const ANTIALIAS_FACTOR: f64 = 1.5;
 
 /// A network ready to run on the frames of one rig.
 pub struct Inference {
@@ -266,105 +266,7 @@ pub fn network_inputs(
         .zip(masks.par_iter())
         .map(|(image, mask)| {
             let normalized = normalize_for_network(image, Some(mask))?;
-            Ok(resize_bilinear(&normalized, size[1], size[0]).data)
+            Ok(resize_align_corners(&normalized, size[1], size[0]).data)
         })
         .collect()
-}
-
-/// Resizes a gray image to `width x height` by bilinear interpolation with corners aligned
-/// (pixel `(0, 0)` and the last pixel keep their place), so that lookup-table coordinates,
-/// normalised the same way, stay valid. Downscaling by more than 1.5 first smooths with a
-/// `[1, 2, 1] / 4` kernel per halving to limit aliasing.
-pub fn resize_bilinear(image: &GrayImage, width: usize, height: usize) -> GrayImage {
-    if image.width == width && image.height == height {
-        return image.clone();
-    }
-    let mut src = image.clone();
-    let factor = (image.width as f64 / width as f64).max(image.height as f64 / height as f64);
-    let mut f = factor;
-    while f > ANTIALIAS_FACTOR {
-        src = blur_121(&src);
-        f /= 2.0;
-    }
-    let sx = if width > 1 {
-        (src.width as f64 - 1.0) / (width as f64 - 1.0)
-    } else {
-        0.0
-    };
-    let sy = if height > 1 {
-        (src.height as f64 - 1.0) / (height as f64 - 1.0)
-    } else {
-        0.0
-    };
-    let mut data = Vec::with_capacity(width * height);
-    for row in 0..height {
-        for col in 0..width {
-            data.push(src.sample(col as f64 * sx, row as f64 * sy));
-        }
-    }
-    GrayImage {
-        width,
-        height,
-        data,
-    }
-}
-
-/// Separable `[1, 2, 1] / 4` smoothing with clamped borders.
-fn blur_121(image: &GrayImage) -> GrayImage {
-    let (w, h) = (image.width, image.height);
-    let at = |d: &[f32], r: usize, c: usize| d[r * w + c];
-    let mut tmp = vec![0f32; w * h];
-    for r in 0..h {
-        for c in 0..w {
-            let l = at(&image.data, r, c.saturating_sub(1));
-            let m = at(&image.data, r, c);
-            let rr = at(&image.data, r, (c + 1).min(w - 1));
-            tmp[r * w + c] = 0.25 * l + 0.5 * m + 0.25 * rr;
-        }
-    }
-    let mut data = vec![0f32; w * h];
-    for r in 0..h {
-        for c in 0..w {
-            let u = at(&tmp, r.saturating_sub(1), c);
-            let m = at(&tmp, r, c);
-            let d = at(&tmp, (r + 1).min(h - 1), c);
-            data[r * w + c] = 0.25 * u + 0.5 * m + 0.25 * d;
-        }
-    }
-    GrayImage {
-        width: w,
-        height: h,
-        data,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn resize_keeps_corners_and_linear_ramps() {
-        let (w, h) = (9, 5);
-        let data = (0..h)
-            .flat_map(|r| (0..w).map(move |c| (2 * c + 3 * r) as f32))
-            .collect();
-        let image = GrayImage {
-            width: w,
-            height: h,
-            data,
-        };
-        // 9x5 -> 7x4 (factor < 1.5, no smoothing): corners keep their place and a
-        // linear ramp stays linear under bilinear sampling.
-        let near = resize_bilinear(&image, 7, 4);
-        assert!((near.data[0] - image.data[0]).abs() < 1e-4);
-        assert!((near.data[7 * 4 - 1] - image.data[w * h - 1]).abs() < 1e-4);
-        let want = 2.0 * 4.0 + 3.0 * (2.0 * 4.0 / 3.0);
-        assert!((near.data[2 * 7 + 3] - want).abs() < 1e-4);
-        // 9x5 -> 5x3 smooths with [1, 2, 1] first, which is exact on a ramp away
-        // from the clamped borders.
-        let small = resize_bilinear(&image, 5, 3);
-        assert!((small.data[5 + 2] - (2.0 * 4.0 + 3.0 * 2.0)).abs() < 1e-4);
-        let same = resize_bilinear(&image, w, h);
-        assert_eq!(same, image);
-    }
 }

@@ -19,9 +19,9 @@ use burn::nn::PaddingConfig2d;
 use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::tensor::{Device, Tensor, TensorData, activation};
 use omnimvs_camera::ValidityMask;
+use omnimvs_core::GrayImage;
 use omnimvs_data::image_io::normalize_for_network;
 use omnimvs_stereo::{FeatureExtractor, FeatureMap, StereoError};
-use omnimvs_sweep::GrayImage;
 use serde::{Deserialize, Serialize};
 
 use crate::error::NetError;

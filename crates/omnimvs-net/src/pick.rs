@@ -27,9 +27,11 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+use omnimvs_core::GrayImage;
+use omnimvs_core::interp::{sample_inside_f64, upsample_half_pixel};
+pub use omnimvs_core::safetensors::Tensors;
 use omnimvs_data::edges::neighbour_min_max;
 use omnimvs_stereo::camera_pairs;
-use omnimvs_sweep::GrayImage;
 use rayon::prelude::*;
 
 use crate::error::NetError;
@@ -522,7 +524,7 @@ fn sample_cameras(
                 for col in 0..w {
                     let p = row * w + col;
                     if let Some((x, y)) = sampler.project(c, p, inv[p])
-                        && let Some(value) = bilinear(image, f64::from(x), f64::from(y))
+                        && let Some(value) = sample_inside_f64(image, f64::from(x), f64::from(y))
                     {
                         gray[col] = ((value - mean) / (std + 1e-9)) as f32;
                         sees[col] = 1.0;
@@ -699,9 +701,6 @@ pub struct PickRefiner {
     then: Option<Box<PickRefiner>>,
 }
 
-/// Tensors by name: shape and values.
-pub type Tensors = HashMap<String, (Vec<usize>, Vec<f32>)>;
-
 /// A safetensors file's tensors (`F32` only); `path` labels errors.
 ///
 /// # Errors
@@ -710,88 +709,18 @@ pub fn read_safetensors(bytes: &[u8], path: &Path) -> Result<Tensors, NetError> 
     read_safetensors_with_metadata(bytes, path).map(|(tensors, _)| tensors)
 }
 
-/// [`read_safetensors`], with the header's `__metadata__` (string values; empty without one).
+/// [`read_safetensors`], with the header's `__metadata__` (empty without one).
 ///
 /// # Errors
-/// As [`read_safetensors`], and for metadata that is not an object of strings.
+/// As [`read_safetensors`].
 pub fn read_safetensors_with_metadata(
     bytes: &[u8],
     path: &Path,
 ) -> Result<(Tensors, HashMap<String, String>), NetError> {
-    let bad = |message: String| NetError::Weights {
-        path: path.to_path_buf(),
-        message,
-    };
-    let header_len = bytes
-        .get(..8)
-        .map(|b| u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]) as usize)
-        .ok_or_else(|| bad("shorter than a safetensors header (8 bytes)".into()))?;
-    let header = bytes.get(8..8 + header_len).ok_or_else(|| {
-        bad(format!(
-            "header of {header_len} bytes past the end of the file"
-        ))
-    })?;
-    let data = &bytes[8 + header_len..];
-    let header: serde_json::Value =
-        serde_json::from_slice(header).map_err(|e| bad(format!("header is not JSON: {e}")))?;
-    let entries = header
-        .as_object()
-        .ok_or_else(|| bad("header is not a JSON object".into()))?;
-    let mut out = HashMap::new();
-    let mut metadata = HashMap::new();
-    for (name, entry) in entries {
-        if name == "__metadata__" {
-            let object = entry
-                .as_object()
-                .ok_or_else(|| bad("`__metadata__` is not a JSON object".into()))?;
-            for (key, value) in object {
-                let text = value
-                    .as_str()
-                    .ok_or_else(|| bad(format!("`__metadata__` `{key}` is not a string")))?;
-                metadata.insert(key.clone(), text.to_string());
-            }
-            continue;
-        }
-        let field = |key: &str| {
-            entry
-                .get(key)
-                .ok_or_else(|| bad(format!("tensor `{name}`: no `{key}`")))
-        };
-        if field("dtype")?.as_str() != Some("F32") {
-            return Err(bad(format!("tensor `{name}`: dtype must be F32")));
-        }
-        let numbers = |key: &str| -> Result<Vec<usize>, NetError> {
-            field(key)?
-                .as_array()
-                .and_then(|a| a.iter().map(|v| v.as_u64().map(|v| v as usize)).collect())
-                .ok_or_else(|| {
-                    bad(format!(
-                        "tensor `{name}`: `{key}` must be a list of integers"
-                    ))
-                })
-        };
-        let shape = numbers("shape")?;
-        let offsets = numbers("data_offsets")?;
-        let (start, end) = match offsets[..] {
-            [s, e]
-                if s <= e && e <= data.len() && (e - s) == 4 * shape.iter().product::<usize>() =>
-            {
-                (s, e)
-            }
-            _ => {
-                return Err(bad(format!(
-                    "tensor `{name}`: data_offsets {offsets:?} do not hold {shape:?} f32 values within {} bytes",
-                    data.len()
-                )));
-            }
-        };
-        let values = data[start..end]
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
-        out.insert(name.clone(), (shape, values));
-    }
-    Ok((out, metadata))
+    omnimvs_core::safetensors::read_safetensors(bytes, path).map_err(|e| NetError::Weights {
+        path: e.path,
+        message: e.message,
+    })
 }
 
 impl PickRefiner {
@@ -1064,7 +993,7 @@ impl PickRefiner {
             x = level[1].run(&x.0, x.1)?;
         }
         for (layer, skip) in self.decoder.iter().zip(skips.iter().rev()) {
-            let mut joined = upsample_bilinear(&x.0, x.1, [skip.1[1], skip.1[2]]);
+            let mut joined = upsample_half_pixel(&x.0, x.1, [skip.1[1], skip.1[2]]);
             joined.extend_from_slice(&skip.0);
             x = layer.run(&joined, [x.1[0] + skip.1[0], skip.1[1], skip.1[2]])?;
         }
@@ -1100,52 +1029,4 @@ fn mean_and_std(image: &GrayImage) -> (f64, f64) {
         .sum::<f64>()
         / n;
     (mean, var.sqrt())
-}
-
-/// Bilinear value at `(col, row)` (pixels), `None` unless the four neighbours are inside.
-fn bilinear(image: &GrayImage, col: f64, row: f64) -> Option<f64> {
-    let (c0, r0) = (col.floor(), row.floor());
-    if c0 < 0.0 || r0 < 0.0 || c0 + 1.0 >= image.width as f64 || r0 + 1.0 >= image.height as f64 {
-        return None;
-    }
-    let (fc, fr) = (col - c0, row - r0);
-    let (c0, r0) = (c0 as usize, r0 as usize);
-    let at = |r: usize, c: usize| f64::from(image.data[r * image.width + c]);
-    Some(
-        at(r0, c0) * (1.0 - fc) * (1.0 - fr)
-            + at(r0, c0 + 1) * fc * (1.0 - fr)
-            + at(r0 + 1, c0) * (1.0 - fc) * fr
-            + at(r0 + 1, c0 + 1) * fc * fr,
-    )
-}
-
-/// PyTorch's `interpolate(mode="bilinear", align_corners=False)` of `[c, h, w]` to `[c, oh,
-/// ow]` (source positions clamped at the borders, no wrap).
-pub fn upsample_bilinear(input: &[f32], [c, h, w]: [usize; 3], [oh, ow]: [usize; 2]) -> Vec<f32> {
-    let taps = |out: usize, len: usize| -> Vec<(usize, usize, f32)> {
-        let scale = len as f64 / out as f64;
-        (0..out)
-            .map(|o| {
-                let src = ((o as f64 + 0.5) * scale - 0.5).max(0.0);
-                let i0 = (src.floor() as usize).min(len - 1);
-                let i1 = (i0 + 1).min(len - 1);
-                (i0, i1, (src - i0 as f64) as f32)
-            })
-            .collect()
-    };
-    let (rows, cols) = (taps(oh, h), taps(ow, w));
-    let mut out = vec![0f32; c * oh * ow];
-    out.par_chunks_mut(oh * ow)
-        .enumerate()
-        .for_each(|(ch, plane)| {
-            let src = &input[ch * h * w..(ch + 1) * h * w];
-            for (y, &(r0, r1, fr)) in rows.iter().enumerate() {
-                for (x, &(c0, c1, fc)) in cols.iter().enumerate() {
-                    let top = src[r0 * w + c0] * (1.0 - fc) + src[r0 * w + c1] * fc;
-                    let bottom = src[r1 * w + c0] * (1.0 - fc) + src[r1 * w + c1] * fc;
-                    plane[y * ow + x] = top * (1.0 - fr) + bottom * fr;
-                }
-            }
-        });
-    out
 }

@@ -16,7 +16,7 @@
 use std::ops::Range;
 
 use omnimvs_camera::Rig;
-use omnimvs_stereo::SphereProjector;
+use omnimvs_sweep::SphereProjector;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, normalized_pixel};
 use rayon::prelude::*;
 

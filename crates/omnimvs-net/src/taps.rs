@@ -9,6 +9,7 @@
 
 use std::ops::Range;
 
+use omnimvs_core::interp::BilinearTap;
 use rayon::prelude::*;
 
 use crate::error::NetError;
@@ -91,79 +92,12 @@ impl SweepGrid {
     }
 }
 
-/// The four bilinear neighbours (north-west, north-east, south-west, south-east) of one
-/// sample: flat indices `row * src_width + col` into the source and their weights. An
-/// outside neighbour has index 0 and weight 0.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Taps {
-    /// Flat source indices.
-    pub index: [u32; 4],
-    /// Bilinear weights; zero for neighbours outside the source.
-    pub weight: [f32; 4],
-}
-
-impl Taps {
-    /// Whether every neighbour lies outside the source (the sample is zero).
-    pub fn is_empty(&self) -> bool {
-        self.weight == [0.0; 4]
-    }
-}
-
-/// Bilinear taps of the normalised position `(x, y)` in a `src_height x src_width` source,
-/// computed in `f32` with the same formulas as PyTorch's `grid_sample` (bilinear, zero
-/// padding, `align_corners=True`). Non-finite positions give empty taps.
-#[inline]
-pub fn bilinear_taps(x: f32, y: f32, src_height: usize, src_width: usize) -> Taps {
-    let ix = (x + 1.0) / 2.0 * (src_width as f32 - 1.0);
-    let iy = (y + 1.0) / 2.0 * (src_height as f32 - 1.0);
-    let mut taps = Taps::default();
-    if !(ix.is_finite() && iy.is_finite()) {
-        return taps;
-    }
-    let ix_nw = floor(ix);
-    let iy_nw = floor(iy);
-    let (dx, dy) = (ix - ix_nw, iy - iy_nw);
-    let (ex, ey) = (ix_nw + 1.0 - ix, iy_nw + 1.0 - iy);
-    // The corners' columns and rows as integers (the floors are whole numbers, and any
-    // beyond an i32 lies outside the source either way): the same tests as in `f32`.
-    let (x0, y0) = (ix_nw as i64, iy_nw as i64);
-    let (width, height) = (src_width as i64, src_height as i64);
-    let corners = [
-        (x0, y0, ex * ey),
-        (x0 + 1, y0, dx * ey),
-        (x0, y0 + 1, ex * dy),
-        (x0 + 1, y0 + 1, dx * dy),
-    ];
-    for (k, (cx, cy, w)) in corners.into_iter().enumerate() {
-        if (0..width).contains(&cx) && (0..height).contains(&cy) {
-            taps.index[k] = (cy * width + cx) as u32;
-            taps.weight[k] = w;
-        }
-    }
-    taps
-}
-
-/// `value.floor()` for a finite `value`, without a call: the default x86-64 target has no
-/// rounding instruction, so `f32::floor` is a library function, and the cascade takes
-/// millions of taps a frame. Truncation toward zero, one less where that rounded up; exact for
-/// every finite value whose floor fits an `i32`. Beyond that both answers lie outside any
-/// image, so the taps they give are the same (empty).
-#[inline]
-fn floor(value: f32) -> f32 {
-    let truncated = value as i32 as f32;
-    if truncated > value {
-        truncated - 1.0
-    } else {
-        truncated
-    }
-}
-
 /// Taps of every sample of `grid` for a `src_height x src_width` source, flat over
 /// `[num_spheres, height, width]`.
-pub fn grid_taps(grid: &SweepGrid, src_height: usize, src_width: usize) -> Vec<Taps> {
+pub fn grid_taps(grid: &SweepGrid, src_height: usize, src_width: usize) -> Vec<BilinearTap> {
     grid.coords
         .par_chunks_exact(2)
-        .map(|xy| bilinear_taps(xy[0], xy[1], src_height, src_width))
+        .map(|xy| BilinearTap::grid_sample(xy[0], xy[1], src_height, src_width))
         .collect()
 }
 
@@ -210,9 +144,9 @@ pub fn warp_features(
                 row_taps.clear();
                 row_taps.extend((0..width).map(|col| {
                     let (x, y) = grid.coord(first + col);
-                    bilinear_taps(x, y, src_height, src_width)
+                    BilinearTap::grid_sample(x, y, src_height, src_width)
                 }));
-                if row_taps.iter().all(Taps::is_empty) {
+                if row_taps.iter().all(BilinearTap::is_empty) {
                     continue;
                 }
                 for c in 0..channels {
@@ -222,11 +156,7 @@ pub fn warp_features(
                         if taps.is_empty() {
                             continue;
                         }
-                        let mut sum = 0.0;
-                        for t in 0..4 {
-                            sum += src[taps.index[t] as usize] * taps.weight[t];
-                        }
-                        *value = sum;
+                        *value = taps.apply(src);
                     }
                 }
             }
@@ -237,58 +167,6 @@ pub fn warp_features(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_inline_floor_is_f32_floor_on_finite_values() {
-        // Integers, halves, values just off an integer, both signs, the ends of f32's exact
-        // integers and beyond.
-        let mut values = vec![
-            0.0f32,
-            1.0,
-            -1.0,
-            0.5,
-            -0.5,
-            1e-7,
-            -1e-7,
-            16_777_216.0,
-            -16_777_217.0,
-        ];
-        for i in -3000..3000 {
-            let v = i as f32 * 0.37;
-            values.extend([
-                v,
-                v.next_up(),
-                v.next_down(),
-                v.round(),
-                v.round().next_down(),
-            ]);
-        }
-        for v in values {
-            assert_eq!(floor(v), v.floor(), "{v}");
-        }
-        // Beyond an i32 the two differ, and both corners lie outside: the same (empty) taps.
-        for x in [3e9f32, -3e9, 1e30, -1e30] {
-            assert!(bilinear_taps(x, 0.0, 768, 800).is_empty(), "{x}");
-            assert!(bilinear_taps(0.0, x, 768, 800).is_empty(), "{x}");
-        }
-    }
-
-    #[test]
-    fn taps_interpolate_inside_and_drop_outside_neighbours() {
-        // 3 x 5 source; x = 0 is column 2, y = 0 is row 1 exactly.
-        let taps = bilinear_taps(0.0, 0.0, 3, 5);
-        assert_eq!(taps.index[0], 7);
-        assert!((taps.weight[0] - 1.0).abs() < 1e-6);
-        assert!(taps.weight[1..].iter().all(|w| w.abs() < 1e-6));
-        // Halfway between columns 3 and 4 of the last row: the south neighbours are outside.
-        let taps = bilinear_taps(0.75, 1.0, 3, 5);
-        assert_eq!(&taps.index[..2], &[13, 14]);
-        assert!((taps.weight[0] - 0.5).abs() < 1e-6 && (taps.weight[1] - 0.5).abs() < 1e-6);
-        assert_eq!(&taps.weight[2..], &[0.0, 0.0]);
-        // The reference marks invalid entries with a pixel of -1e5.
-        assert!(bilinear_taps(-1e5, 0.0, 3, 5).is_empty());
-        assert!(bilinear_taps(f32::NAN, 0.0, 3, 5).is_empty());
-    }
 
     #[test]
     fn warp_reproduces_the_source_on_an_identity_grid() {

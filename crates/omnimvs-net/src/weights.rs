@@ -109,7 +109,7 @@ pub fn save_with_config<M: Module, C: serde::Serialize>(
         path: json_path.clone(),
         source,
     })?;
-    omnimvs_camera::fs::write_atomic(&json_path, (json + "\n").as_bytes()).map_err(|source| {
+    omnimvs_core::fs::write_atomic(&json_path, (json + "\n").as_bytes()).map_err(|source| {
         NetError::Io {
             path: json_path.clone(),
             source,
@@ -122,7 +122,7 @@ pub fn save_with_config<M: Module, C: serde::Serialize>(
     let bytes = store
         .get_bytes()
         .map_err(|e| weights_error(path, e.to_string()))?;
-    omnimvs_camera::fs::write_atomic(path, &bytes).map_err(|source| NetError::Io {
+    omnimvs_core::fs::write_atomic(path, &bytes).map_err(|source| NetError::Io {
         path: path.to_path_buf(),
         source,
     })

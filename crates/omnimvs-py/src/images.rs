@@ -2,8 +2,8 @@
 //! and a frame number, or the images themselves with a rig.
 
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use omnimvs_core::GrayImage;
 use omnimvs_data::Dataset;
-use omnimvs_sweep::GrayImage;
 use pyo3::prelude::*;
 
 use crate::dataset::{PyDataset, PyRig, frame_number, type_name};

@@ -18,9 +18,10 @@ mod scenes;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 use omnimvs_stereo::{
-    CameraView, Matcher, RunSampler, SgmParams, SphereProjector, SphericalStereo, SweepStep,
-    aggregate_in, winner_take_all,
+    CameraView, Matcher, RunSampler, SgmParams, SphericalStereo, SweepStep, aggregate_in,
+    winner_take_all,
 };
+use omnimvs_sweep::SphereProjector;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 use scenes::{Rendered, published_rig, room};

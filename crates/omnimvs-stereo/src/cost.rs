@@ -20,7 +20,8 @@ use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
 use crate::params::{COST_SCALE, SweepStep, cost_units};
-use crate::{CameraView, RunSampler, SphereProjector, StereoError};
+use crate::{CameraView, RunSampler, StereoError};
+use omnimvs_sweep::SphereProjector;
 
 /// Cost where fewer than two cameras see the whole window.
 pub const NO_PAIR_COST: f32 = 0.5;
@@ -885,7 +886,7 @@ impl Matcher<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use omnimvs_camera::rng::SplitMix64;
+    use omnimvs_core::rng::SplitMix64;
 
     #[test]
     fn row_window_sums_equal_the_plain_running_sums_bit_for_bit() {

@@ -40,8 +40,6 @@ pub enum StereoError {
     },
     #[error("SGM penalties P1 = {p1}, P2 = {p2}: {reason}")]
     Penalties { p1: f32, p2: f32, reason: String },
-    #[error("camera {camera}: {reason}")]
-    Camera { camera: usize, reason: String },
     #[error("cost volume: {0}")]
     Volume(String),
 }

@@ -3,8 +3,9 @@
 use std::sync::Arc;
 
 use omnimvs_camera::{Rig, ValidityMask};
+use omnimvs_core::GrayImage;
 use omnimvs_data::{DepthEstimate, DepthEstimator, EstimateError, StageObserver};
-use omnimvs_sweep::{GrayImage, SweepSpec};
+use omnimvs_sweep::SweepSpec;
 
 use crate::{FeatureExtractor, LearnedCost, SgmParams, SphericalStereo, StageTimings, StereoError};
 

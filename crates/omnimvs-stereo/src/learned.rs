@@ -12,12 +12,16 @@
 use std::fmt::Debug;
 use std::time::{Duration, Instant};
 
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+use omnimvs_core::GrayImage;
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
 use crate::cost::{NO_PAIR_COST, camera_pairs, fill_odd_hypotheses, finished_volume};
 use crate::params::{SweepStep, cost_units};
-use crate::{CameraView, CostTimings, CostVolume, SphereProjector, StereoError};
+use omnimvs_core::interp::sample_channels_inside;
+
+use crate::{CameraView, CostTimings, CostVolume, StereoError};
+use omnimvs_sweep::SphereProjector;
 
 /// One camera's dense features, `data[(y * width + x) * channels + c]`, on a grid that is the
 /// camera image scaled by `1 / stride` (pixel `j` of the map covers image pixels
@@ -41,29 +45,13 @@ impl FeatureMap {
         // Centre of map pixel j is image position s * j + (s - 1) / 2.
         let x = (col - (s - 1.0) * 0.5) / s;
         let y = (row - (s - 1.0) * 0.5) / s;
-        if !(x >= 0.0 && y >= 0.0) {
-            return false;
-        }
-        let (x0, y0) = (x as usize, y as usize);
-        // `as` saturates (an infinite coordinate gives usize::MAX): no `+ 1` that could wrap.
-        if x0 >= self.width.saturating_sub(1) || y0 >= self.height.saturating_sub(1) {
-            return false;
-        }
-        let (fx, fy) = (x - x0 as f32, y - y0 as f32);
-        let c = self.channels;
-        let i = (y0 * self.width + x0) * c;
-        let j = i + self.width * c;
-        let (w00, w01, w10, w11) = (
-            (1.0 - fx) * (1.0 - fy),
-            fx * (1.0 - fy),
-            (1.0 - fx) * fy,
-            fx * fy,
-        );
-        let d = &self.data;
-        for (k, o) in out.iter_mut().enumerate().take(c) {
-            *o = w00 * d[i + k] + w01 * d[i + c + k] + w10 * d[j + k] + w11 * d[j + c + k];
-        }
-        true
+        sample_channels_inside(
+            &self.data,
+            [self.width, self.height, self.channels],
+            x,
+            y,
+            out,
+        )
     }
 }
 

@@ -33,7 +33,6 @@ pub mod filter;
 pub mod learned;
 pub mod params;
 mod pipeline;
-mod projector;
 mod sgm;
 pub mod sweepnet;
 mod view;
@@ -47,7 +46,6 @@ pub use params::{
     COST_SCALE, DEFAULT_MEDIAN, DEFAULT_P1, DEFAULT_P2, Directions, SgmParams, SweepStep,
 };
 pub use pipeline::{LearnedCost, SphericalStereo, StageTimings, StereoResult};
-pub use projector::SphereProjector;
 pub use sgm::{AggregatedVolume, aggregate, aggregate_in};
 pub use sweepnet::{Mlp, SweepCostHead};
 pub use view::{CameraView, RunSampler, Taps, TexelPairs};

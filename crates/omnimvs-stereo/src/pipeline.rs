@@ -5,15 +5,17 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
 use omnimvs_camera::{Rig, ValidityMask};
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+use omnimvs_core::GrayImage;
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use serde::Serialize;
 
 use crate::learned::{FeatureExtractor, feature_cost_volume};
 use crate::sweepnet::{SweepCostHead, sweep_cost_volume};
 use crate::{
-    AggregatedVolume, CameraView, CostVolume, IndexMap, Matcher, SgmParams, SphereProjector,
-    StereoError, aggregate_in, winner_take_all,
+    AggregatedVolume, CameraView, CostVolume, IndexMap, Matcher, SgmParams, StereoError,
+    aggregate_in, winner_take_all,
 };
+use omnimvs_sweep::SphereProjector;
 
 /// Wall-clock time of each stage of one frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]

@@ -342,7 +342,7 @@ mod tests {
 
     #[test]
     fn a_step_and_its_sum_equal_the_plain_loops_for_any_depth_count() {
-        let mut rng = omnimvs_camera::rng::SplitMix64::new(21);
+        let mut rng = omnimvs_core::rng::SplitMix64::new(21);
         for nd in [2, 15, 16, 17, 64, 192, 203] {
             let cost: Vec<u16> = (0..nd).map(|_| rng.below(2048) as u16).collect();
             let mut prev = start_state(nd);

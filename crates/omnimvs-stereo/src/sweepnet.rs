@@ -29,7 +29,8 @@ use crate::cost::{
     NO_PAIR_COST, ZNCC_VARIANCE_EPS, camera_pairs, fill_odd_hypotheses, finished_volume,
 };
 use crate::params::{SweepStep, cost_units};
-use crate::{CameraView, CostTimings, CostVolume, SphereProjector, StereoError};
+use crate::{CameraView, CostTimings, CostVolume, StereoError};
+use omnimvs_sweep::SphereProjector;
 
 /// Output rows computed together (the warped band holds `BAND` rows and the reach of the
 /// widest window, [`FeatureSpec`]'s `reach`, above and below).

@@ -2,9 +2,11 @@
 //! gray value and whether a bilinear sample there is trustworthy.
 
 use omnimvs_camera::ValidityMask;
-use omnimvs_sweep::GrayImage;
+use omnimvs_core::GrayImage;
+use omnimvs_core::interp::{inside_corner, lerp_2d};
 
-use crate::{SphereProjector, StereoError};
+use crate::StereoError;
+use omnimvs_sweep::SphereProjector;
 
 /// Fixed-point steps per gray level in a texel.
 const TEXEL_SCALE: f32 = 128.0;
@@ -99,18 +101,15 @@ impl CameraView {
     /// on. Together with [`Self::sample_at`] it gives exactly what
     /// `sample` gives.
     pub fn taps(&self, start: usize, cols: &[f32], rows: &[f32], taps: &mut Taps) {
-        let (last_col, last_row) = ((self.width - 1) as f32, (self.height - 1) as f32);
         let n = cols.len().min(rows.len()).min(taps.index.len());
         for i in start..n {
-            let (col, row) = (cols[i], rows[i]);
-            // `col as usize + 1 < width` is `col < width - 1` for col >= 0.
-            if col >= 0.0 && row >= 0.0 && col < last_col && row < last_row {
-                let (x0, y0) = (col as i32, row as i32);
-                taps.index[i] = y0 * self.width as i32 + x0;
-                taps.fx[i] = col - x0 as f32;
-                taps.fy[i] = row - y0 as f32;
-            } else {
-                taps.index[i] = -1;
+            match inside_corner(cols[i], rows[i], self.width, self.height) {
+                Some((index, fx, fy)) => {
+                    taps.index[i] = index as i32;
+                    taps.fx[i] = fx;
+                    taps.fy[i] = fy;
+                }
+                None => taps.index[i] = -1,
             }
         }
     }
@@ -178,10 +177,7 @@ impl CameraView {
         }
         let [t10, t11] = *self.texels.get(i0 + self.width..)?.first_chunk::<2>()?;
         let v = |t: u16| f32::from(t >> 1);
-        let (a, b, c, d) = (v(t00), v(t01), v(t10), v(t11));
-        let top = a + fx * (b - a);
-        let bottom = c + fx * (d - c);
-        let gray = (top + fy * (bottom - top)) * (1.0 / TEXEL_SCALE);
+        let gray = lerp_2d([v(t00), v(t01), v(t10), v(t11)], fx, fy) * (1.0 / TEXEL_SCALE);
         Some((gray - self.mean) * self.inv_std)
     }
 
@@ -189,33 +185,20 @@ impl CameraView {
     /// any of the four neighbours is outside the image or invalid.
     #[inline]
     pub fn sample(&self, col: f32, row: f32) -> Option<f32> {
-        if !(col >= 0.0 && row >= 0.0) {
-            return None;
-        }
-        let x0 = col as usize;
-        let y0 = row as usize;
-        // `as` saturates (an infinite coordinate gives usize::MAX): no `+ 1` that could wrap.
-        if x0 >= self.width.saturating_sub(1) || y0 >= self.height.saturating_sub(1) {
-            return None;
-        }
-        let i = y0 * self.width + x0;
+        let (i, fx, fy) = inside_corner(col, row, self.width, self.height)?;
         let t00 = self.texels[i];
         if t00 & 1 == 0 {
             return None;
         }
         let j = i + self.width;
         let v = |t: u16| f32::from(t >> 1);
-        let (a, b, c, d) = (
+        let corners = [
             v(t00),
             v(self.texels[i + 1]),
             v(self.texels[j]),
             v(self.texels[j + 1]),
-        );
-        let fx = col - x0 as f32;
-        let fy = row - y0 as f32;
-        let top = a + fx * (b - a);
-        let bottom = c + fx * (d - c);
-        let gray = (top + fy * (bottom - top)) * (1.0 / TEXEL_SCALE);
+        ];
+        let gray = lerp_2d(corners, fx, fy) * (1.0 / TEXEL_SCALE);
         Some((gray - self.mean) * self.inv_std)
     }
 }
@@ -261,17 +244,15 @@ impl CameraView {
             }
             let (a, b) = ((top & 0xffff) >> 1, top >> 17);
             let (c, d) = ((bottom & 0xffff) >> 1, bottom >> 17);
-            let (a, b, c, d) = (a as f32, b as f32, c as f32, d as f32);
-            let (fx, fy) = (taps.fx[i], taps.fy[i]);
-            let upper = a + fx * (b - a);
-            let lower = c + fx * (d - c);
-            let gray = (upper + fy * (lower - upper)) * (1.0 / TEXEL_SCALE);
+            let corners = [a as f32, b as f32, c as f32, d as f32];
+            let gray = lerp_2d(corners, taps.fx[i], taps.fy[i]) * (1.0 / TEXEL_SCALE);
             (values[i], missing[i]) = ((gray - self.mean) * self.inv_std, 0.0);
         }
     }
 
-    /// [`Self::blend`] eight taps at a time with AVX2 (the same operations in the same
-    /// order, no fused multiply-add); returns how many leading taps it did.
+    /// [`Self::blend`] eight taps at a time with AVX2 (the operations of
+    /// [`omnimvs_core::interp::lerp_2d`] in the same order, no fused multiply-add); returns how
+    /// many leading taps it did.
     #[cfg(target_arch = "x86_64")]
     pub fn blend_v3(
         &self,
@@ -443,7 +424,7 @@ mod tests {
             valid: (0..w * h).map(|i| i % 17 != 5).collect(),
         };
         let v = CameraView::new(&img, Some(&mask), 1).unwrap();
-        let mut rng = omnimvs_camera::rng::SplitMix64::new(3);
+        let mut rng = omnimvs_core::rng::SplitMix64::new(3);
         let mut cols: Vec<f32> = (0..203)
             .map(|_| (rng.next_f64() * 15.0 - 1.0) as f32)
             .collect();

@@ -104,7 +104,7 @@ mod tests {
                 .unwrap_or(u16::MAX);
             (best, second)
         };
-        let mut rng = omnimvs_camera::rng::SplitMix64::new(5);
+        let mut rng = omnimvs_core::rng::SplitMix64::new(5);
         for len in [2, 3, 4, 17, 192] {
             for _ in 0..200 {
                 // Few distinct values, so that ties and neighbours are common.

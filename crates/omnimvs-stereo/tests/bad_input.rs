@@ -4,8 +4,9 @@
 mod support;
 
 use omnimvs_camera::{Rig, ValidityMask};
+use omnimvs_core::GrayImage;
 use omnimvs_stereo::{SgmParams, SphericalStereo, StereoError};
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use support::scenes::published_rig;
 
 fn grid() -> EquirectGrid {

@@ -26,6 +26,8 @@ pub enum SweepError {
         height: usize,
         width: usize,
     },
+    #[error("camera {camera}: {reason}")]
+    Camera { camera: usize, reason: String },
     #[error("{what}: expected {expected}, found {found}")]
     Mismatch {
         what: String,

@@ -21,6 +21,7 @@ mod grid;
 mod hypotheses;
 mod lut;
 pub mod panorama;
+mod projector;
 mod resample;
 mod spec;
 pub mod warp;
@@ -33,6 +34,7 @@ pub use lut::{
     INVALID_PIXEL, LookupTable, SphereSet, hwd_file_name, normalized_pixel, normalized_position,
 };
 pub use panorama::{InvDepthSource, Panorama, compose_panorama, warp_camera_to_panorama};
+pub use projector::SphereProjector;
 pub use resample::resample_map;
 pub use spec::SweepSpec;
-pub use warp::{BilinearTap, GrayImage, sample_bilinear, warp_camera_onto_spheres};
+pub use warp::warp_camera_onto_spheres;

@@ -200,7 +200,7 @@ impl LookupTable {
     /// # Errors
     /// [`SweepError::Io`] naming the file.
     pub fn write_hwd(&self, path: &Path) -> Result<(), SweepError> {
-        omnimvs_camera::fs::write_atomic_with(path, |w| {
+        omnimvs_core::fs::write_atomic_with(path, |w| {
             let mut buf = Vec::with_capacity(1 << 16);
             for chunk in self.data.chunks(1 << 14) {
                 buf.clear();

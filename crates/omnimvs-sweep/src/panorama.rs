@@ -5,7 +5,9 @@ use omnimvs_camera::nalgebra::Point3;
 use omnimvs_camera::{Camera, Rig, ValidityMask};
 use rayon::prelude::*;
 
-use crate::{EquirectGrid, GrayImage, SweepError};
+use omnimvs_core::GrayImage;
+
+use crate::{EquirectGrid, SweepError};
 
 /// Inverse depth (1/m) at which each panorama pixel is looked up.
 #[derive(Debug, Clone, Copy)]

@@ -1,5 +1,7 @@
 //! Resampling a map from one equirectangular grid to another of the same latitude range.
 
+use omnimvs_core::interp::mix_2d;
+
 use crate::EquirectGrid;
 
 /// Resamples a map on grid `from` at the rays of grid `to` (same latitude range): bilinear,
@@ -30,9 +32,11 @@ pub fn resample_map(map: &[f32], from: &EquirectGrid, to: &EquirectGrid) -> Vec<
             let c1 = (c0 + 1) % wf;
             let fc = (c - c.floor()) as f32;
             let at = |r: usize, c: usize| map[r * wf + c];
-            let top = at(r0, c0) * (1.0 - fc) + at(r0, c1) * fc;
-            let bottom = at(r1, c0) * (1.0 - fc) + at(r1, c1) * fc;
-            out.push(top * (1.0 - fr) + bottom * fr);
+            out.push(mix_2d(
+                [at(r0, c0), at(r0, c1), at(r1, c0), at(r1, c1)],
+                fc,
+                fr,
+            ));
         }
     }
     out

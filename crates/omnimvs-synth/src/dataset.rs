@@ -368,7 +368,7 @@ impl DatasetWriter {
             path: paths.scene.clone(),
             message: e.to_string(),
         })?;
-        omnimvs_camera::fs::write_atomic(&paths.scene, json.as_bytes())
+        omnimvs_core::fs::write_atomic(&paths.scene, json.as_bytes())
             .map_err(io(&paths.scene, "cannot write"))?;
         self.rig
             .cameras
@@ -497,7 +497,7 @@ fn write_or_check_settings(path: &Path, settings: &SynthSettings) -> Result<(), 
         }
         Ok(())
     } else {
-        omnimvs_camera::fs::write_atomic(path, settings_json.as_bytes())
+        omnimvs_core::fs::write_atomic(path, settings_json.as_bytes())
             .map_err(io(path, "cannot write"))
     }
 }
@@ -542,7 +542,7 @@ fn write_config_and_masks(
         camera.invalid_mask = Some(name);
     }
     let text = write_config_yaml(&rig_with_masks, &config)?;
-    omnimvs_camera::fs::write_atomic(&config_path, text.as_bytes())
+    omnimvs_core::fs::write_atomic(&config_path, text.as_bytes())
         .map_err(io(&config_path, "cannot write"))
 }
 

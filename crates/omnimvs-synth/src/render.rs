@@ -5,8 +5,9 @@
 use glam::Vec3A;
 use nalgebra::Vector3;
 use omnimvs_camera::{Camera, Pixel, Rig};
+use omnimvs_core::GrayImage;
 use omnimvs_data::gt::InvDepthMap;
-use omnimvs_sweep::{EquirectGrid, GrayImage};
+use omnimvs_sweep::EquirectGrid;
 use rayon::prelude::*;
 
 use crate::Tracer;

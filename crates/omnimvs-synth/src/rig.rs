@@ -3,8 +3,7 @@
 
 use std::path::Path;
 
-use omnimvs_camera::{Camera, Rig, parse_config_rig};
-use serde_json::Value;
+use omnimvs_camera::{Camera, ConfigFile, Rig, parse_config_rig};
 
 use crate::SynthError;
 
@@ -61,14 +60,11 @@ pub fn load_rig(arg: &str) -> Result<RigSource, SynthError> {
 /// [`SynthError`] naming the file and field: unreadable file, invalid YAML
 /// or camera fields, a missing or non-positive minimum depth.
 pub fn rig_from_config(path: &Path) -> Result<RigSource, SynthError> {
-    let rig = omnimvs_camera::read_config_rig(path)?;
-    let text =
-        std::fs::read_to_string(path).map_err(|e| SynthError::io(path, "cannot read rig", e))?;
-    let value = omnimvs_camera::yaml::parse_yaml(path, &text)?;
-    let min_depth = value
-        .get("config")
-        .and_then(|c| c.get("omnimvs_sweep_min_depth"))
-        .and_then(Value::as_f64)
+    let file = ConfigFile::read(path)?;
+    let rig = file.rig(path)?;
+    let min_depth = file
+        .config
+        .map(|c| c.omnimvs_sweep_min_depth)
         .ok_or_else(|| {
             SynthError::invalid(
                 format!("{}: field `config.omnimvs_sweep_min_depth`", path.display()),

@@ -1,9 +1,9 @@
 //! The scene generators' random draws: distributions (ranges, Marsaglia's
 //! sphere points, rotations) over the workspace's one SplitMix64
-//! ([`omnimvs_camera::rng`]).
+//! ([`omnimvs_core::rng`]).
 
 use nalgebra::{UnitQuaternion, Vector3};
-use omnimvs_camera::rng::{GAMMA, SplitMix64, mix64};
+use omnimvs_core::rng::{GAMMA, SplitMix64, mix64};
 
 /// A SplitMix64 stream seeded through [`mix64`], with the draws the scene
 /// generators need (one stream per scene, forked per sub-task).

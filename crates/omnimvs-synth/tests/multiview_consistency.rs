@@ -7,7 +7,8 @@
 
 use glam::Vec3A;
 use omnimvs_camera::nalgebra::Vector3;
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthSource, warp_camera_to_panorama};
+use omnimvs_core::GrayImage;
+use omnimvs_sweep::{EquirectGrid, InvDepthSource, warp_camera_to_panorama};
 use omnimvs_synth::rig::{preset_rig, resize_rig, rig_radius_m};
 use omnimvs_synth::{
     GenParams, SceneKind, ShapeSpec, Tracer, generate, render_gray_frame, render_inverse_depth,

@@ -10,7 +10,7 @@ use burn::optim::momentum::MomentumConfig;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer, SgdConfig};
 use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::{Device, Tensor, TensorData};
-use omnimvs_camera::fs::write_atomic;
+use omnimvs_core::fs::write_atomic;
 use omnimvs_data::gt::GroundTruth;
 
 use crate::config::{Optimizer, TrainConfig, TrainParts};

@@ -19,9 +19,10 @@ use std::path::{Path, PathBuf};
 
 use burn::module::Module;
 use burn::tensor::{Device, Tensor, TensorData, activation};
+use omnimvs_core::GrayImage;
+use omnimvs_core::interp::mix_2d;
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::mccnn::{self, McCnn, McCnnConfig, pool};
-use omnimvs_sweep::GrayImage;
 use serde::{Deserialize, Serialize};
 
 use crate::cost_run::{RunState, Schedule, Source, append_metrics, read_run_config};
@@ -164,9 +165,13 @@ fn push_patch(
             let (x0, y0) = (x.floor(), y.floor());
             let (fx, fy) = (x - x0, y - y0);
             let (x0, y0) = (x0 as isize, y0 as isize);
-            let top = at(x0, y0) * (1.0 - fx) + at(x0 + 1, y0) * fx;
-            let bottom = at(x0, y0 + 1) * (1.0 - fx) + at(x0 + 1, y0 + 1) * fx;
-            out.push(top * (1.0 - fy) + bottom * fy);
+            let corners = [
+                at(x0, y0),
+                at(x0 + 1, y0),
+                at(x0, y0 + 1),
+                at(x0 + 1, y0 + 1),
+            ];
+            out.push(mix_2d(corners, fx, fy));
         }
     }
 }

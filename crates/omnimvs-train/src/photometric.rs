@@ -19,7 +19,7 @@
 //! The draws come from a seed per sample (recorded in the epoch's plan), so an epoch is the
 //! same whether it runs whole or resumes.
 
-use omnimvs_sweep::GrayImage;
+use omnimvs_core::GrayImage;
 use serde::{Deserialize, Serialize};
 
 use crate::error::TrainError;

@@ -5,9 +5,10 @@ use std::path::Path;
 
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::ValidityMask;
+use omnimvs_core::GrayImage;
 use omnimvs_data::Dataset;
 use omnimvs_data::gt::GroundTruth;
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses};
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 
 use crate::photometric::PhotometricAugment;
 

@@ -15,7 +15,7 @@
 //!                                  `omnimvs train`; `--resume` continues on it)
 //! ```
 //!
-//! Every file is written atomically (`omnimvs_camera::fs::write_atomic`: a temporary file, then
+//! Every file is written atomically (`omnimvs_core::fs::write_atomic`: a temporary file, then
 //! a rename; a checkpoint is a new folder renamed into place), so killing the process at any
 //! moment leaves the previous epoch's checkpoint usable: at most one epoch is lost.
 
@@ -151,7 +151,7 @@ fn io_error(path: &Path, source: std::io::Error) -> TrainError {
 
 /// Writes `bytes` to `path` through a synced temporary file and a rename.
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
-    omnimvs_camera::fs::write_atomic(path, bytes).map_err(|e| io_error(path, e))
+    omnimvs_core::fs::write_atomic(path, bytes).map_err(|e| io_error(path, e))
 }
 
 fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), TrainError> {

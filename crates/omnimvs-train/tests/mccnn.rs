@@ -6,7 +6,7 @@
 use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::Device;
-use omnimvs_camera::rng::SplitMix64;
+use omnimvs_core::rng::SplitMix64;
 use omnimvs_net::mccnn::{McCnn, McCnnConfig};
 use omnimvs_train::mccnn::batch_loss;
 

@@ -61,6 +61,6 @@ fn metrics_are_read_back_for_a_redraw() {
         .iter()
         .map(|r| serde_json::to_string(r).unwrap() + "\n")
         .collect();
-    omnimvs_camera::fs::write_atomic(&path, text.as_bytes()).unwrap();
+    omnimvs_core::fs::write_atomic(&path, text.as_bytes()).unwrap();
     assert_eq!(read_metrics(&path).unwrap(), history);
 }

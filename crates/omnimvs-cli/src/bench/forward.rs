@@ -4,13 +4,14 @@ use anyhow::Result;
 use burn::module::Module;
 use burn::tensor::Device;
 use omnimvs_camera::Rig;
+use omnimvs_core::GrayImage;
 use omnimvs_net::cascade::{CascadeGeometry, CascadeNet, CascadeTimings};
 use omnimvs_net::config::NetConfig;
 use omnimvs_net::model::{OmniMvsNet, StageTimings, SweepInput, SweepTaps};
 use omnimvs_net::pick::PickRefiner;
 use omnimvs_net::synthetic::synthetic_grids;
 use omnimvs_net::tensor::read_values;
-use omnimvs_sweep::{GrayImage, InvDepthHypotheses};
+use omnimvs_sweep::InvDepthHypotheses;
 use serde::Serialize;
 
 use super::{median_row, peak_rss_bytes, random_images};

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use omnimvs_camera::fs::write_atomic;
+use omnimvs_core::fs::write_atomic;
 use omnimvs_net::bundled::{BundledModel, PickChoice};
 use omnimvs_net::{Backend, Family, NetConfig};
 use omnimvs_synth::rig::preset_rig;

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use omnimvs_core::GrayImage;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_data::image_io::write_png_u8;
@@ -20,7 +21,7 @@ use omnimvs_data::ply::write_ply;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange};
 use omnimvs_net::{Backend, BundledModel, NetEstimator};
 use omnimvs_stereo::{SgmEstimator, SgmParams};
-use omnimvs_sweep::{GrayImage, LutCache};
+use omnimvs_sweep::LutCache;
 use omnimvs_synth::rig::preset_rig;
 use omnimvs_synth::{DatasetWriter, SceneKind, Shard, SynthOptions};
 

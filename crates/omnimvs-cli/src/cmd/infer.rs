@@ -4,12 +4,13 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use omnimvs_core::GrayImage;
 use omnimvs_data::metrics::ProtocolMetrics;
 use omnimvs_data::output::{DepthRun, FrameScene, protocol_tables};
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, Finishing, FinishingError, FrameRange};
 use omnimvs_net::weights::common_image_size;
 use omnimvs_net::{Backend, NetEstimator};
-use omnimvs_sweep::{CacheStatus, GrayImage, LutCache};
+use omnimvs_sweep::{CacheStatus, LutCache};
 
 use crate::args::{BACKEND_HELP, Preset, Size, parse_backend};
 use crate::weights::{BUNDLED, Weights, apply_pick, parse_pick};

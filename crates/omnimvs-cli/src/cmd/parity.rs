@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail, ensure};
-use omnimvs_camera::fs::write_atomic;
+use omnimvs_core::fs::write_atomic;
 use omnimvs_data::Dataset;
 use omnimvs_net::Backend;
 use omnimvs_net::infer::Inference;
@@ -135,7 +135,7 @@ fn tempdir_for_random(weights: &Weights) -> Result<Option<PathBuf>> {
 fn compare(
     args: &Args,
     ds: &Dataset,
-    images: &[omnimvs_sweep::GrayImage],
+    images: &[omnimvs_core::GrayImage],
     weights: &Weights,
 ) -> Result<Report> {
     let cache = LutCache::default_location();

@@ -4,13 +4,13 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
+use omnimvs_core::GrayImage;
 use omnimvs_data::gt::EvalTruth;
 use omnimvs_data::output::ConfidenceRun;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, StageTimes};
 use omnimvs_net::NetError;
 use omnimvs_net::learned_sgm::{MatchingCost, sgm_estimator};
 use omnimvs_stereo::{Directions, SgmEstimator, SgmParams, SweepStep};
-use omnimvs_sweep::GrayImage;
 use omnimvs_sweep::SweepSpec;
 
 use crate::args::{Cost, SweepArgs};

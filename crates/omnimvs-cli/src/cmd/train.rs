@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use burn::tensor::Device;
 use indicatif::{ProgressBar, ProgressStyle};
-use omnimvs_camera::fs::write_atomic;
+use omnimvs_core::fs::write_atomic;
 use omnimvs_data::FrameRange;
 use omnimvs_data::metrics::Metrics;
 use omnimvs_net::{Backend, CascadeNet, Family, NetConfig, OmniMvsNet};

@@ -4,7 +4,8 @@ use std::path::{Path, PathBuf};
 
 use omnimvs_camera::Rig;
 use omnimvs_camera::ValidityMask;
-use omnimvs_sweep::{GrayImage, InvDepthSource, Panorama, compose_panorama};
+use omnimvs_core::GrayImage;
+use omnimvs_sweep::{InvDepthSource, Panorama, compose_panorama};
 
 use super::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 use crate::DataError;

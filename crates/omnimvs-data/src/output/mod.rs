@@ -9,7 +9,7 @@
 //!   `omnimvs infer`'s layouts).
 //! * [`evaluation`]: methods scored at one evaluation sweep, `eval.json` and `eval.md`.
 //!
-//! Every file goes through `omnimvs_camera::fs::write_atomic`.
+//! Every file goes through `omnimvs_core::fs::write_atomic`.
 
 pub mod evaluation;
 pub mod files;

@@ -1,6 +1,7 @@
 //! Building blocks of the result pictures (RGB8 rows stacked into one image).
 
-use omnimvs_sweep::{EquirectGrid, GrayImage};
+use omnimvs_core::GrayImage;
+use omnimvs_sweep::EquirectGrid;
 
 use crate::colormap::{Colormap, colorize};
 use crate::gt::GroundTruth;

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use omnimvs_camera::fs::write_atomic;
+use omnimvs_core::fs::write_atomic;
 use serde::Serialize;
 
 use crate::DataError;

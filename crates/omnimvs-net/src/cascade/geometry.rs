@@ -23,8 +23,9 @@ use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;
 use crate::pixel::PixelSampler;
-use crate::taps::{SweepGrid, Taps, grid_taps};
+use crate::taps::{SweepGrid, grid_taps};
 use crate::tensor::{hypothesis_tensor, read_values};
+use omnimvs_core::interp::BilinearTap;
 use rayon::prelude::*;
 
 /// One stage's sampling positions on the device: every camera's taps, the hypotheses, and
@@ -55,7 +56,7 @@ pub struct StageTaps {
 #[derive(Clone, Debug)]
 pub struct HostTaps {
     /// Taps of every camera into its feature map, flat over `[K, H, W]`.
-    pub cameras: Vec<Vec<Taps>>,
+    pub cameras: Vec<Vec<BilinearTap>>,
     /// Size `[rows, cols]` of the feature maps the taps index into.
     pub feature_size: [usize; 2],
     /// Number of camera pairs that see each sample, flat over `[K, H, W]`.
@@ -94,7 +95,7 @@ impl StageTaps {
                 actual: vec![index.len()],
             });
         }
-        let camera_taps: Vec<Vec<Taps>> = grids
+        let camera_taps: Vec<Vec<BilinearTap>> = grids
             .iter()
             .map(|grid| grid_taps(grid, feature_size[0], feature_size[1]))
             .collect();

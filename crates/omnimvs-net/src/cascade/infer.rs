@@ -5,8 +5,9 @@
 
 use burn::tensor::Device;
 use omnimvs_camera::ValidityMask;
+use omnimvs_core::GrayImage;
 use omnimvs_data::{Dataset, DepthEstimate, StageObserver};
-use omnimvs_sweep::{EquirectGrid, GrayImage, InvDepthHypotheses, SweepSpec, resample_map};
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, SweepSpec, resample_map};
 
 use super::geometry::CascadeGeometry;
 use super::model::{CascadeNet, StageOutput};

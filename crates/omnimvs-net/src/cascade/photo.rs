@@ -20,6 +20,7 @@
 use std::sync::OnceLock;
 
 use burn::tensor::{Device, Tensor, TensorData};
+use omnimvs_core::interp::grid_sample_plane;
 use omnimvs_stereo::params::{COST_SCALE, Directions, cost_units};
 use omnimvs_stereo::{ZNCC_VARIANCE_EPS, camera_pairs};
 use rayon::prelude::*;
@@ -27,7 +28,7 @@ use rayon::prelude::*;
 use super::score_sgm::aggregate_eight;
 use crate::error::NetError;
 use crate::pixel::box_sum;
-use crate::taps::{SweepGrid, bilinear_taps};
+use crate::taps::SweepGrid;
 use crate::tensor::with_values;
 
 /// Half the side of the ZNCC window (5 x 5 samples of a stage's grid).
@@ -171,7 +172,7 @@ impl ImagePyramid {
                     .zip(images)
                     .map(|(grid, image)| {
                         let coords = &grid.coords[2 * slot * plane..2 * (slot + 1) * plane];
-                        sample_plane(coords, image, rows, cols)
+                        grid_sample_plane(coords, image, rows, cols, SEEN_WEIGHT)
                     })
                     .collect();
                 zncc_plane(&samples, h, w, ZNCC_RADIUS, dst);
@@ -355,57 +356,6 @@ fn halve(image: &[f32], rows: usize, cols: usize) -> Vec<f32> {
         }
     }
     out
-}
-
-/// Bilinear samples of `image` at the normalised positions `coords` (`(x, y)` pairs) and,
-/// for each, 1 where the sample is missing (not every neighbour inside the image; its value
-/// is then 0).
-///
-/// A sample whose four neighbours all lie inside the image (nearly all of them) is read
-/// directly, with the weights and the sum in the order of [`bilinear_taps`] (the same value
-/// to the bit); one a whole pixel or more outside is missing at once; the others, on the
-/// border, go through the taps.
-fn sample_plane(coords: &[f32], image: &[f32], rows: usize, cols: usize) -> (Vec<f32>, Vec<f32>) {
-    let (w, h) = (cols as f32 - 1.0, rows as f32 - 1.0);
-    coords
-        .chunks_exact(2)
-        .map(|xy| {
-            let ix = (xy[0] + 1.0) / 2.0 * w;
-            let iy = (xy[1] + 1.0) / 2.0 * h;
-            // Inside with a margin, so that truncation is the floor and all four corners are
-            // in the image; NaN fails the tests.
-            if ix >= 0.0 && iy >= 0.0 && ix < w - 1.0 && iy < h - 1.0 {
-                let (x0, y0) = (ix as usize, iy as usize);
-                let (fx, fy) = (x0 as f32, y0 as f32);
-                let (dx, dy) = (ix - fx, iy - fy);
-                let (ex, ey) = (fx + 1.0 - ix, fy + 1.0 - iy);
-                let i = y0 * cols + x0;
-                let value = ex * ey * image[i]
-                    + dx * ey * image[i + 1]
-                    + ex * dy * image[i + cols]
-                    + dx * dy * image[i + cols + 1];
-                return (value, 0.0);
-            }
-            // A whole pixel or more outside (or NaN): no neighbour inside, missing, as the
-            // taps would find (most of a camera's unseen samples; only the border band
-            // needs them).
-            if !(ix > -1.0 && iy > -1.0 && ix < w + 1.0 && iy < h + 1.0) {
-                return (0.0, 1.0);
-            }
-            let taps = bilinear_taps(xy[0], xy[1], rows, cols);
-            let seen: f32 = taps.weight.iter().sum();
-            if seen < SEEN_WEIGHT {
-                return (0.0, 1.0);
-            }
-            let value: f32 = taps
-                .index
-                .iter()
-                .zip(&taps.weight)
-                .map(|(&i, &wt)| wt * image[i as usize])
-                .sum();
-            (value, 0.0)
-        })
-        .unzip()
 }
 
 /// One camera's window statistics over a plane of samples.

@@ -8,7 +8,8 @@ use burn::tensor::{Device, Int, Tensor, TensorData};
 
 use super::blocks::ConvBn2d;
 use crate::error::NetError;
-use crate::taps::{SweepGrid, Taps, grid_taps, warp_features};
+use crate::taps::{SweepGrid, grid_taps, warp_features};
+use omnimvs_core::interp::BilinearTap;
 
 /// One camera's bilinear taps as device tensors, for a given feature-map size.
 ///
@@ -40,7 +41,7 @@ impl SweepTaps {
     /// The taps `taps` of `grid` (from [`grid_taps`]) for feature maps of `src_size`, as
     /// device tensors.
     pub fn from_taps(
-        taps: &[Taps],
+        taps: &[BilinearTap],
         grid: &SweepGrid,
         src_size: [usize; 2],
         device: &Device,

@@ -4,8 +4,9 @@
 #![allow(dead_code, clippy::expect_used)] // each user takes what it needs; fixtures
 
 use omnimvs_camera::Rig;
+use omnimvs_core::GrayImage;
 use omnimvs_data::gt::InvDepthMap;
-use omnimvs_sweep::{EquirectGrid, GrayImage};
+use omnimvs_sweep::EquirectGrid;
 use omnimvs_synth::rig::{preset_rig, resize_rig, rig_radius_m};
 use omnimvs_synth::texture::{Pattern, TextureSpec};
 use omnimvs_synth::{

@@ -13,9 +13,8 @@
 //! lookup table) to about 1e-3 pixel; see the tests.
 
 use omnimvs_camera::Camera;
-use omnimvs_sweep::EquirectGrid;
 
-use crate::StereoError;
+use crate::{EquirectGrid, SweepError};
 
 /// Entries of the tabulated radial function.
 const TABLE_LEN: usize = 4096;
@@ -44,17 +43,17 @@ impl SphereProjector {
     /// Prepares the projection of `grid`'s rays into `camera`.
     ///
     /// # Errors
-    /// [`StereoError::Camera`] for a field of view of 360 degrees or more
+    /// [`SweepError::Camera`] for a field of view of 360 degrees or more
     /// (no half-angle table) or a degenerate affine matrix.
     pub fn new(
         camera: &Camera,
         camera_number: usize,
         grid: &EquirectGrid,
-    ) -> Result<Self, StereoError> {
+    ) -> Result<Self, SweepError> {
         let radial = camera.model.radial_projection();
         let half_fov = radial.half_fov_rad;
         if !(half_fov > 0.0 && half_fov < std::f64::consts::PI) {
-            return Err(StereoError::Camera {
+            return Err(SweepError::Camera {
                 camera: camera_number,
                 reason: format!(
                     "max_fov {} deg: expected a field of view in (0, 360) degrees",
@@ -381,11 +380,28 @@ impl SphereProjector {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use omnimvs_sweep::{InvDepthHypotheses, LookupTable, SphereSet};
+    use crate::{InvDepthHypotheses, LookupTable, SphereSet};
+    use omnimvs_camera::{Camera, Rig};
+
+    /// The published rig (the generator's preset, the same cameras as the public
+    /// `sunny/config.yaml`).
+    fn preset_rig() -> Rig {
+        let text = include_str!("../../omnimvs-synth/src/sunny_cameras.yaml");
+        omnimvs_camera::parse_config_rig(std::path::Path::new("sunny_cameras.yaml"), text).unwrap()
+    }
+
+    /// `rig` with its images resized to `height x width`.
+    fn resize_rig(rig: &Rig, height: u32, width: u32) -> Rig {
+        let resized = |c: &Camera| {
+            let model = c.model.resized(height, width);
+            Camera::new(c.id, c.img_dir.clone(), model, c.pose, None)
+        };
+        Rig::new(rig.cameras.iter().map(resized).collect())
+    }
 
     #[test]
     fn columns_outside_the_visible_runs_see_no_sphere() {
-        let rig = omnimvs_synth::rig::preset_rig().unwrap().rig;
+        let rig = preset_rig();
         let grid = EquirectGrid::new(40, 160, 45.0).unwrap();
         let hyps = InvDepthHypotheses::new(64, 0.55).unwrap();
         let (near, far) = (hyps.inv_depth(0.0) as f32, hyps.inv_depth(63.0) as f32);
@@ -420,8 +436,8 @@ mod tests {
 
     #[test]
     fn matches_the_lookup_table() {
-        let preset = omnimvs_synth::rig::preset_rig().unwrap().rig;
-        let rig = omnimvs_synth::rig::resize_rig(&preset, 192, 200).unwrap();
+        let preset = preset_rig();
+        let rig = resize_rig(&preset, 192, 200);
         let grid = EquirectGrid::new(20, 80, 45.0).unwrap();
         let hyps = InvDepthHypotheses::new(16, 0.8).unwrap();
         let lut = LookupTable::build(&rig, &grid, &hyps, SphereSet::All).unwrap();
@@ -472,7 +488,7 @@ mod tests {
             eprintln!("no AVX2 here: only the plain loop runs");
             return;
         };
-        let preset = omnimvs_synth::rig::preset_rig().unwrap().rig;
+        let preset = preset_rig();
         let grid = EquirectGrid::new(20, 84, 45.0).unwrap();
         let n = grid.len();
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
