@@ -20,7 +20,7 @@ pub mod upsample;
 
 pub use features::CascadeFeatures;
 pub use grow::sphere_resampling;
-pub use regularize::{CoarseRegularizer, PanoConv2d, StageRegularizer, Up2d};
+pub use regularize::{CoarseRegularizer, StageRegularizer, Up2d};
 pub use upsample::{
     CandidateSelector, UPSAMPLE_TAPS, bilinear_prior, convex_combination, neighbourhood_candidates,
     same_grid_prior, upsampling_candidates,
