@@ -1,6 +1,8 @@
 //! Growth of a trained cascade: each `with_*` method switches one option of the
 //! configuration on and adds the weights it needs so that the network answers as before (or
-//! nearly) until training moves them.
+//! nearly) until training moves them; [`GROWABLE`] says which fields of a saved network's
+//! configuration may differ from the one it is loaded into, and how
+//! ([`crate::weights::load_cascade_grown`]).
 
 use burn::module::Param;
 use burn::nn::conv::Conv2d;
@@ -12,6 +14,160 @@ use super::upsample::{CandidateSelector, UPSAMPLE_TAPS};
 use crate::config::CascadeParams;
 use crate::error::NetError;
 use crate::tensor::read_values;
+
+/// How a field of [`CascadeParams`] may differ between a saved network and the
+/// configuration it is loaded into ([`GROWABLE`]).
+#[derive(Clone, Copy, Debug)]
+pub enum GrowRule {
+    /// Any value: only training reads it, or no weight depends on it.
+    Any,
+    /// Any value while the saved network has what the function accepts, else unchanged.
+    AnyWhile(fn(&CascadeParams) -> bool),
+    /// A flag (the function reads it) that may switch on, not off.
+    SwitchOn(fn(&CascadeParams) -> bool),
+    /// A count (the function reads it) that may grow, not shrink.
+    Grow(fn(&CascadeParams) -> usize),
+    /// A count (the function reads it) that may shrink, not grow.
+    Shrink(fn(&CascadeParams) -> usize),
+    /// Whatever the function accepts of the saved and the asked-for parameters.
+    Check(fn(&CascadeParams, &CascadeParams) -> bool),
+}
+
+impl GrowRule {
+    /// Whether a saved network's value is replaced by the asked-for one when the two are
+    /// compared: always but for [`GrowRule::AnyWhile`], whose condition `saved` must meet.
+    pub fn may_differ(self, saved: &CascadeParams) -> bool {
+        match self {
+            GrowRule::AnyWhile(allowed) => allowed(saved),
+            _ => true,
+        }
+    }
+
+    /// Whether the asked-for value may follow the saved one.
+    pub fn allows(self, saved: &CascadeParams, asked: &CascadeParams) -> bool {
+        match self {
+            GrowRule::Any | GrowRule::AnyWhile(_) => true,
+            GrowRule::SwitchOn(flag) => !flag(saved) || flag(asked),
+            GrowRule::Grow(count) => count(saved) <= count(asked),
+            GrowRule::Shrink(count) => count(asked) <= count(saved),
+            GrowRule::Check(check) => check(saved, asked),
+        }
+    }
+
+    /// How the value may differ, in words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            GrowRule::Any => "may take any value",
+            GrowRule::AnyWhile(_) => "may be chosen only while the saved network allows it",
+            GrowRule::SwitchOn(_) => "may switch on, not off",
+            GrowRule::Grow(_) => "may grow, not shrink",
+            GrowRule::Shrink(_) => "may shrink, not grow",
+            GrowRule::Check(_) => "may change only as its growth allows",
+        }
+    }
+}
+
+/// Where the weights of a growable field's asked-for value come from when a saved network
+/// is loaded into another configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GrowWeights {
+    /// The network is built as asked; tensors the file lacks keep their starting values.
+    Built,
+    /// The network is built as saved and a `with_*` growth adds what the asked-for value
+    /// needs after loading.
+    Grown,
+}
+
+/// One field of [`CascadeParams`] that may differ between a saved network and the
+/// configuration it is loaded into.
+#[derive(Clone, Copy, Debug)]
+pub struct Growable {
+    /// The field's name in the configuration file.
+    pub name: &'static str,
+    /// Copies the field from the second parameters into the first.
+    pub copy: fn(&mut CascadeParams, &CascadeParams),
+    /// How it may differ.
+    pub rule: GrowRule,
+    /// Where its weights come from.
+    pub weights: GrowWeights,
+}
+
+/// One [`Growable`] per `field[index]: rule, weights` line; the rules `any`, `switch_on`,
+/// `grow` and `shrink` read the field itself, `any_while(f)` and `check(f)` take a function.
+macro_rules! growable {
+    (@rule $f:ident $([$i:literal])?, any) => { GrowRule::Any };
+    (@rule $f:ident $([$i:literal])?, switch_on) => { GrowRule::SwitchOn(|p| p.$f) };
+    (@rule $f:ident $([$i:literal])?, grow) => { GrowRule::Grow(|p| p.$f$([$i])?) };
+    (@rule $f:ident $([$i:literal])?, shrink) => { GrowRule::Shrink(|p| p.$f$([$i])?) };
+    (@rule $f:ident $([$i:literal])?, any_while($c:expr)) => { GrowRule::AnyWhile($c) };
+    (@rule $f:ident $([$i:literal])?, check($c:expr)) => { GrowRule::Check($c) };
+    ($($f:ident $([$i:literal])?: $rule:ident $(($c:expr))?, $weights:ident;)*) => {
+        &[$(Growable {
+            name: concat!(stringify!($f) $(, "[", stringify!($i), "]")?),
+            copy: |to, from| to.$f$([$i])? = from.$f$([$i])?,
+            rule: growable!(@rule $f $([$i])?, $rule $(($c))?),
+            weights: GrowWeights::$weights,
+        }),*]
+    };
+}
+
+/// The fields of [`CascadeParams`] that may differ between a saved network and the
+/// configuration it is loaded into ([`crate::weights::load_cascade_grown`]), with how; every
+/// other field must be equal. A new option that a trained network can grow into is one line
+/// here (and, when its weights are [`GrowWeights::Grown`], one step of the growth).
+pub const GROWABLE: &[Growable] = growable! {
+    // Only training reads these.
+    loss_weights: any, Built;
+    coarse_distribution_weight: any, Built;
+    refine_distribution_weight: any, Built;
+    sky_loss_weight: any, Built;
+    neighbour_start_score: any, Built;
+    // The neighbour hypotheses' gain scales weights that only exist with them: it may be
+    // chosen when the network grows into them, not changed afterwards.
+    neighbour_gain: any_while(|saved| (0..2).all(|i| saved.neighbour_count(i) == 0)), Built;
+    // New modules that start where the network answers as before (or nearly).
+    context_pairs: grow, Built;
+    stage_gates: switch_on, Built;
+    convex_upsampling: switch_on, Built;
+    // The full grid's selector may be left out of the file's network or new.
+    convex_upsampling_full: any, Built;
+    // New input channels with zero weights (`CascadeNet::with_zncc_cue`,
+    // `with_coarse_cue_sgm`, `with_mid_cue_sgm`, `with_coarse_stride4`).
+    zncc_cue: switch_on, Grown;
+    coarse_cue_sgm: switch_on, Grown;
+    mid_cue_sgm: switch_on, Grown;
+    coarse_stride4: switch_on, Grown;
+    // No weight depends on these: the aggregation of the coarse distribution, the
+    // refinement's hypothesis spacing and reach, the grid and depths of the coarse cue.
+    coarse_score_sgm: any, Built;
+    stage_intervals: any, Built;
+    neighbour_extremes: any, Built;
+    coarse_cue_oversample: any, Built;
+    coarse_cue_depths: any, Built;
+    // Neighbour hypotheses may switch on (`CascadeNet::with_neighbour_hypotheses`), the cue
+    // not after them.
+    neighbour_hypotheses: check(neighbour_hypotheses_grow), Grown;
+    // The stride-8 features may widen (`CascadeFeatures::widen8`).
+    feature_channels[2]: grow, Grown;
+    // The coarse stage may move to a finer grid over other spheres
+    // (`CascadeNet::with_coarse_grid`) and centre its half stage on a learnt choice
+    // (`CascadeNet::with_same_grid_selector`).
+    coarse_scale: shrink, Grown;
+    coarse_spheres: any, Grown;
+    same_grid_selector: switch_on, Grown;
+    // Its evidence may be squeezed, once (`CascadeNet::with_coarse_squeeze`).
+    coarse_squeeze: check(|saved, asked| saved.coarse_squeeze == 0
+        || saved.coarse_squeeze == asked.coarse_squeeze), Grown;
+};
+
+/// Neighbour hypotheses may switch on per stage, and a stage that has them keeps the
+/// photometric cue as it was.
+fn neighbour_hypotheses_grow(saved: &CascadeParams, asked: &CascadeParams) -> bool {
+    (0..2).all(|i| {
+        let (had, has) = (saved.neighbour_count(i), asked.neighbour_count(i));
+        has >= had && (had == 0 || saved.zncc_cue == asked.zncc_cue)
+    })
+}
 
 impl CascadeNet {
     /// The network with the photometric cue switched on (`zncc_cue`): the first convolution

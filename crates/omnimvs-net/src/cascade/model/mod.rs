@@ -19,7 +19,7 @@ pub mod stages;
 pub mod upsample;
 
 pub use features::CascadeFeatures;
-pub use grow::sphere_resampling;
+pub use grow::{GROWABLE, GrowRule, GrowWeights, Growable, sphere_resampling};
 pub use regularize::{CoarseRegularizer, StageRegularizer, Up2d};
 pub use upsample::{
     CandidateSelector, UPSAMPLE_TAPS, bilinear_prior, convex_combination, neighbourhood_candidates,
