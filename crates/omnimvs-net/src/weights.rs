@@ -331,10 +331,7 @@ fn grow_loaded(net: CascadeNet, config: &NetConfig) -> Result<CascadeNet, NetErr
     } else {
         net
     };
-    let mut net = net.with_coarse_feature_channels(p.feature_channels[2])?;
-    for (i, &radius) in p.neighbour_hypotheses.iter().enumerate() {
-        net = net.with_neighbour_hypotheses(i + 1, radius)?;
-    }
+    let net = net.with_coarse_feature_channels(p.feature_channels[2])?;
     // Everything asked for but the saved grid and spheres by now; the move keeps what it has
     // where they are the same.
     let net = net.with_coarse_grid(p.coarse_scale, p.coarse_spheres)?;

@@ -121,10 +121,6 @@ pub const GROWABLE: &[Growable] = growable! {
     coarse_distribution_weight: any, Built;
     refine_distribution_weight: any, Built;
     sky_loss_weight: any, Built;
-    neighbour_start_score: any, Built;
-    // The neighbour hypotheses' gain scales weights that only exist with them: it may be
-    // chosen when the network grows into them, not changed afterwards.
-    neighbour_gain: any_while(|saved| (0..2).all(|i| saved.neighbour_count(i) == 0)), Built;
     // New modules that start where the network answers as before (or nearly).
     context_pairs: grow, Built;
     stage_gates: switch_on, Built;
@@ -138,15 +134,11 @@ pub const GROWABLE: &[Growable] = growable! {
     mid_cue_sgm: switch_on, Grown;
     coarse_stride4: switch_on, Grown;
     // No weight depends on these: the aggregation of the coarse distribution, the
-    // refinement's hypothesis spacing and reach, the grid and depths of the coarse cue.
+    // refinement's hypothesis spacing, the grid and depths of the coarse cue.
     coarse_score_sgm: any, Built;
     stage_intervals: any, Built;
-    neighbour_extremes: any, Built;
     coarse_cue_oversample: any, Built;
     coarse_cue_depths: any, Built;
-    // Neighbour hypotheses may switch on (`CascadeNet::with_neighbour_hypotheses`), the cue
-    // not after them.
-    neighbour_hypotheses: check(neighbour_hypotheses_grow), Grown;
     // The stride-8 features may widen (`CascadeFeatures::widen8`).
     feature_channels[2]: grow, Grown;
     // The coarse stage may move to a finer grid over other spheres
@@ -159,15 +151,6 @@ pub const GROWABLE: &[Growable] = growable! {
     coarse_squeeze: check(|saved, asked| saved.coarse_squeeze == 0
         || saved.coarse_squeeze == asked.coarse_squeeze), Grown;
 };
-
-/// Neighbour hypotheses may switch on per stage, and a stage that has them keeps the
-/// photometric cue as it was.
-fn neighbour_hypotheses_grow(saved: &CascadeParams, asked: &CascadeParams) -> bool {
-    (0..2).all(|i| {
-        let (had, has) = (saved.neighbour_count(i), asked.neighbour_count(i));
-        has >= had && (had == 0 || saved.zncc_cue == asked.zncc_cue)
-    })
-}
 
 impl CascadeNet {
     /// The network with the photometric cue switched on (`zncc_cue`): the first convolution
@@ -260,56 +243,6 @@ impl CascadeNet {
         *flag(&mut config.cascade) = true;
         config.validate()?;
         insert_zero_inputs(first(&mut self), tail, k(&config.cascade));
-        self.config = config;
-        Ok(self)
-    }
-
-    /// The network with the two neighbour hypotheses of refinement stage `stage` (1: half,
-    /// 2: full resolution) within `radius` pixels (`neighbour_hypotheses`): the stage's first
-    /// convolution reads their evidence (after all of the evenly spaced hypotheses') with zero
-    /// weights, and its scoring convolution scores them with zero weights and a bias of
-    /// `neighbour_start_score` (by default -5: the network answers nearly as before, the two
-    /// holding a small share of each pixel's weight, until training moves them). A stage that
-    /// has them already takes the new radius.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] for another stage, a radius of 0 for a stage that has them,
-    /// or when the configuration with them is not valid.
-    pub fn with_neighbour_hypotheses(
-        mut self,
-        stage: usize,
-        radius: usize,
-    ) -> Result<Self, NetError> {
-        if !(1..=2).contains(&stage) {
-            return Err(NetError::InvalidConfig {
-                field: "neighbour_hypotheses",
-                message: format!("stage {stage}: the refinement stages are 1 and 2"),
-            });
-        }
-        let i = stage - 1;
-        let mut config = self.config.clone();
-        let had = config.cascade.neighbour_count(i) > 0;
-        config.cascade.neighbour_hypotheses[i] = radius;
-        config.validate()?;
-        if had && radius == 0 {
-            return Err(NetError::InvalidConfig {
-                field: "neighbour_hypotheses",
-                message: format!("stage {stage} has them already; they cannot be taken out"),
-            });
-        }
-        if !had && radius > 0 {
-            let p = &config.cascade;
-            let channels = p.stage_evidence_channels(i);
-            let regularizer = if stage == 1 {
-                &mut self.mid
-            } else {
-                &mut self.fine
-            };
-            append_zero_inputs(&mut regularizer.convs[0].conv, 2 * channels);
-            // Scores leave the stage times `neighbour_gain`: the bias starts at score / gain.
-            let score = (p.neighbour_start_score / p.neighbour_gain) as f32;
-            append_zero_outputs(&mut regularizer.out.conv, 2, score);
-        }
         self.config = config;
         Ok(self)
     }
@@ -502,21 +435,6 @@ impl CascadeNet {
         self.coarse.squeeze = Some(conv);
         self.config = config;
         Ok(self)
-    }
-}
-
-/// `conv` writing `k` more output channels, after its own, with zero weights and `bias`.
-fn append_zero_outputs(conv: &mut Conv2d, k: usize, bias: f32) {
-    let weight = conv.weight.val(); // [C_out, C_in, kh, kw]
-    let [_, c_in, kh, kw] = weight.dims();
-    let device = weight.device();
-    let zeros = Tensor::zeros([k, c_in, kh, kw], &device);
-    conv.weight = Param::from_tensor(Tensor::cat(vec![weight, zeros], 0).detach());
-    if let Some(b) = conv.bias.take() {
-        let new = Tensor::<1>::full([k], bias, &device);
-        conv.bias = Some(Param::from_tensor(
-            Tensor::cat(vec![b.val(), new], 0).detach(),
-        ));
     }
 }
 
