@@ -365,31 +365,6 @@ fn cascade_options_are_checked_and_belong_to_the_cascade() {
         ),
         ("cascade", "--stage-intervals", "a,1", "stage-intervals"),
         (
-            "cascade",
-            "--neighbour-hypotheses",
-            "0,9",
-            "two radii in pixels from 0 to 4",
-        ),
-        (
-            "cascade",
-            "--neighbour-extremes",
-            "1",
-            "two radii in pixels from 0 to 4",
-        ),
-        (
-            "cascade",
-            "--neighbour-start-score",
-            "low",
-            "neighbour-start-score",
-        ),
-        ("cascade", "--neighbour-gain", "0", "cascade.neighbour_gain"),
-        (
-            "tiny",
-            "--neighbour-hypotheses",
-            "0,1",
-            "options of --preset cascade",
-        ),
-        (
             "tiny",
             "--stage-intervals",
             "2.5,1.5",

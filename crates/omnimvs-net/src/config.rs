@@ -215,46 +215,6 @@ pub struct CascadeParams {
     /// (3.77 -> 3.89 with the pick), so the bundled network does not use it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coarse_score_sgm: Option<ScoreSgm>,
-    /// Per refinement stage (half, full resolution), the radius `r` of the neighbourhood of
-    /// centres its outermost hypotheses stretch to (`0`, and left out of the file: none, the
-    /// hypotheses are evenly spaced). With `r > 0` the lowest hypothesis of a pixel is the
-    /// lower of its own and the lowest centre of the `(2r + 1)^2` pixels around it, the highest
-    /// likewise: at a depth edge the centre (an upsampling) blends the two surfaces, and an
-    /// evenly spaced reach around it holds neither, where the neighbours' extremes are the two
-    /// surfaces. On things validation frames the better of a pixel's own answer and its 3 x 3
-    /// neighbourhood's lowest and highest would halve the network's error (`research/errors.md`). No weight
-    /// depends on it.
-    #[serde(default, skip_serializing_if = "is_zero_pair")]
-    pub neighbour_extremes: [usize; 2],
-    /// Per refinement stage (half, full resolution), the radius `r` of the neighbourhood whose
-    /// lowest and highest centre become two more hypotheses of the stage, after its evenly
-    /// spaced ones (`0`, and left out of the file: none). Unlike `neighbour_extremes` the
-    /// evenly spaced hypotheses stay as they are, so a network grown into them
-    /// ([`crate::cascade::CascadeNet::with_neighbour_hypotheses`]) starts near its answer
-    /// without them; the stage's convolutions read the two more hypotheses' evidence after
-    /// all of the others' and score them last. Not with `mid_cue_sgm` on the half stage.
-    #[serde(default, skip_serializing_if = "is_zero_pair")]
-    pub neighbour_hypotheses: [usize; 2],
-    /// Training only: the starting score (logit) of the two neighbour hypotheses when a
-    /// trained stage grows into them ([`crate::cascade::CascadeNet::with_neighbour_hypotheses`];
-    /// the evenly spaced ones' scores are near 0). `-5` (and left out of the file): they start
-    /// with under 1 % of each pixel's weight, the grown network at the answer it had, and the
-    /// softmax passes them little gradient; higher, they start with more of both.
-    #[serde(
-        default = "default_neighbour_start_score",
-        skip_serializing_if = "is_default_neighbour_start_score"
-    )]
-    pub neighbour_start_score: f64,
-    /// The gain `g` of the neighbour hypotheses' weights: their evidence enters the stage's
-    /// first convolution times `g` and their scores leave its scoring convolution times `g`
-    /// (a grown network's starting bias is `neighbour_start_score / g`, so it starts where it
-    /// would with `g = 1`). Under Adam, whose steps do not depend on a gradient's scale, this
-    /// trains the weights grown for them `g` times faster than the rest of the stage: a rate of
-    /// their own (at 3e-5 their zero weights could move by 0.02 in 600 steps). `1`
-    /// (and left out of the file) by default; the answer depends on it, so weights trained
-    /// with one gain answer with it.
-    #[serde(default = "one_f64", skip_serializing_if = "is_one_f64")]
-    pub neighbour_gain: f64,
 }
 
 /// The penalties and the temperature of [`CascadeParams::coarse_score_sgm`], in nats of the
@@ -302,38 +262,7 @@ impl ScoreSgm {
     }
 }
 
-/// Refuses radii (`neighbour_extremes`, `neighbour_hypotheses`) over
-/// [`MAX_NEIGHBOUR_RADIUS`], naming `field`.
-fn check_radii(field: &'static str, radii: [usize; 2]) -> Result<(), NetError> {
-    if radii.iter().any(|&r| r > MAX_NEIGHBOUR_RADIUS) {
-        return Err(NetError::InvalidConfig {
-            field,
-            message: format!(
-                "{radii:?}: each radius must be at most {MAX_NEIGHBOUR_RADIUS} pixels"
-            ),
-        });
-    }
-    Ok(())
-}
-
-/// The default of [`CascadeParams::neighbour_start_score`].
-pub const DEFAULT_NEIGHBOUR_START_SCORE: f64 = -5.0;
-
-fn default_neighbour_start_score() -> f64 {
-    DEFAULT_NEIGHBOUR_START_SCORE
-}
-
-fn is_default_neighbour_start_score(value: &f64) -> bool {
-    *value == DEFAULT_NEIGHBOUR_START_SCORE
-}
-
 impl CascadeParams {
-    /// The hypotheses per pixel of refinement stage `i` (0: half, 1: full resolution): the
-    /// evenly spaced ones and, with `neighbour_hypotheses`, the two neighbours' extremes.
-    pub fn stage_hypotheses_of(&self, i: usize) -> usize {
-        self.stage_hypotheses[i] + self.neighbour_count(i)
-    }
-
     /// The input channels per hypothesis of refinement stage `i` (0: half, 1: full
     /// resolution): its groups' correlations, the visibility, the photometric cue with
     /// `zncc_cue`, and on the half stage the aggregated cue with `mid_cue_sgm`.
@@ -371,30 +300,6 @@ impl CascadeParams {
     pub fn half_grid_selector(&self) -> bool {
         self.convex_upsampling && (self.coarse_scale == 4 || self.same_grid_selector)
     }
-
-    /// The hypotheses that `neighbour_hypotheses` adds to refinement stage `i`: 2 or 0.
-    pub fn neighbour_count(&self, i: usize) -> usize {
-        if self.neighbour_hypotheses[i] > 0 {
-            2
-        } else {
-            0
-        }
-    }
-}
-
-/// The largest radius of [`CascadeParams::neighbour_extremes`].
-pub const MAX_NEIGHBOUR_RADIUS: usize = 4;
-
-fn is_zero_pair(value: &[usize; 2]) -> bool {
-    *value == [0, 0]
-}
-
-fn one_f64() -> f64 {
-    1.0
-}
-
-fn is_one_f64(value: &f64) -> bool {
-    *value == 1.0
 }
 
 fn one_usize() -> usize {
@@ -469,10 +374,6 @@ impl Default for CascadeParams {
             coarse_cue_sgm: false,
             mid_cue_sgm: false,
             coarse_score_sgm: None,
-            neighbour_extremes: [0, 0],
-            neighbour_hypotheses: [0, 0],
-            neighbour_start_score: DEFAULT_NEIGHBOUR_START_SCORE,
-            neighbour_gain: 1.0,
         }
     }
 }
@@ -501,8 +402,55 @@ pub struct NetConfig {
     pub layout: Layout,
     /// Network family (absent in older files: the paper's network).
     pub family: Family,
-    /// Sizes of the cascade network (only for [`Family::Cascade`]).
+    /// Sizes of the cascade network (only for [`Family::Cascade`]). Files may still name the
+    /// experiment switches removed in 0.2 ([`REMOVED_SWITCHES`]) at their default value.
+    #[serde(deserialize_with = "read_cascade_params")]
     pub cascade: CascadeParams,
+}
+
+/// Experiment switches of [`CascadeParams`] removed in 0.2 (no shipped network and no step of
+/// the bundled cascade's lineage turned them on), each with the value that left it off
+/// (`research/cascade.md`, "switches removed from the code"). A configuration file that names
+/// one at that value still loads; one that sets it otherwise is refused.
+pub const REMOVED_SWITCHES: &[(&str, &str)] = &[
+    ("neighbour_extremes", "[0, 0]"),
+    ("neighbour_hypotheses", "[0, 0]"),
+    ("neighbour_start_score", "-5.0"),
+    ("neighbour_gain", "1.0"),
+];
+
+/// Whether two JSON values are equal, numbers by value (`1` and `1.0` alike).
+fn same_json(a: &serde_json::Value, b: &serde_json::Value) -> bool {
+    use serde_json::Value;
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => x.as_f64() == y.as_f64(),
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(x, y)| same_json(x, y))
+        }
+        _ => a == b,
+    }
+}
+
+/// [`CascadeParams`] from a configuration file, which may name a removed switch
+/// ([`REMOVED_SWITCHES`]) at its default value.
+fn read_cascade_params<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> Result<CascadeParams, D::Error> {
+    use serde::de::Error;
+    let mut map = serde_json::Map::<String, serde_json::Value>::deserialize(deserializer)?;
+    for &(name, default) in REMOVED_SWITCHES {
+        let Some(value) = map.remove(name) else {
+            continue;
+        };
+        let off: serde_json::Value = serde_json::from_str(default).map_err(D::Error::custom)?;
+        if !same_json(&value, &off) {
+            return Err(D::Error::custom(format!(
+                "`cascade.{name}` was an experiment switch removed in 0.2 (off at {default}); \
+                 this file sets it to {value}"
+            )));
+        }
+    }
+    CascadeParams::deserialize(serde_json::Value::Object(map)).map_err(D::Error::custom)
 }
 
 impl Default for NetConfig {
@@ -730,7 +678,7 @@ impl NetConfig {
         Ok(())
     }
 
-    /// The photometric cues' settings and the neighbour hypotheses and extremes.
+    /// The photometric cues' settings.
     fn validate_cascade_cues(&self) -> Result<(), NetError> {
         let invalid =
             |field: &'static str, message: String| NetError::InvalidConfig { field, message };
@@ -748,26 +696,6 @@ impl NetConfig {
             return Err(invalid(
                 "cascade.coarse_cue_depths",
                 format!("{} must be 1, 3 or 5", p.coarse_cue_depths),
-            ));
-        }
-        check_radii("cascade.neighbour_hypotheses", p.neighbour_hypotheses)?;
-        check_radii("cascade.neighbour_extremes", p.neighbour_extremes)?;
-        if !p.neighbour_start_score.is_finite() {
-            return Err(invalid(
-                "cascade.neighbour_start_score",
-                format!("{} must be finite", p.neighbour_start_score),
-            ));
-        }
-        if !(p.neighbour_gain.is_finite() && p.neighbour_gain > 0.0) {
-            return Err(invalid(
-                "cascade.neighbour_gain",
-                format!("{} must be finite and above 0", p.neighbour_gain),
-            ));
-        }
-        if p.neighbour_hypotheses[0] > 0 && p.mid_cue_sgm {
-            return Err(invalid(
-                "cascade.neighbour_hypotheses",
-                "the half stage's cannot go with `mid_cue_sgm`".into(),
             ));
         }
         if p.coarse_cue_sgm && !p.zncc_cue {
@@ -989,45 +917,6 @@ mod tests {
         let json = serde_json::to_string(&deep).unwrap();
         assert!(json.contains("\"mid_cue_sgm\":true"), "{json}");
         assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
-        // The stretch of the outermost hypotheses: off unless written, radii up to the limit.
-        assert!(!json.contains("neighbour_extremes"), "{json}");
-        deep.cascade.neighbour_extremes = [0, MAX_NEIGHBOUR_RADIUS];
-        deep.validate().unwrap();
-        let json = serde_json::to_string(&deep).unwrap();
-        assert!(json.contains("\"neighbour_extremes\":[0,4]"), "{json}");
-        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
-        deep.cascade.neighbour_extremes = [MAX_NEIGHBOUR_RADIUS + 1, 1];
-        let err = deep.validate().unwrap_err().to_string();
-        assert!(err.contains("cascade.neighbour_extremes"), "{err}");
-        deep.cascade.neighbour_extremes = [0, 0];
-        // Neighbour hypotheses: two more per stage, radii up to the limit, and not on the
-        // half stage beside its aggregated cue (`deep` has it).
-        assert!(!json.contains("neighbour_hypotheses"), "{json}");
-        assert_eq!(deep.cascade.stage_hypotheses_of(1), 5);
-        deep.cascade.neighbour_hypotheses = [0, 3];
-        deep.validate().unwrap();
-        assert_eq!(deep.cascade.stage_hypotheses_of(1), 7);
-        assert_eq!(deep.cascade.stage_hypotheses_of(0), 8);
-        let json = serde_json::to_string(&deep).unwrap();
-        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
-        deep.cascade.neighbour_hypotheses = [1, 0];
-        let err = deep.validate().unwrap_err().to_string();
-        assert!(err.contains("cascade.neighbour_hypotheses"), "{err}");
-        deep.cascade.mid_cue_sgm = false;
-        deep.validate().unwrap();
-        deep.cascade.neighbour_hypotheses = [0, MAX_NEIGHBOUR_RADIUS + 1];
-        let err = deep.validate().unwrap_err().to_string();
-        assert!(err.contains("cascade.neighbour_hypotheses"), "{err}");
-        deep.cascade.neighbour_hypotheses = [0, 1];
-        // Their starting score: left out of the file at its default, finite.
-        assert!(!json.contains("neighbour_start_score"), "{json}");
-        deep.cascade.neighbour_start_score = -2.0;
-        let json = serde_json::to_string(&deep).unwrap();
-        assert!(json.contains("\"neighbour_start_score\":-2.0"), "{json}");
-        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
-        deep.cascade.neighbour_start_score = f64::NAN;
-        let err = deep.validate().unwrap_err().to_string();
-        assert!(err.contains("cascade.neighbour_start_score"), "{err}");
         let mut wide = NetConfig::cascade();
         wide.cascade.feature_channels[2] = 128;
         let err = wide.validate().unwrap_err().to_string();
@@ -1067,6 +956,29 @@ mod tests {
             assert!(err.contains("cascade.coarse_score_sgm"), "{err}");
         }
         let typo = json.replace("temperature", "temp");
+        assert!(serde_json::from_str::<NetConfig>(&typo).is_err());
+    }
+
+    #[test]
+    fn removed_switches_are_read_at_their_default_only() {
+        let json = serde_json::to_string(&NetConfig::cascade()).unwrap();
+        let with = |field: &str| json.replace("\"cascade\":{", &format!("\"cascade\":{{{field},"));
+        for off in [
+            "\"neighbour_extremes\":[0,0]",
+            "\"neighbour_hypotheses\":[0,0]",
+            "\"neighbour_start_score\":-5",
+            "\"neighbour_gain\":1.0",
+        ] {
+            let read: NetConfig = serde_json::from_str(&with(off)).unwrap();
+            assert_eq!(read, NetConfig::cascade(), "{off}");
+        }
+        for on in ["\"neighbour_hypotheses\":[0,2]", "\"neighbour_gain\":30.0"] {
+            let err = serde_json::from_str::<NetConfig>(&with(on))
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains("removed in 0.2"), "{err}");
+        }
+        let typo = with("\"neighbour_gains\":1.0");
         assert!(serde_json::from_str::<NetConfig>(&typo).is_err());
     }
 

@@ -10,6 +10,7 @@ use burn::tensor::Device;
 use serde::Deserialize;
 
 use crate::cascade::CascadeNet;
+use crate::cascade::model::{GROWABLE, GrowWeights};
 use crate::config::{Family, Layout, NetConfig};
 use crate::error::NetError;
 use crate::model::OmniMvsNet;
@@ -220,14 +221,14 @@ pub fn load_cascade(path: &Path, device: &Device) -> Result<CascadeNet, NetError
 }
 
 /// Loads cascade weights into a network of `config`, which may have grown from the
-/// weights' own configuration (the file's JSON): more context pairs at stride 8
-/// (`context_pairs`), gated refinement stages (`stage_gates`), the photometric cue
-/// (`zncc_cue`, [`CascadeNet::with_zncc_cue`]), learnt upsampling (`convex_upsampling`,
-/// selectors that start near the bilinear weights), other loss weights (training only),
-/// everything else equal. The full grid's selector alone may also be left out of the file's
-/// network (`convex_upsampling_full` off: its tensors are not read). The new modules keep their starting values, which leave the
-/// network's answer as it was (or nearly: the gates start at 0.98), so training goes on from
-/// the loaded network.
+/// weights' own configuration (the file's JSON) as [`GROWABLE`] allows, everything else
+/// equal: e.g. more context pairs at stride 8 (`context_pairs`), gated refinement stages
+/// (`stage_gates`), the photometric cue (`zncc_cue`, [`CascadeNet::with_zncc_cue`]), learnt
+/// upsampling (`convex_upsampling`, selectors that start near the bilinear weights), other
+/// loss weights (training only). The full grid's selector alone may also be left out of the
+/// file's network (`convex_upsampling_full` off: its tensors are not read). The new modules
+/// keep their starting values, which leave the network's answer as it was (or nearly: the
+/// gates start at 0.98), so training goes on from the loaded network.
 ///
 /// # Errors
 /// [`NetError::Weights`] when the file's network is not `config` or a part of it; see
@@ -241,81 +242,7 @@ pub fn load_cascade_grown(
     if saved == *config {
         return load_cascade(path, device);
     }
-    let mut shrunk = config.clone();
-    // What only training reads may differ: the loss weights.
-    shrunk.cascade.loss_weights = saved.cascade.loss_weights;
-    shrunk.cascade.coarse_distribution_weight = saved.cascade.coarse_distribution_weight;
-    shrunk.cascade.refine_distribution_weight = saved.cascade.refine_distribution_weight;
-    shrunk.cascade.sky_loss_weight = saved.cascade.sky_loss_weight;
-    shrunk.cascade.neighbour_start_score = saved.cascade.neighbour_start_score;
-    // The neighbour hypotheses' gain scales weights that only exist with them: it may be
-    // chosen when the network grows into them, not changed afterwards.
-    if (0..2).all(|i| saved.cascade.neighbour_count(i) == 0) {
-        shrunk.cascade.neighbour_gain = saved.cascade.neighbour_gain;
-    }
-    shrunk.cascade.context_pairs = saved.cascade.context_pairs;
-    shrunk.cascade.stage_gates = saved.cascade.stage_gates;
-    shrunk.cascade.zncc_cue = saved.cascade.zncc_cue;
-    shrunk.cascade.coarse_cue_sgm = saved.cascade.coarse_cue_sgm;
-    shrunk.cascade.mid_cue_sgm = saved.cascade.mid_cue_sgm;
-    // No weight depends on the aggregation of the coarse distribution.
-    shrunk.cascade.coarse_score_sgm = saved.cascade.coarse_score_sgm;
-    shrunk.cascade.convex_upsampling = saved.cascade.convex_upsampling;
-    shrunk.cascade.convex_upsampling_full = saved.cascade.convex_upsampling_full;
-    // The refinement stages' hypothesis spacing: no weight depends on it.
-    shrunk.cascade.stage_intervals = saved.cascade.stage_intervals;
-    shrunk.cascade.neighbour_extremes = saved.cascade.neighbour_extremes;
-    // Nor on the grid the coarse cue is matched on.
-    shrunk.cascade.coarse_cue_oversample = saved.cascade.coarse_cue_oversample;
-    shrunk.cascade.coarse_cue_depths = saved.cascade.coarse_cue_depths;
-    // Neighbour hypotheses may switch on (CascadeNet::with_neighbour_hypotheses).
-    shrunk.cascade.neighbour_hypotheses = saved.cascade.neighbour_hypotheses;
-    // The stride-8 features may widen (CascadeFeatures::widen8).
-    shrunk.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
-    // The coarse stage may move to the half grid, over other spheres
-    // (CascadeNet::with_coarse_grid).
-    shrunk.cascade.coarse_scale = saved.cascade.coarse_scale;
-    shrunk.cascade.coarse_spheres = saved.cascade.coarse_spheres;
-    // It may also correlate the stride-4 features (CascadeNet::with_coarse_stride4).
-    shrunk.cascade.coarse_stride4 = saved.cascade.coarse_stride4;
-    // And centre its half stage on a learnt choice (CascadeNet::with_same_grid_selector).
-    shrunk.cascade.same_grid_selector = saved.cascade.same_grid_selector;
-    // Its evidence may be squeezed (CascadeNet::with_coarse_squeeze), once.
-    shrunk.cascade.coarse_squeeze = saved.cascade.coarse_squeeze;
-    let grows = saved.cascade.context_pairs <= config.cascade.context_pairs
-        && (saved.cascade.coarse_scale == config.cascade.coarse_scale
-            || config.cascade.coarse_scale < saved.cascade.coarse_scale)
-        && saved.cascade.feature_channels[2] <= config.cascade.feature_channels[2]
-        && (!saved.cascade.stage_gates || config.cascade.stage_gates)
-        && (!saved.cascade.zncc_cue || config.cascade.zncc_cue)
-        && (!saved.cascade.coarse_stride4 || config.cascade.coarse_stride4)
-        && (!saved.cascade.same_grid_selector || config.cascade.same_grid_selector)
-        && (saved.cascade.coarse_squeeze == 0
-            || saved.cascade.coarse_squeeze == config.cascade.coarse_squeeze)
-        && (!saved.cascade.coarse_cue_sgm || config.cascade.coarse_cue_sgm)
-        && (!saved.cascade.mid_cue_sgm || config.cascade.mid_cue_sgm)
-        && (!saved.cascade.convex_upsampling || config.cascade.convex_upsampling)
-        && (0..2).all(|i| {
-            let (had, has) = (
-                saved.cascade.neighbour_count(i),
-                config.cascade.neighbour_count(i),
-            );
-            has >= had && (had == 0 || saved.cascade.zncc_cue == config.cascade.zncc_cue)
-        });
-    if shrunk != saved || !grows {
-        return Err(weights_error(
-            path,
-            "the network of these weights is neither the one asked for nor a part of it \
-             (only `context_pairs` and the stride-8 `feature_channels` may grow, \
-             `stage_gates`, `zncc_cue`, `coarse_cue_sgm`, `mid_cue_sgm`, `coarse_stride4`, \
-             `same_grid_selector`, `neighbour_hypotheses` and `convex_upsampling` switch on \
-             (the cue not after neighbour hypotheses), `convex_upsampling_full` switch either \
-             way, and the refinement stages' `stage_intervals`, `neighbour_extremes`, \
-             `coarse_cue_oversample`, `coarse_cue_depths` and the loss weights differ, \
-             and the coarse stage move to a finer grid (`coarse_scale`) over other \
-             `coarse_spheres` and its evidence be squeezed, once (`coarse_squeeze`))",
-        ));
-    }
+    check_growth(path, &saved, config)?;
     let has_fine = |c: &NetConfig| c.cascade.convex_upsampling && c.cascade.convex_upsampling_full;
     // The full grid's selector may be left out (its tensors in the file unused) or new.
     let (saved_fine, fine) = (has_fine(&saved), has_fine(config));
@@ -330,61 +257,92 @@ pub fn load_cascade_grown(
                 .and_then(|i| i.parse::<usize>().ok())
                 .is_some_and(|i| i >= old_ctx)
     };
-    // The cue widens the first convolution of every stage: load into the network without
-    // it, then widen (zero weights for the cue).
-    let mut without_cue = config.clone();
-    without_cue.cascade.zncc_cue = saved.cascade.zncc_cue;
-    without_cue.cascade.coarse_cue_sgm = saved.cascade.coarse_cue_sgm;
-    without_cue.cascade.mid_cue_sgm = saved.cascade.mid_cue_sgm;
-    without_cue.cascade.feature_channels[2] = saved.cascade.feature_channels[2];
-    without_cue.cascade.neighbour_hypotheses = saved.cascade.neighbour_hypotheses;
-    without_cue.cascade.coarse_stride4 = saved.cascade.coarse_stride4;
-    without_cue.cascade.coarse_scale = saved.cascade.coarse_scale;
-    without_cue.cascade.coarse_spheres = saved.cascade.coarse_spheres;
-    without_cue.cascade.same_grid_selector = saved.cascade.same_grid_selector;
-    without_cue.cascade.coarse_squeeze = saved.cascade.coarse_squeeze;
+    // What a growth step adds weights for is loaded into the network as saved, then grown
+    // (e.g. the cue widens the first convolution of every stage with zero weights).
+    let mut as_saved = config.clone();
+    for field in GROWABLE.iter().filter(|f| f.weights == GrowWeights::Grown) {
+        (field.copy)(&mut as_saved.cascade, &saved.cascade);
+    }
     let dropped = |p: &str| saved_fine && !fine && p.starts_with("up_fine.");
-    let net = apply_file_except(
-        CascadeNet::new(&without_cue, device)?,
-        path,
-        is_new,
-        dropped,
-    )?;
-    let net = if config.cascade.zncc_cue {
-        net.with_zncc_cue()
-    } else {
-        net
+    let net = apply_file_except(CascadeNet::new(&as_saved, device)?, path, is_new, dropped)?;
+    grow_loaded(net, config)
+}
+
+/// Fails unless the network of the weights `path`, saved with `saved`, may be loaded into
+/// one of `config`: every field equal but those of [`GROWABLE`], which may differ as their
+/// rules allow.
+fn check_growth(path: &Path, saved: &NetConfig, config: &NetConfig) -> Result<(), NetError> {
+    let refuse = |why: String| {
+        weights_error(
+            path,
+            format!(
+                "the network of these weights is neither the one asked for nor a part of it: \
+                 {why}"
+            ),
+        )
     };
-    let net = if config.cascade.coarse_cue_sgm {
+    if let Some(field) = GROWABLE
+        .iter()
+        .find(|f| !f.rule.allows(&saved.cascade, &config.cascade))
+    {
+        return Err(refuse(format!(
+            "`{}` {}",
+            field.name,
+            field.rule.describe()
+        )));
+    }
+    let mut shrunk = config.clone();
+    for field in GROWABLE
+        .iter()
+        .filter(|f| f.rule.may_differ(&saved.cascade))
+    {
+        (field.copy)(&mut shrunk.cascade, &saved.cascade);
+    }
+    if shrunk != *saved {
+        let may: Vec<String> = GROWABLE
+            .iter()
+            .map(|f| format!("`{}` {}", f.name, f.rule.describe()))
+            .collect();
+        return Err(refuse(format!(
+            "only these may differ: {}; everything else must be equal",
+            may.join(", ")
+        )));
+    }
+    Ok(())
+}
+
+/// `net`, loaded as saved for the fields whose weights are [`GrowWeights::Grown`], grown into
+/// `config` one `with_*` step at a time.
+fn grow_loaded(net: CascadeNet, config: &NetConfig) -> Result<CascadeNet, NetError> {
+    let p = &config.cascade;
+    let net = if p.zncc_cue { net.with_zncc_cue() } else { net };
+    let net = if p.coarse_cue_sgm {
         net.with_coarse_cue_sgm()?
     } else {
         net
     };
-    let net = if config.cascade.mid_cue_sgm {
+    let net = if p.mid_cue_sgm {
         net.with_mid_cue_sgm()?
     } else {
         net
     };
-    let net = if config.cascade.coarse_stride4 {
+    let net = if p.coarse_stride4 {
         net.with_coarse_stride4()?
     } else {
         net
     };
-    let mut net = net.with_coarse_feature_channels(config.cascade.feature_channels[2])?;
-    for (i, &radius) in config.cascade.neighbour_hypotheses.iter().enumerate() {
-        net = net.with_neighbour_hypotheses(i + 1, radius)?;
-    }
+    let net = net.with_coarse_feature_channels(p.feature_channels[2])?;
     // Everything asked for but the saved grid and spheres by now; the move keeps what it has
     // where they are the same.
-    let net = net.with_coarse_grid(config.cascade.coarse_scale, config.cascade.coarse_spheres)?;
-    let net = if config.cascade.same_grid_selector {
+    let net = net.with_coarse_grid(p.coarse_scale, p.coarse_spheres)?;
+    let net = if p.same_grid_selector {
         net.with_same_grid_selector()?
     } else {
         net
     };
     // Last, so that the factorised layer is the one every growth above left.
-    if config.cascade.coarse_squeeze > 0 {
-        net.with_coarse_squeeze(config.cascade.coarse_squeeze)
+    if p.coarse_squeeze > 0 {
+        net.with_coarse_squeeze(p.coarse_squeeze)
     } else {
         Ok(net)
     }

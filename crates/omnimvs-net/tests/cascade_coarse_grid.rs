@@ -192,15 +192,15 @@ fn a_moved_coarse_stage_keeps_linear_evidence_and_interpolates_its_scores() {
             .collect();
         Tensor::cat(planes, 1) // [1, channels x k, h, w], the sphere fastest
     };
-    let before = old.coarse.c0[0].forward(volume(k_old));
-    let after = moved.coarse.c0[0].forward(volume(k_new));
+    let before = old.coarse.c0[0].forward(volume(k_old), None);
+    let after = moved.coarse.c0[0].forward(volume(k_new), None);
     let diff = same(before, after);
     assert!(diff < 1e-4, "first convolution moved by {diff}");
 
     // The new scores are the old ones interpolated at the new spheres' inverse depths.
     let hidden = noise([1, config.cascade.coarse_channels[0], h, w], 3, &device);
-    let old_scores = read_values(old.coarse.out.forward(hidden.clone()), "old").unwrap();
-    let new_scores = read_values(moved.coarse.out.forward(hidden), "new").unwrap();
+    let old_scores = read_values(old.coarse.out.forward(hidden.clone(), None), "old").unwrap();
+    let new_scores = read_values(moved.coarse.out.forward(hidden, None), "new").unwrap();
     let plane = h * w;
     for j in 0..k_new {
         let u = position(k_new, j) * (k_old - 1) as f32 / (n - 1) as f32;

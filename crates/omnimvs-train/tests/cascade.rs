@@ -347,8 +347,6 @@ fn training_only_the_full_stage_moves_its_weights_and_nothing_else() {
     let mut config = train_config(13);
     config.net.cascade.convex_upsampling = true;
     config.net.cascade.convex_upsampling_full = false;
-    // The full stage's outermost hypotheses reach the neighbours' extremes.
-    config.net.cascade.neighbour_extremes = [0, 1];
     config.train_only = TrainParts::Fine;
     let device = Device::flex();
     let (mut learner, geometry, sample) = learner_on_sunny(&config);

@@ -224,31 +224,6 @@ pub struct Args {
     /// No weight depends on it, so --init weights of another spacing load as they are.
     #[arg(long, value_parser = parse_intervals, conflicts_with = "resume")]
     pub stage_intervals: Option<[f64; 2]>,
-    /// Cascade: per refinement stage, the radius in pixels of the neighbourhood whose lowest
-    /// and highest centre the stage's outermost hypotheses stretch to, `HALF,FULL`
-    /// (`neighbour_extremes`; 0: evenly spaced hypotheses, as before). At a depth edge the
-    /// centre blends the two surfaces; the neighbours' extremes are the surfaces. No weight
-    /// depends on it, so --init weights without it load as they are.
-    #[arg(long, value_parser = parse_radii, conflicts_with = "resume")]
-    pub neighbour_extremes: Option<[usize; 2]>,
-    /// Cascade: per refinement stage, the radius in pixels of the neighbourhood whose lowest
-    /// and highest centre become two more hypotheses of the stage, after its evenly spaced
-    /// ones, `HALF,FULL` (`neighbour_hypotheses`; 0: none). --init weights without them grow
-    /// into them: the stage reads and scores them with zero weights (a low starting score),
-    /// so training starts near the loaded network's answer.
-    #[arg(long, value_parser = parse_radii, conflicts_with = "resume")]
-    pub neighbour_hypotheses: Option<[usize; 2]>,
-    /// Cascade: the starting score of the neighbour hypotheses when --init weights grow into
-    /// them (`neighbour_start_score`; -5: under 1 % of each pixel's weight, and little
-    /// gradient; the evenly spaced hypotheses' scores are near 0).
-    #[arg(long, allow_negative_numbers = true, conflicts_with = "resume")]
-    pub neighbour_start_score: Option<f64>,
-    /// Cascade: the gain of the neighbour hypotheses' weights (`neighbour_gain`; 1): their
-    /// evidence and scores are multiplied by it, so under Adam the weights grown for them
-    /// train this many times faster than the rest of their stage. Chosen when --init weights
-    /// grow into them; the trained network answers with it.
-    #[arg(long, conflicts_with = "resume")]
-    pub neighbour_gain: Option<f64>,
     /// Which weights the run trains (`train_only`): `all`; `upsampling`, the cascade's
     /// learnt upsampling selectors alone (every other weight and batch-norm statistic stays as
     /// --init loaded it; a cheap step, the frozen stages need no backward pass); or `coarse`,
@@ -545,17 +520,6 @@ where
     }
 }
 
-/// `--neighbour-extremes` / `--neighbour-hypotheses HALF,FULL`: two radii of at most
-/// [`omnimvs_net::config::MAX_NEIGHBOUR_RADIUS`].
-fn parse_radii(text: &str) -> Result<[usize; 2], String> {
-    let max = omnimvs_net::config::MAX_NEIGHBOUR_RADIUS;
-    parse_pair(
-        text,
-        |r: usize| r <= max,
-        &format!("two radii in pixels from 0 to {max} (e.g. 0,1)"),
-    )
-}
-
 /// `--stage-intervals HALF,FULL`: two positive finite spacings.
 fn parse_intervals(text: &str) -> Result<[f64; 2], String> {
     parse_pair(
@@ -639,10 +603,6 @@ fn net_config(args: &Args) -> Result<NetConfig> {
         || args.sky_weight.is_some()
         || args.convex_upsampling.is_some()
         || args.stage_intervals.is_some()
-        || args.neighbour_extremes.is_some()
-        || args.neighbour_hypotheses.is_some()
-        || args.neighbour_start_score.is_some()
-        || args.neighbour_gain.is_some()
         || args.coarse_feature_channels.is_some()
         || args.coarse_cue_oversample.is_some()
         || args.coarse_cue_depths.is_some()
@@ -658,9 +618,7 @@ fn net_config(args: &Args) -> Result<NetConfig> {
             bail!(
                 "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                  --refine-distribution, --sky-weight, --convex-upsampling, \
-                 --stage-intervals, --neighbour-extremes, --neighbour-hypotheses, \
-                 --neighbour-start-score, --neighbour-gain, \
-                 --coarse-feature-channels, \
+                 --stage-intervals, --coarse-feature-channels, \
                  --coarse-scale, --coarse-spheres, --coarse-stride4, \
                  --same-grid-selector, --coarse-squeeze, \
                  --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
@@ -682,18 +640,6 @@ fn net_config(args: &Args) -> Result<NetConfig> {
         }
         if let Some(intervals) = args.stage_intervals {
             net.cascade.stage_intervals = intervals;
-        }
-        if let Some(radii) = args.neighbour_extremes {
-            net.cascade.neighbour_extremes = radii;
-        }
-        if let Some(radii) = args.neighbour_hypotheses {
-            net.cascade.neighbour_hypotheses = radii;
-        }
-        if let Some(score) = args.neighbour_start_score {
-            net.cascade.neighbour_start_score = score;
-        }
-        if let Some(gain) = args.neighbour_gain {
-            net.cascade.neighbour_gain = gain;
         }
         if let Some(factor) = args.coarse_cue_oversample {
             net.cascade.coarse_cue_oversample = factor;

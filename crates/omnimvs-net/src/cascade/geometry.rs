@@ -9,7 +9,6 @@ use std::time::Instant;
 use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::Rig;
-use omnimvs_data::edges::neighbour_min_max;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
 use super::model::{
@@ -17,7 +16,7 @@ use super::model::{
     same_grid_prior, upsampling_candidates,
 };
 use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
-use super::sampler::{coarse_indices, hypotheses_around, stretch_to_neighbours};
+use super::sampler::{coarse_indices, hypotheses_around};
 use super::score_sgm::aggregated_scores;
 use crate::config::NetConfig;
 use crate::error::NetError;
@@ -413,31 +412,13 @@ impl CascadeGeometry {
             });
         }
         let p = &self.config.cascade;
-        let even = p.stage_hypotheses[stage - 1];
-        let k = p.stage_hypotheses_of(stage - 1);
-        let mut index = hypotheses_around(
+        let k = p.stage_hypotheses[stage - 1];
+        let index = hypotheses_around(
             &center,
-            even,
+            k,
             p.stage_intervals[stage - 1],
             self.config.num_invdepth,
         );
-        let grid = [sampler.grid().height, cols.len()];
-        let wrap = cols.len() == sampler.grid().width;
-        stretch_to_neighbours(
-            &mut index,
-            &center,
-            even,
-            grid,
-            wrap,
-            p.neighbour_extremes[stage - 1],
-        );
-        // Two more hypotheses, after the evenly spaced ones: the neighbours' extremes.
-        if k > even {
-            let radius = p.neighbour_hypotheses[stage - 1];
-            let (low, high) = neighbour_min_max(&center, grid, wrap, radius);
-            index.extend(low);
-            index.extend(high);
-        }
         let mid_cue = match images {
             Some(pyramid) if stage == 1 && p.mid_cue_sgm => {
                 Some(self.mid_cue(pyramid, &index, k, &cols)?)

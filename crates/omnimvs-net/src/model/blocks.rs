@@ -1,9 +1,12 @@
 //! Convolution + batch norm + ReLU blocks with an optional residual input, laid out like the
-//! reference `module/basic.py` (`conv`, `bn`) so that PyTorch state dicts load by name.
+//! reference `module/basic.py` (`conv`, `bn`) so that PyTorch state dicts load by name. The
+//! 2D block also serves the cascade's panorama convolutions, which wrap around in longitude
+//! ([`ConvBn2d::pano`]).
 
 use std::sync::Arc;
 
 use burn::module::{Module, Param};
+use burn::nn::Initializer;
 use burn::nn::conv::{
     Conv2d, Conv2dConfig, Conv3d, Conv3dConfig, ConvTranspose3d, ConvTranspose3dConfig,
 };
@@ -67,7 +70,8 @@ pub(crate) fn fold_into_conv2d(conv: &mut Conv2d, bn: Option<BatchNorm>) {
     fold_into(&mut conv.weight, &mut conv.bias, bn, 0);
 }
 
-/// 2D convolution, optional batch norm, optional ReLU.
+/// 2D convolution, optional batch norm, optional ReLU; on the panorama grid
+/// ([`ConvBn2d::pano`]) the input's columns are a circle.
 #[derive(Module, Debug)]
 pub struct ConvBn2d {
     /// The convolution (`conv` in the reference state dict).
@@ -78,6 +82,10 @@ pub struct ConvBn2d {
     /// Whether a ReLU ends the block.
     #[module(skip)]
     pub relu: bool,
+    /// Whether the input wraps around in longitude: it is padded circularly by one column on
+    /// each side before the convolution, which pads no columns itself ([`ConvBn2d::pano`]).
+    #[module(skip)]
+    pub wrap_cols: bool,
     /// The same convolution on the host ([`ConvBn2d::with_host_conv`]: inference on a CPU).
     #[module(skip)]
     pub host: Option<Arc<HostConv>>,
@@ -106,18 +114,75 @@ impl ConvBn2d {
             conv,
             bn,
             relu,
+            wrap_cols: false,
             host: None,
         }
     }
 
-    /// The block with its convolution also on the host ([`HostConv`]), used by
-    /// [`ConvBn2d::forward`] from then on: for inference on a CPU, after
-    /// [`ConvBn2d::fold_batch_norm`] (a block that still has its batch norm is returned as it
-    /// is).
+    /// A 3x3 convolution on the panorama grid, which wraps around in longitude (the columns
+    /// are a circle) and is zero-padded in latitude: `channels[0] -> channels[1]` with random
+    /// weights and a bias, at `stride`; with `bn_relu`, a batch norm and a ReLU after the
+    /// convolution. The cost regularisation works on 2D maps whose channels are (groups x
+    /// hypotheses): on a CPU a 2D convolution with many channels runs near the GEMM peak,
+    /// where a 3D convolution with a handful of channels over the same volume is memory-bound
+    /// (measured 10x slower per FLOP with burn's flex backend, see the README).
+    pub fn pano(channels: [usize; 2], stride: usize, bn_relu: bool, device: &Device) -> Self {
+        Self::pano_from(
+            Conv2dConfig::new(channels, [3, 3]).with_stride([stride, stride]),
+            bn_relu,
+            device,
+        )
+    }
+
+    /// A panorama convolution ([`ConvBn2d::pano`]) whose output starts at `bias` everywhere
+    /// (zero weights), no batch norm, no ReLU.
+    pub fn pano_constant(channels: [usize; 2], bias: f32, device: &Device) -> Self {
+        let mut block = Self::pano_from(
+            Conv2dConfig::new(channels, [3, 3]).with_initializer(Initializer::Zeros),
+            false,
+            device,
+        );
+        block.conv.bias = Some(Param::from_tensor(Tensor::full(
+            [channels[1]],
+            bias,
+            device,
+        )));
+        block
+    }
+
+    /// A panorama convolution with ReLU and no batch norm ([`ConvBn2d::pano`]).
+    pub fn pano_relu(channels: [usize; 2], device: &Device) -> Self {
+        Self {
+            relu: true,
+            ..Self::pano_from(Conv2dConfig::new(channels, [3, 3]), false, device)
+        }
+    }
+
+    /// `config` padded by one row above and below and no column (the wrap pads those), with a
+    /// batch norm and a ReLU when `bn_relu`.
+    fn pano_from(config: Conv2dConfig, bn_relu: bool, device: &Device) -> Self {
+        let conv = config
+            .with_padding(PaddingConfig2d::Explicit(1, 0, 1, 0))
+            .init(device);
+        let channels = conv.weight.dims()[0];
+        Self {
+            conv,
+            bn: bn_relu.then(|| BatchNormConfig::new(channels).init(device)),
+            relu: bn_relu,
+            wrap_cols: true,
+            host: None,
+        }
+    }
+
+    /// The block with its convolution also on the host ([`HostConv`], with the longitude wrap
+    /// in its addressing), used by [`ConvBn2d::forward`] from then on: for inference on a
+    /// CPU, after [`ConvBn2d::fold_batch_norm`] (a block that still has its batch norm is
+    /// returned as it is).
     #[must_use]
     pub fn with_host_conv(mut self) -> Self {
         if self.bn.is_none() {
-            self.host = HostConv::from_conv(&self.conv, 0, false).map(Arc::new);
+            let extra_cols = usize::from(self.wrap_cols);
+            self.host = HostConv::from_conv(&self.conv, extra_cols, self.wrap_cols).map(Arc::new);
         }
         self
     }
@@ -131,11 +196,20 @@ impl ConvBn2d {
             },
             None => (x, residual),
         };
+        let x = if self.wrap_cols {
+            let [_, _, _, w] = x.dims();
+            let first = x.clone().narrow(3, 0, 1);
+            let last = x.clone().narrow(3, w - 1, 1);
+            Tensor::cat(vec![last, x, first], 3) // [B, C, H, W + 2]
+        } else {
+            x
+        };
         let x = self.conv.forward(x); // [B, C_out, H', W']
         finish(x, self.bn.as_ref(), residual, self.relu)
     }
 
     /// Folds an inference-mode batch norm into the convolution.
+    #[must_use]
     pub fn fold_batch_norm(mut self) -> Self {
         fold_into_conv2d(&mut self.conv, self.bn.take());
         self

@@ -232,6 +232,7 @@ fn widen_block(old: ConvBn2d, fresh: ConvBn2d, old_width: usize) -> ConvBn2d {
         conv,
         bn,
         relu: old.relu,
+        wrap_cols: old.wrap_cols,
         host: None,
     }
 }
@@ -290,6 +291,7 @@ fn widen_projection(old: ConvBn2d, fresh: ConvBn2d, old_width: usize, groups: us
         conv,
         bn: None,
         relu: old.relu,
+        wrap_cols: old.wrap_cols,
         host: None,
     }
 }

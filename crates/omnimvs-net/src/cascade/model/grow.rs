@@ -1,6 +1,8 @@
 //! Growth of a trained cascade: each `with_*` method switches one option of the
 //! configuration on and adds the weights it needs so that the network answers as before (or
-//! nearly) until training moves them.
+//! nearly) until training moves them; [`GROWABLE`] says which fields of a saved network's
+//! configuration may differ from the one it is loaded into, and how
+//! ([`crate::weights::load_cascade_grown`]).
 
 use burn::module::Param;
 use burn::nn::conv::Conv2d;
@@ -12,6 +14,143 @@ use super::upsample::{CandidateSelector, UPSAMPLE_TAPS};
 use crate::config::CascadeParams;
 use crate::error::NetError;
 use crate::tensor::read_values;
+
+/// How a field of [`CascadeParams`] may differ between a saved network and the
+/// configuration it is loaded into ([`GROWABLE`]).
+#[derive(Clone, Copy, Debug)]
+pub enum GrowRule {
+    /// Any value: only training reads it, or no weight depends on it.
+    Any,
+    /// Any value while the saved network has what the function accepts, else unchanged.
+    AnyWhile(fn(&CascadeParams) -> bool),
+    /// A flag (the function reads it) that may switch on, not off.
+    SwitchOn(fn(&CascadeParams) -> bool),
+    /// A count (the function reads it) that may grow, not shrink.
+    Grow(fn(&CascadeParams) -> usize),
+    /// A count (the function reads it) that may shrink, not grow.
+    Shrink(fn(&CascadeParams) -> usize),
+    /// Whatever the function accepts of the saved and the asked-for parameters.
+    Check(fn(&CascadeParams, &CascadeParams) -> bool),
+}
+
+impl GrowRule {
+    /// Whether a saved network's value is replaced by the asked-for one when the two are
+    /// compared: always but for [`GrowRule::AnyWhile`], whose condition `saved` must meet.
+    pub fn may_differ(self, saved: &CascadeParams) -> bool {
+        match self {
+            GrowRule::AnyWhile(allowed) => allowed(saved),
+            _ => true,
+        }
+    }
+
+    /// Whether the asked-for value may follow the saved one.
+    pub fn allows(self, saved: &CascadeParams, asked: &CascadeParams) -> bool {
+        match self {
+            GrowRule::Any | GrowRule::AnyWhile(_) => true,
+            GrowRule::SwitchOn(flag) => !flag(saved) || flag(asked),
+            GrowRule::Grow(count) => count(saved) <= count(asked),
+            GrowRule::Shrink(count) => count(asked) <= count(saved),
+            GrowRule::Check(check) => check(saved, asked),
+        }
+    }
+
+    /// How the value may differ, in words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            GrowRule::Any => "may take any value",
+            GrowRule::AnyWhile(_) => "may be chosen only while the saved network allows it",
+            GrowRule::SwitchOn(_) => "may switch on, not off",
+            GrowRule::Grow(_) => "may grow, not shrink",
+            GrowRule::Shrink(_) => "may shrink, not grow",
+            GrowRule::Check(_) => "may change only as its growth allows",
+        }
+    }
+}
+
+/// Where the weights of a growable field's asked-for value come from when a saved network
+/// is loaded into another configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GrowWeights {
+    /// The network is built as asked; tensors the file lacks keep their starting values.
+    Built,
+    /// The network is built as saved and a `with_*` growth adds what the asked-for value
+    /// needs after loading.
+    Grown,
+}
+
+/// One field of [`CascadeParams`] that may differ between a saved network and the
+/// configuration it is loaded into.
+#[derive(Clone, Copy, Debug)]
+pub struct Growable {
+    /// The field's name in the configuration file.
+    pub name: &'static str,
+    /// Copies the field from the second parameters into the first.
+    pub copy: fn(&mut CascadeParams, &CascadeParams),
+    /// How it may differ.
+    pub rule: GrowRule,
+    /// Where its weights come from.
+    pub weights: GrowWeights,
+}
+
+/// One [`Growable`] per `field[index]: rule, weights` line; the rules `any`, `switch_on`,
+/// `grow` and `shrink` read the field itself, `any_while(f)` and `check(f)` take a function.
+macro_rules! growable {
+    (@rule $f:ident $([$i:literal])?, any) => { GrowRule::Any };
+    (@rule $f:ident $([$i:literal])?, switch_on) => { GrowRule::SwitchOn(|p| p.$f) };
+    (@rule $f:ident $([$i:literal])?, grow) => { GrowRule::Grow(|p| p.$f$([$i])?) };
+    (@rule $f:ident $([$i:literal])?, shrink) => { GrowRule::Shrink(|p| p.$f$([$i])?) };
+    (@rule $f:ident $([$i:literal])?, any_while($c:expr)) => { GrowRule::AnyWhile($c) };
+    (@rule $f:ident $([$i:literal])?, check($c:expr)) => { GrowRule::Check($c) };
+    ($($f:ident $([$i:literal])?: $rule:ident $(($c:expr))?, $weights:ident;)*) => {
+        &[$(Growable {
+            name: concat!(stringify!($f) $(, "[", stringify!($i), "]")?),
+            copy: |to, from| to.$f$([$i])? = from.$f$([$i])?,
+            rule: growable!(@rule $f $([$i])?, $rule $(($c))?),
+            weights: GrowWeights::$weights,
+        }),*]
+    };
+}
+
+/// The fields of [`CascadeParams`] that may differ between a saved network and the
+/// configuration it is loaded into ([`crate::weights::load_cascade_grown`]), with how; every
+/// other field must be equal. A new option that a trained network can grow into is one line
+/// here (and, when its weights are [`GrowWeights::Grown`], one step of the growth).
+pub const GROWABLE: &[Growable] = growable! {
+    // Only training reads these.
+    loss_weights: any, Built;
+    coarse_distribution_weight: any, Built;
+    refine_distribution_weight: any, Built;
+    sky_loss_weight: any, Built;
+    // New modules that start where the network answers as before (or nearly).
+    context_pairs: grow, Built;
+    stage_gates: switch_on, Built;
+    convex_upsampling: switch_on, Built;
+    // The full grid's selector may be left out of the file's network or new.
+    convex_upsampling_full: any, Built;
+    // New input channels with zero weights (`CascadeNet::with_zncc_cue`,
+    // `with_coarse_cue_sgm`, `with_mid_cue_sgm`, `with_coarse_stride4`).
+    zncc_cue: switch_on, Grown;
+    coarse_cue_sgm: switch_on, Grown;
+    mid_cue_sgm: switch_on, Grown;
+    coarse_stride4: switch_on, Grown;
+    // No weight depends on these: the aggregation of the coarse distribution, the
+    // refinement's hypothesis spacing, the grid and depths of the coarse cue.
+    coarse_score_sgm: any, Built;
+    stage_intervals: any, Built;
+    coarse_cue_oversample: any, Built;
+    coarse_cue_depths: any, Built;
+    // The stride-8 features may widen (`CascadeFeatures::widen8`).
+    feature_channels[2]: grow, Grown;
+    // The coarse stage may move to a finer grid over other spheres
+    // (`CascadeNet::with_coarse_grid`) and centre its half stage on a learnt choice
+    // (`CascadeNet::with_same_grid_selector`).
+    coarse_scale: shrink, Grown;
+    coarse_spheres: any, Grown;
+    same_grid_selector: switch_on, Grown;
+    // Its evidence may be squeezed, once (`CascadeNet::with_coarse_squeeze`).
+    coarse_squeeze: check(|saved, asked| saved.coarse_squeeze == 0
+        || saved.coarse_squeeze == asked.coarse_squeeze), Grown;
+};
 
 impl CascadeNet {
     /// The network with the photometric cue switched on (`zncc_cue`): the first convolution
@@ -104,56 +243,6 @@ impl CascadeNet {
         *flag(&mut config.cascade) = true;
         config.validate()?;
         insert_zero_inputs(first(&mut self), tail, k(&config.cascade));
-        self.config = config;
-        Ok(self)
-    }
-
-    /// The network with the two neighbour hypotheses of refinement stage `stage` (1: half,
-    /// 2: full resolution) within `radius` pixels (`neighbour_hypotheses`): the stage's first
-    /// convolution reads their evidence (after all of the evenly spaced hypotheses') with zero
-    /// weights, and its scoring convolution scores them with zero weights and a bias of
-    /// `neighbour_start_score` (by default -5: the network answers nearly as before, the two
-    /// holding a small share of each pixel's weight, until training moves them). A stage that
-    /// has them already takes the new radius.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] for another stage, a radius of 0 for a stage that has them,
-    /// or when the configuration with them is not valid.
-    pub fn with_neighbour_hypotheses(
-        mut self,
-        stage: usize,
-        radius: usize,
-    ) -> Result<Self, NetError> {
-        if !(1..=2).contains(&stage) {
-            return Err(NetError::InvalidConfig {
-                field: "neighbour_hypotheses",
-                message: format!("stage {stage}: the refinement stages are 1 and 2"),
-            });
-        }
-        let i = stage - 1;
-        let mut config = self.config.clone();
-        let had = config.cascade.neighbour_count(i) > 0;
-        config.cascade.neighbour_hypotheses[i] = radius;
-        config.validate()?;
-        if had && radius == 0 {
-            return Err(NetError::InvalidConfig {
-                field: "neighbour_hypotheses",
-                message: format!("stage {stage} has them already; they cannot be taken out"),
-            });
-        }
-        if !had && radius > 0 {
-            let p = &config.cascade;
-            let channels = p.stage_evidence_channels(i);
-            let regularizer = if stage == 1 {
-                &mut self.mid
-            } else {
-                &mut self.fine
-            };
-            append_zero_inputs(&mut regularizer.convs[0].conv, 2 * channels);
-            // Scores leave the stage times `neighbour_gain`: the bias starts at score / gain.
-            let score = (p.neighbour_start_score / p.neighbour_gain) as f32;
-            append_zero_outputs(&mut regularizer.out.conv, 2, score);
-        }
         self.config = config;
         Ok(self)
     }
@@ -346,21 +435,6 @@ impl CascadeNet {
         self.coarse.squeeze = Some(conv);
         self.config = config;
         Ok(self)
-    }
-}
-
-/// `conv` writing `k` more output channels, after its own, with zero weights and `bias`.
-fn append_zero_outputs(conv: &mut Conv2d, k: usize, bias: f32) {
-    let weight = conv.weight.val(); // [C_out, C_in, kh, kw]
-    let [_, c_in, kh, kw] = weight.dims();
-    let device = weight.device();
-    let zeros = Tensor::zeros([k, c_in, kh, kw], &device);
-    conv.weight = Param::from_tensor(Tensor::cat(vec![weight, zeros], 0).detach());
-    if let Some(b) = conv.bias.take() {
-        let new = Tensor::<1>::full([k], bias, &device);
-        conv.bias = Some(Param::from_tensor(
-            Tensor::cat(vec![b.val(), new], 0).detach(),
-        ));
     }
 }
 

@@ -19,8 +19,8 @@ pub mod stages;
 pub mod upsample;
 
 pub use features::CascadeFeatures;
-pub use grow::sphere_resampling;
-pub use regularize::{CoarseRegularizer, PanoConv2d, StageRegularizer, Up2d};
+pub use grow::{GROWABLE, GrowRule, GrowWeights, Growable, sphere_resampling};
+pub use regularize::{CoarseRegularizer, StageRegularizer, Up2d};
 pub use upsample::{
     CandidateSelector, UPSAMPLE_TAPS, bilinear_prior, convex_combination, neighbourhood_candidates,
     same_grid_prior, upsampling_candidates,
@@ -99,16 +99,16 @@ impl CascadeNet {
                 device,
             ),
             mid: StageRegularizer::new(
-                p.stage_evidence_channels(0) * p.stage_hypotheses_of(0),
+                p.stage_evidence_channels(0) * p.stage_hypotheses[0],
                 p.stage_channels[0],
-                p.stage_hypotheses_of(0),
+                p.stage_hypotheses[0],
                 p.stage_gates,
                 device,
             ),
             fine: StageRegularizer::new(
-                p.stage_evidence_channels(1) * p.stage_hypotheses_of(1),
+                p.stage_evidence_channels(1) * p.stage_hypotheses[1],
                 p.stage_channels[1],
-                p.stage_hypotheses_of(1),
+                p.stage_hypotheses[1],
                 p.stage_gates,
                 device,
             ),

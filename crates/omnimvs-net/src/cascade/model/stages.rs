@@ -260,27 +260,7 @@ impl CascadeNet {
         let channels = 1 + usize::from(level == 1 && self.config.cascade.mid_cue_sgm);
         let volume = self.with_cue(volume, taps.cue.clone(), taps, channels)?;
         let regularizer = if level == 1 { &self.mid } else { &self.fine };
-        // The neighbour hypotheses' evidence after all of the evenly spaced ones', and their
-        // scores last; both times `neighbour_gain` (a rate of their own under Adam).
-        let extra = self.config.cascade.neighbour_count(1 - level);
-        if extra == 0 {
-            return Ok(regularizer.forward(fold_volume(volume))); // [B, K, H, W]
-        }
-        let gain = self.config.cascade.neighbour_gain as f32;
-        let [_, _, k, _, _] = volume.dims();
-        let even = volume.clone().narrow(2, 0, k - extra);
-        let mut neighbours = volume.narrow(2, k - extra, extra);
-        if gain != 1.0 {
-            neighbours = neighbours * gain;
-        }
-        let folded = Tensor::cat(vec![fold_volume(even), fold_volume(neighbours)], 1);
-        let (scores, gate) = regularizer.forward(folded);
-        if gain == 1.0 {
-            return Ok((scores, gate));
-        }
-        let even = scores.clone().narrow(1, 0, k - extra);
-        let neighbours = scores.narrow(1, k - extra, extra) * gain;
-        Ok((Tensor::cat(vec![even, neighbours], 1), gate)) // [B, K, H, W]
+        Ok(regularizer.forward(fold_volume(volume))) // [B, K, H, W]
     }
 }
 

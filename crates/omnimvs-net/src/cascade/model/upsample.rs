@@ -3,13 +3,12 @@
 
 use burn::module::Module;
 use burn::nn::Initializer;
-use burn::nn::PaddingConfig2d;
 use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Tensor, TensorData};
 
-use super::regularize::PanoConv2d;
 use crate::config::CascadeParams;
+use crate::model::blocks::ConvBn2d;
 
 /// Candidates of a finer pixel in [`CandidateSelector`]: the 3 x 3 coarser pixels around its
 /// parent.
@@ -32,21 +31,14 @@ const UNUSED_TAP_LOGIT: f32 = -5.0;
 #[derive(Module, Debug)]
 pub struct CandidateSelector {
     /// 3x3 convolution (circular in longitude) with ReLU.
-    pub hidden: PanoConv2d,
+    pub hidden: ConvBn2d,
     /// 1x1 convolution to one logit per candidate.
     pub out: Conv2d,
 }
 
 impl CandidateSelector {
     pub(super) fn new(channels: [usize; 2], device: &Device) -> Self {
-        let hidden = PanoConv2d {
-            conv: Conv2dConfig::new(channels, [3, 3])
-                .with_padding(PaddingConfig2d::Explicit(1, 0, 1, 0))
-                .init(device),
-            bn: None,
-            relu: true,
-            host: None,
-        };
+        let hidden = ConvBn2d::pano_relu(channels, device);
         let out = Conv2dConfig::new([channels[1], UPSAMPLE_TAPS], [1, 1])
             .with_initializer(Initializer::Zeros)
             .init(device);
@@ -67,7 +59,7 @@ impl CandidateSelector {
         )
     }
 
-    /// Its 3x3 convolution also on the host ([`PanoConv2d::with_host_conv`]).
+    /// Its 3x3 convolution also on the host ([`ConvBn2d::with_host_conv`]).
     #[must_use]
     pub fn with_host_convs(self) -> Self {
         Self {
@@ -78,7 +70,7 @@ impl CandidateSelector {
 
     /// The candidates' evidence `[1, C, H, W]` -> logits `[1, 9, H, W]` (before the prior).
     pub fn forward(&self, evidence: Tensor<4>) -> Tensor<4> {
-        self.out.forward(self.hidden.forward(evidence))
+        self.out.forward(self.hidden.forward(evidence, None))
     }
 }
 
