@@ -17,8 +17,8 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use omnimvs_data::output::{DepthRun, FrameScene};
 use omnimvs_data::{Dataset, DepthEstimator, FrameRange};
+use omnimvs_eval::output::{DepthRun, FrameScene};
 use omnimvs_net::bundled::PickChoice;
 use omnimvs_net::{Backend, BundledModel, NetEstimator};
 use omnimvs_sweep::LutCache;

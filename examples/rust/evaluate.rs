@@ -18,11 +18,11 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use omnimvs_data::gt::read_inv_depth;
-use omnimvs_data::metrics::{
+use omnimvs_data::{Dataset, FrameRange};
+use omnimvs_eval::metrics::{
     Metrics, Protocol, index_on_eval_grid, mean_metrics, protocol_metrics,
 };
-use omnimvs_data::output::frame_path;
-use omnimvs_data::{Dataset, FrameRange};
+use omnimvs_eval::output::frame_path;
 use omnimvs_sweep::EquirectGrid;
 
 const USAGE: &str = "usage: evaluate DATASET ESTIMATE_DIR [FRAMES]

@@ -22,8 +22,8 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use omnimvs_data::colormap::Colormap;
 use omnimvs_data::gt::{read_tiff_f32, write_f32_tiff};
-use omnimvs_data::output::frame_path;
-use omnimvs_data::ply::{ColoredPoint, write_ply};
+use omnimvs_eval::output::frame_path;
+use omnimvs_eval::ply::{ColoredPoint, write_ply};
 use omnimvs_sweep::EquirectGrid;
 
 const USAGE: &str = "usage: read_outputs OUT FRAME

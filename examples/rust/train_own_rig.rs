@@ -20,8 +20,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use omnimvs_data::metrics::{Protocol, protocol_metrics};
 use omnimvs_data::{Dataset, DepthEstimator, FrameRange};
+use omnimvs_eval::metrics::{Protocol, protocol_metrics};
 use omnimvs_net::weights::load_family;
 use omnimvs_net::{Backend, NetConfig, NetEstimator, OmniMvsNet};
 use omnimvs_sweep::LutCache;

@@ -15,8 +15,8 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use omnimvs_data::output::ConfidenceRun;
 use omnimvs_data::{Dataset, DepthEstimator, FrameRange, StageTimes};
+use omnimvs_eval::output::ConfidenceRun;
 use omnimvs_stereo::{SgmEstimator, SgmParams};
 
 const USAGE: &str = "usage: zncc_sgm DATASET OUT [FRAMES]

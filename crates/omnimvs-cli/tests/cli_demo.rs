@@ -8,7 +8,7 @@ mod support;
 
 use omnimvs_data::Dataset;
 use omnimvs_data::gt::read_inv_depth;
-use omnimvs_data::metrics::eval_metrics;
+use omnimvs_eval::metrics::eval_metrics;
 use omnimvs_sweep::EquirectGrid;
 use support::{constant_guess_mae, png_size, read_json, run_ok};
 
@@ -119,7 +119,7 @@ fn demo_reports_figures_of_its_outputs_in_range() {
         assert_eq!((map.width, map.height), (width, height), "{name}");
         let (mut missed, mut right) = ((0.0f64, 0usize), (0.0f64, 0usize));
         for i in 0..width * height {
-            if !truth.scored(i, omnimvs_data::metrics::Protocol::Reference) {
+            if !omnimvs_eval::metrics::Protocol::Reference.scores(&truth, i) {
                 continue;
             }
             let e = f64::from((index.data[i] - truth.gt.index[i]).abs()) / ndepth as f64 * 100.0;

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use burn::tensor::Device;
 use omnimvs_data::Dataset;
 use omnimvs_data::gt::read_inv_depth;
-use omnimvs_data::metrics::eval_metrics;
+use omnimvs_eval::metrics::eval_metrics;
 use omnimvs_net::mccnn::{self, McCnnExtractor};
 use omnimvs_stereo::{CameraView, SweepStep, feature_cost_volume};
 use omnimvs_sweep::SphereProjector;

@@ -7,7 +7,7 @@ mod support;
 
 use omnimvs_data::Dataset;
 use omnimvs_data::gt::read_inv_depth;
-use omnimvs_data::metrics::eval_metrics;
+use omnimvs_eval::metrics::eval_metrics;
 use omnimvs_sweep::EquirectGrid;
 use support::{constant_guess_mae, omnimvs, png_size, read_json, run_ok, synth_dataset, text};
 

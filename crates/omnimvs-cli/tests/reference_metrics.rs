@@ -17,7 +17,7 @@ mod support;
 use std::path::{Path, PathBuf};
 
 use omnimvs_data::gt::{eval_truth_on_grid, read_inv_depth};
-use omnimvs_data::metrics::{Protocol, protocol_metrics};
+use omnimvs_eval::metrics::{Protocol, protocol_metrics};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use support::read_json;
 

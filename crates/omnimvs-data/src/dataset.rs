@@ -349,7 +349,7 @@ impl Dataset {
     }
 
     /// [`Self::ground_truth`] on `spec`'s grid and hypotheses together with the sky mask on
-    /// the same pixels, for scoring under either protocol ([`crate::metrics::Protocol`];
+    /// the same pixels, for scoring under either protocol (`omnimvs_eval::metrics::Protocol`;
     /// [`eval_truth_on_grid`]).
     ///
     /// # Errors

@@ -10,7 +10,6 @@ use tiff::decoder::{Decoder, DecodingResult};
 use tiff::encoder::{Compression, DeflateLevel, TiffEncoder, colortype};
 
 use crate::DataError;
-use crate::metrics::Protocol;
 
 /// Width of the published ground-truth panoramas.
 pub const GT_WIDTH: usize = 640;
@@ -269,7 +268,7 @@ pub const FINITE_INV_DEPTH: f32 = 1e-3;
 /// valid: the ground truth of training, and of the `with-sky` evaluation
 /// protocol. The reference's `evalError` does not score sky (its index is
 /// `(0 - d_0) / step`, just below 0 there); [`EvalTruth`] carries the sky mask
-/// that the `reference` protocol ([`crate::metrics::Protocol`]) leaves out.
+/// that the `reference` protocol (`omnimvs_eval::metrics::Protocol`) leaves out.
 pub fn ground_truth_index(map: &InvDepthMap, hyps: &InvDepthHypotheses) -> GroundTruth {
     let (w, h) = (map.width, map.height);
     let finite: Vec<bool> = map.data.iter().map(|&d| d >= FINITE_INV_DEPTH).collect();
@@ -358,7 +357,7 @@ pub fn is_sky(inv_depth: f32, hyps: &InvDepthHypotheses) -> bool {
 }
 
 /// The ground truth of one frame for evaluation under both protocols
-/// ([`crate::metrics::Protocol`]): `gt` is the ground truth of training and of the
+/// (`omnimvs_eval::metrics::Protocol`): `gt` is the ground truth of training and of the
 /// `with-sky` protocol (sky valid at index 0), `sky` marks the pixels that are sky
 /// ([`is_sky`]), which the `reference` protocol does not score.
 #[derive(Debug, Clone, PartialEq)]
@@ -367,18 +366,6 @@ pub struct EvalTruth {
     pub gt: GroundTruth,
     /// Whether each pixel is sky (inverse depth below `d_0`), row-major like `gt`.
     pub sky: Vec<bool>,
-}
-
-impl EvalTruth {
-    /// Whether pixel `i` is scored under `protocol`: valid in `gt`, and not sky for the
-    /// `reference` protocol.
-    pub fn scored(&self, i: usize, protocol: Protocol) -> bool {
-        self.gt.valid[i]
-            && match protocol {
-                Protocol::Reference => !self.sky[i],
-                Protocol::WithSky => true,
-            }
-    }
 }
 
 /// [`ground_truth_index`] of a (cropped) map together with its sky mask.
@@ -590,8 +577,9 @@ mod tests {
             crop.gt,
             ground_truth_index(&map.crop_rows_centered(160).unwrap(), &hyps)
         );
-        assert!(crop.scored(0, Protocol::WithSky) && !crop.scored(0, Protocol::Reference));
-        assert!(crop.scored(159 * w, Protocol::Reference));
+        // The first row is sky (scored with sky only), the last row scene.
+        assert!(crop.gt.valid[0] && crop.sky[0]);
+        assert!(crop.gt.valid[159 * w] && !crop.sky[159 * w]);
         // A coarser grid samples the same rays for the indices, the validity and the sky.
         let grid = EquirectGrid::new(32, 128, 45.0).unwrap();
         let sampled = eval_truth_on_grid(&map, &hyps, &grid).unwrap();

@@ -1,4 +1,5 @@
-//! Dataset folders in the reference OmniMVS layout (`FORMATS.md`).
+//! Dataset folders in the reference OmniMVS layout (`FORMATS.md`) and the one interface of
+//! every depth method; scoring and output files are `omnimvs-eval`'s.
 //!
 //! * [`Dataset`]: `config.yaml` (rig, min depth, `img_fmt`, frame range),
 //!   frame files by index, validity masks.
@@ -6,12 +7,11 @@
 //!   normalisation, PNG writing.
 //! * [`gt`]: ground-truth inverse depth in its three encodings, cropping and
 //!   the invalid-pixel rule; the f32 TIFF writer.
-//! * [`metrics`]: the paper's error metrics per frame and over frames.
-//! * [`colormap`], [`ply`]: pictures and point clouds of results; [`edges`]: depth edges
-//!   without blends (no points floating between two surfaces).
+//! * [`colormap`]: colour maps of inverse depth (the ground truth's picture page and every
+//!   output picture); [`edges`]: depth edges without blends (no points floating between two
+//!   surfaces).
 //! * [`estimate`]: [`DepthEstimator`], the one interface of every depth method, and its
 //!   [`DepthEstimate`].
-//! * [`output`]: an estimate's files, reports and the evaluation of methods side by side.
 
 pub mod colormap;
 mod config;
@@ -22,9 +22,6 @@ pub mod estimate;
 mod format;
 pub mod gt;
 pub mod image_io;
-pub mod metrics;
-pub mod output;
-pub mod ply;
 
 pub use config::{DatasetConfig, FrameRange, Split, write_config_yaml};
 pub use dataset::{Dataset, RELEASED_MAX_FOV_DEG, RELEASED_MIN_DEPTH_M};

@@ -2,7 +2,7 @@
 //! scored as `omnimvs eval` scores a method.
 
 use numpy::{PyArray2, PyArrayMethods, PyUntypedArrayMethods};
-use omnimvs_data::metrics::{Protocol, index_on_eval_grid, protocol_metrics};
+use omnimvs_eval::metrics::{Protocol, index_on_eval_grid, protocol_metrics};
 use omnimvs_sweep::EquirectGrid;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

@@ -5,7 +5,7 @@
 mod support;
 
 use omnimvs_data::gt::ground_truth_index;
-use omnimvs_data::metrics::{frame_metrics, mean_metrics};
+use omnimvs_eval::metrics::{frame_metrics, mean_metrics};
 use omnimvs_stereo::{SgmParams, SphericalStereo, SweepStep};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use support::scenes::{Rendered, published_rig, room, textured_sphere};

@@ -25,7 +25,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use burn::tensor::{Device, Tensor};
-use omnimvs_data::metrics::{Metrics, Protocol, frame_metrics, mean_metrics, protocol_metrics};
+use omnimvs_eval::metrics::{Metrics, Protocol, frame_metrics, mean_metrics, protocol_metrics};
 use omnimvs_sweep::SweepSpec;
 use serde::{Deserialize, Serialize};
 

@@ -8,17 +8,17 @@ use omnimvs_core::GrayImage;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_data::image_io::write_png_u8;
-use omnimvs_data::metrics::ProtocolMetrics;
-use omnimvs_data::output::evaluation::write_index_png;
-use omnimvs_data::output::pictures::{
+use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange};
+use omnimvs_eval::metrics::ProtocolMetrics;
+use omnimvs_eval::output::evaluation::write_index_png;
+use omnimvs_eval::output::pictures::{
     error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud,
 };
-use omnimvs_data::output::{
+use omnimvs_eval::output::{
     ConfidenceRun, DepthRun, EvalReport, Evaluation, FrameScene, MethodScores, protocol_tables,
     write_text,
 };
-use omnimvs_data::ply::write_ply;
-use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange};
+use omnimvs_eval::ply::write_ply;
 use omnimvs_net::{Backend, BundledModel, NetEstimator};
 use omnimvs_stereo::{SgmEstimator, SgmParams};
 use omnimvs_sweep::LutCache;

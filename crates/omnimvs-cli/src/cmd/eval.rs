@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use omnimvs_data::output::evaluation::write_index_png;
-use omnimvs_data::output::{EvalReport, Evaluation, MethodScores};
 use omnimvs_data::{Dataset, DepthEstimator, FrameRange};
+use omnimvs_eval::output::evaluation::write_index_png;
+use omnimvs_eval::output::{EvalReport, Evaluation, MethodScores};
 use omnimvs_net::NetEstimator;
 use omnimvs_stereo::{SgmEstimator, SgmParams};
 use omnimvs_sweep::{LutCache, SweepSpec};

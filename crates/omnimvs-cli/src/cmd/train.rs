@@ -8,7 +8,7 @@ use burn::tensor::Device;
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_core::fs::write_atomic;
 use omnimvs_data::FrameRange;
-use omnimvs_data::metrics::Metrics;
+use omnimvs_eval::metrics::Metrics;
 use omnimvs_net::{Backend, CascadeNet, Family, NetConfig, OmniMvsNet};
 use omnimvs_train::mccnn::{CostTrainConfig, CostTrainer};
 use omnimvs_train::sweepnet::{SweepTrainConfig, SweepTrainer};

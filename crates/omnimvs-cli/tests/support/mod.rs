@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use omnimvs_data::gt::EvalTruth;
-use omnimvs_data::metrics::Protocol;
+use omnimvs_eval::metrics::Protocol;
 
 /// Runs `omnimvs args` with its lookup-table cache in `cache`.
 pub fn omnimvs(args: &[&str], cache: &Path) -> Output {
@@ -73,7 +73,7 @@ pub fn png_size(path: &Path) -> (u32, u32) {
 /// the pixels the reference protocol scores: what a method that ignores the images gets.
 pub fn constant_guess_mae(truth: &EvalTruth, ndepth: usize) -> f64 {
     let mut scored: Vec<f32> = (0..truth.gt.index.len())
-        .filter(|&i| truth.scored(i, Protocol::Reference))
+        .filter(|&i| Protocol::Reference.scores(truth, i))
         .map(|i| truth.gt.index[i])
         .collect();
     scored.sort_by(f32::total_cmp);

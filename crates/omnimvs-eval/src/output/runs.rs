@@ -10,20 +10,22 @@ use super::files::{FrameScene, write_depth_pictures, write_maps, write_percentil
 use super::report::{
     ConfidenceFrame, ConfidenceSummary, frames_table, metrics_json, write_json, write_text,
 };
-use crate::estimate::{DepthEstimate, StageTimes};
-use crate::gt::EvalTruth;
 use crate::metrics::{Protocol, ProtocolMetrics, eval_metrics};
-use crate::{DataError, Dataset};
+use omnimvs_data::Dataset;
+use omnimvs_data::estimate::{DepthEstimate, StageTimes};
+use omnimvs_data::gt::EvalTruth;
 
-fn create_dir(dir: &Path) -> Result<(), DataError> {
-    std::fs::create_dir_all(dir).map_err(|e| DataError::io(dir, e))
+use crate::EvalError;
+
+fn create_dir(dir: &Path) -> Result<(), EvalError> {
+    std::fs::create_dir_all(dir).map_err(|e| EvalError::io(dir, e))
 }
 
 /// The metrics of an estimate against `truth` (on its grid), when there is a truth.
 fn metrics_of(
     est: &DepthEstimate,
     truth: Option<&EvalTruth>,
-) -> Result<Option<ProtocolMetrics>, DataError> {
+) -> Result<Option<ProtocolMetrics>, EvalError> {
     truth
         .map(|t| eval_metrics(&est.index, t, est.spec.ndepth()))
         .transpose()
@@ -42,8 +44,8 @@ impl ConfidenceRun {
     /// A run writing into `dir` (created) on `spec`.
     ///
     /// # Errors
-    /// [`DataError::Io`] when the folder cannot be created.
-    pub fn new(dir: &Path, spec: SweepSpec) -> Result<Self, DataError> {
+    /// [`EvalError::Io`] when the folder cannot be created.
+    pub fn new(dir: &Path, spec: SweepSpec) -> Result<Self, EvalError> {
         create_dir(dir)?;
         Ok(Self {
             dir: dir.to_path_buf(),
@@ -55,14 +57,14 @@ impl ConfidenceRun {
     /// Writes a frame's files and scores it against `truth` (on the estimate's grid).
     ///
     /// # Errors
-    /// [`DataError`] for a file that cannot be written or a truth of another size.
+    /// [`EvalError`] for a file that cannot be written or a truth of another size.
     pub fn add(
         &mut self,
         frame: u32,
         est: &DepthEstimate,
         timings: StageTimes,
         truth: Option<&EvalTruth>,
-    ) -> Result<&ConfidenceFrame, DataError> {
+    ) -> Result<&ConfidenceFrame, EvalError> {
         write_maps(&self.dir, frame, est)?;
         let color_range = write_percentile_png(&self.dir, frame, est)?;
         let metrics = metrics_of(est, truth)?;
@@ -92,14 +94,14 @@ impl ConfidenceRun {
     /// truth, and `json_name` summarising the run of `method` with `params` on `ds`.
     ///
     /// # Errors
-    /// [`DataError::Io`] for a file that cannot be written.
+    /// [`EvalError::Io`] for a file that cannot be written.
     pub fn finish<P: Serialize>(
         self,
         ds: &Dataset,
         method: &str,
         params: P,
         json_name: &str,
-    ) -> Result<Option<String>, DataError> {
+    ) -> Result<Option<String>, EvalError> {
         let per_frame: Vec<(u32, ProtocolMetrics)> = self
             .frames
             .iter()
@@ -150,13 +152,13 @@ impl DepthRun {
     /// when `ply`.
     ///
     /// # Errors
-    /// [`DataError::Io`] when the folder or the settings cannot be written.
+    /// [`EvalError::Io`] when the folder or the settings cannot be written.
     pub fn new(
         dir: &Path,
         settings_name: &str,
         settings: &impl Serialize,
         ply: bool,
-    ) -> Result<Self, DataError> {
+    ) -> Result<Self, EvalError> {
         create_dir(dir)?;
         write_json(&dir.join(settings_name), settings, true)?;
         Ok(Self {
@@ -169,14 +171,14 @@ impl DepthRun {
     /// Writes a frame's files; returns its metrics against `truth` (on the estimate's grid).
     ///
     /// # Errors
-    /// [`DataError`] for a file that cannot be written or images that do not fit the rig.
+    /// [`EvalError`] for a file that cannot be written or images that do not fit the rig.
     pub fn add(
         &mut self,
         frame: u32,
         est: &DepthEstimate,
         scene: FrameScene<'_>,
         truth: Option<&EvalTruth>,
-    ) -> Result<Option<ProtocolMetrics>, DataError> {
+    ) -> Result<Option<ProtocolMetrics>, EvalError> {
         write_maps(&self.dir, frame, est)?;
         let metrics = metrics_of(est, truth)?;
         write_depth_pictures(&self.dir, frame, est, scene, truth.map(|t| &t.gt), self.ply)?;
@@ -189,8 +191,8 @@ impl DepthRun {
     /// Writes `metrics.json` when frames had ground truth; returns the mean metrics.
     ///
     /// # Errors
-    /// [`DataError::Io`] for a file that cannot be written.
-    pub fn finish(self) -> Result<Option<ProtocolMetrics>, DataError> {
+    /// [`EvalError::Io`] for a file that cannot be written.
+    pub fn finish(self) -> Result<Option<ProtocolMetrics>, EvalError> {
         if self.metrics.is_empty() {
             return Ok(None);
         }

@@ -8,12 +8,14 @@ use omnimvs_sweep::SweepSpec;
 use serde::Serialize;
 
 use super::report::{protocol_tables, write_json, write_text};
-use crate::colormap::{Colormap, colorize};
-use crate::estimate::DepthEstimate;
-use crate::gt::{EvalTruth, GroundTruth};
-use crate::image_io::write_png_u8;
 use crate::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics, index_on_eval_grid};
-use crate::{DataError, Dataset};
+use omnimvs_data::Dataset;
+use omnimvs_data::colormap::{Colormap, colorize};
+use omnimvs_data::estimate::DepthEstimate;
+use omnimvs_data::gt::{EvalTruth, GroundTruth};
+use omnimvs_data::image_io::write_png_u8;
+
+use crate::EvalError;
 
 /// The ground truth of some frames on the evaluation sweep.
 pub struct Evaluation {
@@ -31,11 +33,11 @@ impl Evaluation {
     /// Reads the ground truth of `frames` on `spec`.
     ///
     /// # Errors
-    /// [`DataError`] for a frame without ground truth or an unreadable one.
-    pub fn new(ds: &Dataset, frames: &[u32], spec: SweepSpec) -> Result<Self, DataError> {
+    /// [`EvalError`] for a frame without ground truth or an unreadable one.
+    pub fn new(ds: &Dataset, frames: &[u32], spec: SweepSpec) -> Result<Self, EvalError> {
         let mut truths = Vec::with_capacity(frames.len());
         for &f in frames {
-            truths.push(ds.eval_truth(f, &spec)?.ok_or_else(|| DataError::Format {
+            truths.push(ds.eval_truth(f, &spec)?.ok_or_else(|| EvalError::Format {
                 path: ds.root.clone(),
                 message: format!("frame {f} has no ground truth"),
             })?);
@@ -52,12 +54,12 @@ impl Evaluation {
     /// under both protocols.
     ///
     /// # Errors
-    /// [`DataError`] for an estimate that cannot be brought to the evaluation grid.
+    /// [`EvalError`] for an estimate that cannot be brought to the evaluation grid.
     pub fn score(
         &self,
         k: usize,
         est: &DepthEstimate,
-    ) -> Result<(Vec<f32>, ProtocolMetrics), DataError> {
+    ) -> Result<(Vec<f32>, ProtocolMetrics), EvalError> {
         let (from, to) = (&est.spec, &self.spec);
         let index = index_on_eval_grid(
             &est.index,
@@ -153,7 +155,7 @@ impl MethodScores {
         self,
         eval: &SweepSpec,
         seconds_per_frame: f64,
-    ) -> Result<MethodResult, DataError> {
+    ) -> Result<MethodResult, EvalError> {
         let all: Vec<ProtocolMetrics> = self
             .per_frame
             .iter()
@@ -163,7 +165,7 @@ impl MethodScores {
             })
             .collect();
         let mean = ProtocolMetrics::mean(&all)
-            .ok_or_else(|| DataError::mismatch(format!("frames of {}", self.name), "1", "0"))?;
+            .ok_or_else(|| EvalError::mismatch(format!("frames of {}", self.name), "1", "0"))?;
         Ok(MethodResult {
             method: self.name,
             native: NativeGrid::of(&self.native),
@@ -259,8 +261,8 @@ impl EvalReport {
     /// Writes `out/eval.json` and `out/eval.md`.
     ///
     /// # Errors
-    /// [`DataError::Io`] for a file that cannot be written.
-    pub fn write(&self, out: &Path) -> Result<(), DataError> {
+    /// [`EvalError::Io`] for a file that cannot be written.
+    pub fn write(&self, out: &Path) -> Result<(), EvalError> {
         write_json(&out.join("eval.json"), self, true)?;
         write_text(&out.join("eval.md"), &self.table())
     }
@@ -270,15 +272,15 @@ impl EvalReport {
 /// black where the ground truth is invalid when `mask`.
 ///
 /// # Errors
-/// [`DataError::Io`] for a file that cannot be written.
+/// [`EvalError::Io`] for a file that cannot be written.
 pub fn write_index_png(
     path: &Path,
     index: &[f32],
     gt: &GroundTruth,
     ndepth: usize,
     mask: bool,
-) -> Result<(), DataError> {
+) -> Result<(), EvalError> {
     let valid = mask.then_some(gt.valid.as_slice());
     let rgb = colorize(index, 0.0, (ndepth - 1) as f64, Colormap::Turbo, valid);
-    write_png_u8(path, gt.width, gt.height, 3, &rgb)
+    Ok(write_png_u8(path, gt.width, gt.height, 3, &rgb)?)
 }

@@ -8,7 +8,7 @@
 //! (`eval_truth_on_grid`, `index_on_eval_grid`, `eval_metrics`, `ProtocolMetrics::mean`).
 
 use omnimvs_data::gt::{EvalTruth, InvDepthMap, eval_truth_on_grid};
-use omnimvs_data::metrics::{Metrics, ProtocolMetrics, eval_metrics, index_on_eval_grid};
+use omnimvs_eval::metrics::{Metrics, ProtocolMetrics, eval_metrics, index_on_eval_grid};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 
 const N: usize = 50;

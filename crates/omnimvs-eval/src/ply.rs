@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use crate::DataError;
+use crate::EvalError;
 
 /// A coloured point.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -14,8 +14,8 @@ pub struct ColoredPoint {
 /// Writes a binary little-endian PLY file atomically.
 ///
 /// # Errors
-/// [`DataError::Io`] naming the file.
-pub fn write_ply(path: &Path, points: &[ColoredPoint]) -> Result<(), DataError> {
+/// [`EvalError::Io`] naming the file.
+pub fn write_ply(path: &Path, points: &[ColoredPoint]) -> Result<(), EvalError> {
     omnimvs_core::fs::write_atomic_with(path, |w| {
         write!(
             w,
@@ -32,7 +32,7 @@ pub fn write_ply(path: &Path, points: &[ColoredPoint]) -> Result<(), DataError> 
         }
         Ok(())
     })
-    .map_err(|e| DataError::io(path, e))
+    .map_err(|e| EvalError::io(path, e))
 }
 
 #[cfg(test)]

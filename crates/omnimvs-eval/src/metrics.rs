@@ -16,8 +16,8 @@ use std::fmt;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 use serde::{Deserialize, Serialize};
 
-use crate::DataError;
-use crate::gt::{EvalTruth, GroundTruth};
+use crate::EvalError;
+use omnimvs_data::gt::{EvalTruth, GroundTruth};
 
 /// Which ground-truth pixels a score counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
@@ -54,6 +54,16 @@ impl Protocol {
             }
             Self::WithSky => "sky scored as index 0, as in training",
         }
+    }
+
+    /// Whether pixel `i` of `truth` is scored: valid in the ground truth, and not sky for the
+    /// `reference` protocol.
+    pub fn scores(self, truth: &EvalTruth, i: usize) -> bool {
+        truth.gt.valid[i]
+            && match self {
+                Self::Reference => !truth.sky[i],
+                Self::WithSky => true,
+            }
     }
 }
 
@@ -101,7 +111,7 @@ pub fn frame_metrics(
     pred_index: &[f32],
     gt: &GroundTruth,
     ndepth: usize,
-) -> Result<Metrics, DataError> {
+) -> Result<Metrics, EvalError> {
     metrics_where(pred_index, gt, ndepth, "valid ground-truth pixels", |i| {
         gt.valid[i]
     })
@@ -117,9 +127,9 @@ pub fn protocol_metrics(
     truth: &EvalTruth,
     ndepth: usize,
     protocol: Protocol,
-) -> Result<Metrics, DataError> {
+) -> Result<Metrics, EvalError> {
     if truth.sky.len() != truth.gt.valid.len() {
-        return Err(DataError::mismatch(
+        return Err(EvalError::mismatch(
             "sky mask size",
             truth.gt.valid.len(),
             truth.sky.len(),
@@ -127,7 +137,7 @@ pub fn protocol_metrics(
     }
     let what = format!("ground-truth pixels scored by the {protocol} protocol");
     metrics_where(pred_index, &truth.gt, ndepth, &what, |i| {
-        truth.scored(i, protocol)
+        protocol.scores(truth, i)
     })
 }
 
@@ -139,7 +149,7 @@ pub fn eval_metrics(
     pred_index: &[f32],
     truth: &EvalTruth,
     ndepth: usize,
-) -> Result<ProtocolMetrics, DataError> {
+) -> Result<ProtocolMetrics, EvalError> {
     Ok(ProtocolMetrics {
         reference: protocol_metrics(pred_index, truth, ndepth, Protocol::Reference)?,
         with_sky: protocol_metrics(pred_index, truth, ndepth, Protocol::WithSky)?,
@@ -157,9 +167,9 @@ fn metrics_where(
     ndepth: usize,
     what: &str,
     scored: impl Fn(usize) -> bool,
-) -> Result<Metrics, DataError> {
+) -> Result<Metrics, EvalError> {
     if pred_index.len() != gt.index.len() {
-        return Err(DataError::mismatch(
+        return Err(EvalError::mismatch(
             "prediction size",
             format!("{} x {} = {}", gt.height, gt.width, gt.index.len()),
             pred_index.len(),
@@ -185,7 +195,7 @@ fn metrics_where(
         sum_sq += e * e;
     }
     if n == 0 {
-        return Err(DataError::mismatch(what, "at least one", 0));
+        return Err(EvalError::mismatch(what, "at least one", 0));
     }
     let pct = |k: usize| k as f64 / n as f64 * 100.0;
     Ok(Metrics {
@@ -243,16 +253,16 @@ pub fn index_on_eval_grid(
     native_hyps: &InvDepthHypotheses,
     eval: &EquirectGrid,
     eval_hyps: &InvDepthHypotheses,
-) -> Result<Vec<f32>, DataError> {
+) -> Result<Vec<f32>, EvalError> {
     if index.len() != native.len() {
-        return Err(DataError::mismatch(
+        return Err(EvalError::mismatch(
             "prediction size",
             format!("{} x {} = {}", native.height, native.width, native.len()),
             index.len(),
         ));
     }
     if (native.phi_deg - eval.phi_deg).abs() > 1e-9 {
-        return Err(DataError::mismatch(
+        return Err(EvalError::mismatch(
             format!(
                 "latitude range of a {}x{} prediction",
                 native.height, native.width
@@ -265,7 +275,7 @@ pub fn index_on_eval_grid(
         ));
     }
     if (native_hyps.min_depth_m - eval_hyps.min_depth_m).abs() > 1e-12 {
-        return Err(DataError::mismatch(
+        return Err(EvalError::mismatch(
             "minimum depth of the prediction's hypotheses",
             format!("{} m (the evaluation's)", eval_hyps.min_depth_m),
             format!("{} m", native_hyps.min_depth_m),
@@ -382,8 +392,8 @@ mod tests {
     }
 
     /// An inverse-depth map of one row (1/m).
-    fn one_row(data: Vec<f32>) -> crate::gt::InvDepthMap {
-        crate::gt::InvDepthMap {
+    fn one_row(data: Vec<f32>) -> omnimvs_data::gt::InvDepthMap {
+        omnimvs_data::gt::InvDepthMap {
             width: data.len(),
             height: 1,
             data,
@@ -392,7 +402,7 @@ mod tests {
 
     #[test]
     fn both_protocols_on_a_hand_made_frame() {
-        use crate::gt::eval_truth_index;
+        use omnimvs_data::gt::eval_truth_index;
         // One row: two sky pixels, four at 10, 5, 3.33 and 2.5 m. A single row has no hole
         // (the 5x5 closing erodes everything next to the border).
         let truth = eval_truth_index(&one_row(vec![0.0, 0.0, 0.1, 0.2, 0.3, 0.4]), &hundred());
@@ -470,7 +480,7 @@ mod tests {
 
     #[test]
     fn a_coarse_map_is_upsampled_on_the_sphere_before_it_is_scored() {
-        use crate::gt::{InvDepthMap, eval_truth_on_grid};
+        use omnimvs_data::gt::{InvDepthMap, eval_truth_on_grid};
         let hyps64 = InvDepthHypotheses::new(64, 0.5).unwrap();
         let hyps192 = InvDepthHypotheses::new(192, 0.5).unwrap();
         let coarse = EquirectGrid::new(32, 128, 45.0).unwrap();

@@ -3,9 +3,9 @@
 use omnimvs_core::GrayImage;
 use omnimvs_sweep::EquirectGrid;
 
-use crate::colormap::{Colormap, colorize};
-use crate::gt::GroundTruth;
 use crate::ply::ColoredPoint;
+use omnimvs_data::colormap::{Colormap, colorize};
+use omnimvs_data::gt::GroundTruth;
 
 /// Error maps saturate at this error, in percent of N.
 pub const ERROR_MAP_MAX_PCT: f64 = 10.0;

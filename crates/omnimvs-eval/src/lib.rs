@@ -1,0 +1,16 @@
+//! Scoring and output of depth methods, apart from reading datasets (`omnimvs-data`).
+//!
+//! * [`metrics`]: the paper's error metrics per frame and over frames, under the reference's
+//!   protocol (sky not scored) and with sky; an estimate resampled to the evaluation grid.
+//! * [`output`]: an estimate's files (TIFF, colour PNGs, the point cloud), reports and the
+//!   evaluation of methods side by side.
+//! * [`ply`]: point clouds.
+//!
+//! Errors are [`EvalError`]: a file, a field or a size that is not what was expected.
+
+mod error;
+pub mod metrics;
+pub mod output;
+pub mod ply;
+
+pub use error::EvalError;
