@@ -97,14 +97,8 @@ pub(crate) trait SphereCost: Sync {
 
     /// The costs (in `[0, 1]`, [`NO_PAIR_COST`] where no camera pair sees the point) of
     /// output rows `rows`, all columns, on the sphere of inverse depth `inv_depth` (1/m) into
-    /// `out`, `[(row - rows.start) * width + col]`.
-    fn costs(
-        &self,
-        rows: Range<usize>,
-        inv_depth: f32,
-        scratch: &mut Self::Scratch,
-        out: &mut [f32],
-    );
+    /// `out`, `[(row - rows.start) * width + col]` (`s`: this thread's buffers).
+    fn costs(&self, rows: Range<usize>, inv_depth: f32, s: &mut Self::Scratch, out: &mut [f32]);
 }
 
 /// The cost volume of a frame by a learned cost: every sphere of `hyps` (every other one with
