@@ -13,11 +13,11 @@
 
 use std::fmt;
 
+use omnimvs_data::gt::{EvalTruth, GroundTruth};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 use serde::{Deserialize, Serialize};
 
 use crate::EvalError;
-use omnimvs_data::gt::{EvalTruth, GroundTruth};
 
 /// Which ground-truth pixels a score counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]

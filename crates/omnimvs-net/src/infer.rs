@@ -4,6 +4,7 @@
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::ValidityMask;
 use omnimvs_core::GrayImage;
+use omnimvs_core::interp::resize_align_corners;
 use omnimvs_data::image_io::normalize_for_network;
 use omnimvs_data::{Dataset, DepthEstimate, NoTimings, StageObserver};
 use omnimvs_sweep::{
@@ -13,8 +14,6 @@ use rayon::prelude::*;
 
 pub use crate::backend::device_from_name;
 use crate::config::NetConfig;
-use omnimvs_core::interp::resize_align_corners;
-
 use crate::error::NetError;
 use crate::model::{OmniMvsNet, SweepInput, SweepTaps};
 use crate::taps::SweepGrid;

@@ -16,12 +16,12 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
+use omnimvs_sweep::SphereProjector;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use rayon::prelude::*;
 
 use crate::params::{COST_SCALE, SweepStep, cost_units};
 use crate::{CameraView, RunSampler, StereoError};
-use omnimvs_sweep::SphereProjector;
 
 /// Cost where fewer than two cameras see the whole window.
 pub const NO_PAIR_COST: f32 = 0.5;

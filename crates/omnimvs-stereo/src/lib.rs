@@ -12,10 +12,11 @@
 //!   each camera, computed on the fly (the lookup table of all spheres would
 //!   not fit the memory budget).
 //! * [`Matcher::cost_volume`]: the ZNCC cost volume ([`CostVolume`], 16-bit).
-//! * [`learned`]: learned matching costs (MC-CNN style): per-camera feature maps from a
-//!   [`FeatureExtractor`] compared by cosine similarity, in the same cost volume.
+//! * [`learned`]: the learned matching costs' one cost-volume driver, and the MC-CNN-style
+//!   cost: per-camera feature maps from a [`FeatureExtractor`] compared by cosine similarity,
+//!   in the same cost volume.
 //! * [`sweepnet`]: the SweepNet-style learned cost: a network on the warped images' windows
-//!   of every sphere ([`SweepCostHead`]).
+//!   of every sphere ([`SweepCostHead`]), through the same driver.
 //! * [`aggregate`]: SGM along 4 or 8 paths that wrap around in longitude.
 //! * [`filter`]: median filter and confidence-based invalidation of the index map.
 //! * [`winner_take_all`]: index with parabola refinement, and confidence.

@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use omnimvs_camera::{Rig, ValidityMask};
 use omnimvs_core::GrayImage;
+use omnimvs_sweep::SphereProjector;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
 use serde::Serialize;
 
@@ -15,7 +16,6 @@ use crate::{
     AggregatedVolume, CameraView, CostVolume, IndexMap, Matcher, SgmParams, StereoError,
     aggregate_in, winner_take_all,
 };
-use omnimvs_sweep::SphereProjector;
 
 /// Wall-clock time of each stage of one frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]

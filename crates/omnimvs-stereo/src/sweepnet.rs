@@ -20,17 +20,14 @@
 
 use std::fmt::Debug;
 use std::ops::Range;
-use std::time::{Duration, Instant};
 
-use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
-use rayon::prelude::*;
-
-use crate::cost::{
-    NO_PAIR_COST, ZNCC_VARIANCE_EPS, camera_pairs, fill_odd_hypotheses, finished_volume,
-};
-use crate::params::{SweepStep, cost_units};
-use crate::{CameraView, CostTimings, CostVolume, StereoError};
 use omnimvs_sweep::SphereProjector;
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+
+use crate::cost::{NO_PAIR_COST, ZNCC_VARIANCE_EPS, camera_pairs};
+use crate::learned::{SphereCost, learned_cost_volume};
+use crate::params::SweepStep;
+use crate::{CameraView, CostTimings, CostVolume, StereoError};
 
 /// Output rows computed together (the warped band holds `BAND` rows and the reach of the
 /// widest window, [`FeatureSpec`]'s `reach`, above and below).
@@ -681,6 +678,57 @@ pub fn any_pair(features: &[f32], layout: FeatureLayout) -> bool {
     (0..layout.pairs()).any(|p| features[layout.pair_complete(0, p)] > 0.5)
 }
 
+/// A head's cost on the window features of the warped images, mixed with the plain ZNCC cost
+/// by its [`SweepCostHead::zncc_weight`].
+struct HeadCost<'a> {
+    grid: &'a EquirectGrid,
+    projectors: &'a [SphereProjector],
+    views: &'a [CameraView],
+    head: &'a dyn SweepCostHead,
+    layout: FeatureLayout,
+}
+
+/// Per-thread buffers of [`HeadCost`]: the band's feature vectors and their scratch.
+#[derive(Default)]
+struct HeadScratch {
+    band: BandScratch,
+    features: Vec<f32>,
+}
+
+impl SphereCost for HeadCost<'_> {
+    const ROWS: usize = BAND;
+    type Scratch = HeadScratch;
+
+    fn costs(&self, rows: Range<usize>, inv_depth: f32, s: &mut HeadScratch, out: &mut [f32]) {
+        let (layout, dim) = (self.layout, self.layout.dim());
+        s.features.resize(out.len() * dim, 0.0);
+        band_features(
+            self.grid,
+            self.projectors,
+            self.views,
+            self.head.features(),
+            rows,
+            inv_depth,
+            &mut s.band,
+            &mut s.features,
+        );
+        self.head.costs(&s.features, out);
+        let zncc_weight = self.head.zncc_weight();
+        for (f, c) in s.features.chunks_exact(dim).zip(out.iter_mut()) {
+            *c = if any_pair(f, layout) {
+                let learned = c.clamp(0.0, 1.0);
+                if zncc_weight > 0.0 {
+                    (1.0 - zncc_weight) * learned + zncc_weight * layout.zncc_cost(f)
+                } else {
+                    learned
+                }
+            } else {
+                NO_PAIR_COST
+            };
+        }
+    }
+}
+
 /// The cost volume of a frame by a learned head on the warped images' window features.
 ///
 /// # Errors
@@ -702,8 +750,7 @@ pub fn sweep_cost_volume(
             found: ncam,
         });
     }
-    let spec = head.features();
-    let layout = spec.layout(ncam);
+    let layout = head.features().layout(ncam);
     let dim = layout.dim();
     if head.input_dim() != dim {
         return Err(StereoError::Volume(format!(
@@ -712,58 +759,14 @@ pub fn sweep_cost_volume(
             head.input_dim()
         )));
     }
-    let (w, h, nd) = (grid.width, grid.height, hyps.count);
-    let step = sweep.stride();
-    let zncc_weight = head.zncc_weight();
-    let inv_depths: Vec<f32> = (0..nd).map(|n| hyps.inv_depth(n as f64) as f32).collect();
-    let start = Instant::now();
-    let mut data = vec![0u16; w * h * nd];
-    data.par_chunks_mut(BAND * w * nd)
-        .enumerate()
-        .for_each_init(
-            || (BandScratch::default(), Vec::new(), Vec::new()),
-            |(scratch, feats, costs), (band, out)| {
-                let rows = band * BAND..(band * BAND + BAND).min(h);
-                let npx = rows.len() * w;
-                feats.resize(npx * dim, 0.0);
-                costs.resize(npx, 0.0);
-                for n in (0..nd).step_by(step) {
-                    band_features(
-                        grid,
-                        projectors,
-                        views,
-                        spec,
-                        rows.clone(),
-                        inv_depths[n],
-                        scratch,
-                        feats,
-                    );
-                    head.costs(feats, costs);
-                    for (i, (f, &c)) in feats.chunks_exact(dim).zip(costs.iter()).enumerate() {
-                        let cost = if any_pair(f, layout) {
-                            let learned = c.clamp(0.0, 1.0);
-                            if zncc_weight > 0.0 {
-                                (1.0 - zncc_weight) * learned + zncc_weight * layout.zncc_cost(f)
-                            } else {
-                                learned
-                            }
-                        } else {
-                            NO_PAIR_COST
-                        };
-                        out[i * nd + n] = cost_units(cost);
-                    }
-                }
-                if step == 2 {
-                    out.chunks_exact_mut(nd).for_each(fill_odd_hypotheses);
-                }
-            },
-        );
-    Ok(finished_volume(
-        [h, w, nd],
-        data,
-        Duration::ZERO,
-        start.elapsed(),
-    ))
+    let cost = HeadCost {
+        grid,
+        projectors,
+        views,
+        head,
+        layout,
+    };
+    Ok(learned_cost_volume(grid, hyps, sweep, &cost))
 }
 
 #[cfg(test)]

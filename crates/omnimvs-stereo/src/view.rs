@@ -4,9 +4,9 @@
 use omnimvs_camera::ValidityMask;
 use omnimvs_core::GrayImage;
 use omnimvs_core::interp::{inside_corner, lerp_2d};
+use omnimvs_sweep::SphereProjector;
 
 use crate::StereoError;
-use omnimvs_sweep::SphereProjector;
 
 /// Fixed-point steps per gray level in a texel.
 const TEXEL_SCALE: f32 = 128.0;

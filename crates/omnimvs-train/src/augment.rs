@@ -11,11 +11,11 @@ use omnimvs_camera::Rig;
 #[cfg(doc)]
 use omnimvs_data::gt::ground_truth_index;
 use omnimvs_data::gt::{GroundTruth, InvDepthMap, sample_ground_truth};
+use omnimvs_net::taps::SweepGrid;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, LookupTable, SphereSet};
 
 use crate::error::TrainError;
 use crate::rng::SplitMix64;
-use omnimvs_net::taps::SweepGrid;
 
 /// Small rotations `new_rig_from_rig`; index 0 is the identity.
 #[derive(Clone, Debug, PartialEq)]

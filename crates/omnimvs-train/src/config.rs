@@ -4,11 +4,11 @@
 use std::ops::RangeInclusive;
 use std::path::PathBuf;
 
+use omnimvs_net::config::{Family, NetConfig};
 use serde::{Deserialize, Serialize};
 
 use crate::error::TrainError;
 use crate::photometric::PhotometricAugment;
-use omnimvs_net::config::{Family, NetConfig};
 
 /// The optimiser of a run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

@@ -1,6 +1,9 @@
-//! What the matching-cost trainers (`mccnn`, `sweepnet`) share: the datasets opened for
-//! drawing samples through the rig, and the run folder (configuration, metrics lines and a
-//! resumable checkpoint, every file written atomically).
+//! The matching-cost networks' one trainer: [`CostModelTrainer`], generic over a
+//! [`CostModel`] (what differs between MC-CNN in `mccnn` and SweepNet in `sweepnet`: the
+//! network, the frames and batches drawn, the loss, the metrics line, the saved weights). It
+//! holds what they share: the datasets opened for drawing samples through the rig, the
+//! seeded frame and batch schedule, Adam's steps, validation, and the run folder
+//! (configuration, metrics lines and a resumable checkpoint, every file written atomically).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -8,7 +11,7 @@ use std::time::Instant;
 use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::store::{BurnpackStore, ModuleSnapshot};
-use burn::tensor::Tensor;
+use burn::tensor::{Device, Tensor};
 use omnimvs_camera::ValidityMask;
 use omnimvs_core::fs::write_atomic;
 use omnimvs_data::Dataset;
@@ -22,11 +25,11 @@ use crate::rng::SplitMix64;
 
 /// A dataset opened for sampling: its masks, the sweep of the ground truth and the fast
 /// projectors of that sweep's grid.
-pub(crate) struct Source {
-    pub dataset: Dataset,
-    pub masks: Vec<ValidityMask>,
-    pub spec: SweepSpec,
-    pub projectors: Vec<SphereProjector>,
+pub struct Source {
+    pub(crate) dataset: Dataset,
+    pub(crate) masks: Vec<ValidityMask>,
+    pub(crate) spec: SweepSpec,
+    pub(crate) projectors: Vec<SphereProjector>,
 }
 
 pub(crate) fn io_err(path: &Path) -> impl Fn(std::io::Error) -> TrainError + '_ {
@@ -164,7 +167,8 @@ pub(crate) fn append_metrics<R: Serialize>(run_dir: &Path, record: &R) -> Result
 }
 
 /// When a matching-cost run steps, draws from a new frame and writes a metrics line.
-pub(crate) struct Schedule {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Schedule {
     /// The run's seed: frames by `seed` and `step / frame_every`, batches by `seed` and step.
     pub seed: u64,
     /// Total steps.
@@ -195,39 +199,122 @@ pub struct Progress {
     pub seconds: f64,
 }
 
-/// What every matching-cost run holds beside its own configuration: its folder, the network
-/// being trained (on the autodiff device), Adam's state, the step and the opened datasets.
-pub(crate) struct RunState<M> {
-    pub run_dir: PathBuf,
-    pub net: M,
-    pub optim: ModuleOptimizer,
-    pub device: burn::tensor::Device,
-    pub step: usize,
-    pub sources: Vec<Source>,
+/// What differs between the matching-cost networks' training, implemented by each one's
+/// configuration (`train_config.json`): the network, the frames and batches it draws, its loss
+/// and its metrics line. [`CostModelTrainer`] is the rest: the run folder, resuming, the steps,
+/// validation, the metrics log and the checkpoints.
+pub trait CostModel: Serialize + DeserializeOwned {
+    /// The network.
+    type Net: Module;
+    /// One frame loaded for drawing samples.
+    type Frame;
+    /// The samples of one step (or one validation batch).
+    type Batch;
+    /// One line of `metrics.jsonl`.
+    type Record: Serialize;
+
+    /// Dataset folders with ground truth.
+    fn data(&self) -> &[PathBuf];
+    /// Grid and hypotheses of the ground truth (`h`, `w`, `N`).
+    fn grid(&self) -> (usize, usize, usize);
+    /// Validation frames of each dataset, inclusive.
+    fn val_frames(&self) -> (u32, u32);
+    /// The steps, frames, seed and learning rate of the run.
+    fn schedule(&self) -> Schedule;
+    /// Sets the total steps (a resumed run may raise them).
+    fn set_steps(&mut self, steps: usize);
+
+    /// Checks the configuration before anything is opened.
+    ///
+    /// # Errors
+    /// [`TrainError::InvalidConfig`] naming what does not fit.
+    fn check(&self) -> Result<(), TrainError>;
+
+    /// Checks the opened datasets (the rig the network reads); any by default.
+    ///
+    /// # Errors
+    /// [`TrainError::InvalidConfig`] naming the dataset that does not fit.
+    fn check_sources(&self, _sources: &[Source]) -> Result<(), TrainError> {
+        Ok(())
+    }
+
+    /// A new network on `device`.
+    ///
+    /// # Errors
+    /// The network's own error.
+    fn build(&self, device: &Device) -> Result<Self::Net, TrainError>;
+
+    /// Frame `frame` of dataset `source`, ready for drawing samples.
+    ///
+    /// # Errors
+    /// [`TrainError`] for an unreadable frame or one without ground truth.
+    fn load_frame(
+        &self,
+        sources: &[Source],
+        source: usize,
+        frame: u32,
+    ) -> Result<Self::Frame, TrainError>;
+
+    /// One training step's batch from `frame`; `None` when the frame offers none.
+    fn draw(
+        &self,
+        sources: &[Source],
+        frame: &Self::Frame,
+        rng: &mut SplitMix64,
+    ) -> Option<Self::Batch>;
+
+    /// The fixed validation batches of validation frame `j` (0: the first of the range, 1:
+    /// the last) of dataset `source`.
+    fn validation_batches(
+        &self,
+        sources: &[Source],
+        frame: &Self::Frame,
+        source: usize,
+        j: usize,
+    ) -> Vec<Self::Batch>;
+
+    /// The loss of a batch (a scalar of `device`) and the model's accuracy on it.
+    fn loss(&self, net: &Self::Net, batch: &Self::Batch, device: &Device) -> (Tensor<1>, f32);
+
+    /// The metrics line of `progress` (`val`: the validation batches).
+    fn record(&self, progress: &Progress, val: &[Self::Batch]) -> Self::Record;
+
+    /// Writes the weights (safetensors + JSON) to `path`.
+    ///
+    /// # Errors
+    /// [`TrainError`] for a file that cannot be written.
+    fn save(net: &Self::Net, path: &Path) -> Result<(), TrainError>;
 }
 
-impl<M: Module> RunState<M> {
-    /// A new run: the datasets of `data` opened for the grid and accepted by `check` first,
-    /// then `run_dir` created with `config`, then the network built by `build` on the
-    /// autodiff device seeded with `seed`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn create<C: Serialize>(
-        run_dir: &Path,
-        config: &C,
-        data: &[PathBuf],
-        grid: (usize, usize, usize),
-        seed: u64,
-        device: &burn::tensor::Device,
-        check: impl FnOnce(&[Source]) -> Result<(), TrainError>,
-        build: impl FnOnce(&burn::tensor::Device) -> Result<M, TrainError>,
-    ) -> Result<Self, TrainError> {
-        let sources = open_sources(data, grid)?;
-        check(&sources)?;
-        create_run(run_dir, config)?;
+/// A matching-cost training run of the network of `C`: its folder, the network being trained
+/// (on the autodiff device), Adam's state, the step and the opened datasets.
+pub struct CostModelTrainer<C: CostModel> {
+    pub config: C,
+    run_dir: PathBuf,
+    net: C::Net,
+    optim: ModuleOptimizer,
+    device: Device,
+    step: usize,
+    sources: Vec<Source>,
+}
+
+impl<C: CostModel> CostModelTrainer<C> {
+    /// A new run in `run_dir`: the configuration checked, the datasets opened and checked,
+    /// then the folder created with `train_config.json` (refused if it holds a run already),
+    /// then the network built on the autodiff device seeded with the run's seed.
+    ///
+    /// # Errors
+    /// [`TrainError`] for unreadable datasets, a bad configuration or an existing run.
+    pub fn create(config: C, run_dir: &Path, device: &Device) -> Result<Self, TrainError> {
+        config.check()?;
+        let sources = open_sources(config.data(), config.grid())?;
+        config.check_sources(&sources)?;
+        create_run(run_dir, &config)?;
         let device = device.clone().autodiff();
-        device.seed(seed);
-        let net = build(&device)?;
+        device.seed(config.schedule().seed);
+        let net = config.build(&device)?;
         Ok(Self {
+            config,
             run_dir: run_dir.to_path_buf(),
             net,
             optim: AdamConfig::new().init(),
@@ -237,18 +324,24 @@ impl<M: Module> RunState<M> {
         })
     }
 
-    /// The run in `run_dir` from its last checkpoint (a network of `build`'s shape).
+    /// The run in `run_dir` from its last checkpoint; `steps` raises the total.
+    ///
+    /// # Errors
+    /// [`TrainError`] for a missing or unreadable run.
     pub fn resume(
         run_dir: &Path,
-        data: &[PathBuf],
-        grid: (usize, usize, usize),
-        device: &burn::tensor::Device,
-        build: impl FnOnce(&burn::tensor::Device) -> Result<M, TrainError>,
+        steps: Option<usize>,
+        device: &Device,
     ) -> Result<Self, TrainError> {
+        let mut config: C = read_run_config(run_dir)?;
+        if let Some(s) = steps {
+            config.set_steps(s);
+        }
         let device = device.clone().autodiff();
-        let (net, optim, step) = load_checkpoint(run_dir, build(&device)?)?;
-        let sources = open_sources(data, grid)?;
+        let (net, optim, step) = load_checkpoint(run_dir, config.build(&device)?)?;
+        let sources = open_sources(config.data(), config.grid())?;
         Ok(Self {
+            config,
             run_dir: run_dir.to_path_buf(),
             net,
             optim,
@@ -258,101 +351,119 @@ impl<M: Module> RunState<M> {
         })
     }
 
-    /// Writes the checkpoint of the current step.
-    pub fn save_checkpoint(&self) -> Result<(), TrainError> {
-        save_checkpoint(&self.run_dir, &self.net, &self.optim, self.step)
+    /// The step the run is at.
+    pub fn step(&self) -> usize {
+        self.step
+    }
+
+    /// The run's folder.
+    pub fn run_dir(&self) -> &Path {
+        &self.run_dir
+    }
+
+    /// The trained network, without autodiff.
+    pub fn net(&self) -> C::Net {
+        self.net.valid()
+    }
+
+    /// Fixed validation batches: those of the first and the last frame of each dataset's
+    /// validation range.
+    fn validation(&self) -> Result<Vec<C::Batch>, TrainError> {
+        let mut out = Vec::new();
+        let (v0, v1) = self.config.val_frames();
+        for s in 0..self.sources.len() {
+            for (j, f) in [v0, v1].into_iter().enumerate() {
+                let frame = self.config.load_frame(&self.sources, s, f)?;
+                out.extend(self.config.validation_batches(&self.sources, &frame, s, j));
+            }
+        }
+        Ok(out)
     }
 
     /// The dataset and frame that the steps from `step` on draw from: a new one every
     /// `frame_every` steps, among the frames `train_frames` of every dataset, chosen by
     /// `seed` and `step / frame_every` (so that a resumed run chooses as the first did).
-    pub fn frame_for_step(
-        &self,
-        seed: u64,
-        step: usize,
-        frame_every: usize,
-        (f0, f1): (u32, u32),
-    ) -> (usize, u32) {
-        let mut rng = SplitMix64::for_epoch(seed, step / frame_every);
+    fn frame_for_step(&self, schedule: &Schedule, step: usize) -> (usize, u32) {
+        let (f0, f1) = schedule.train_frames;
+        let mut rng = SplitMix64::for_epoch(schedule.seed, step / schedule.frame_every);
         let source = rng.below(self.sources.len());
         let frame = f0 + rng.below((f1 - f0 + 1) as usize) as u32;
         (source, frame)
     }
 
-    /// One Adam step of the network on `loss` (a scalar of the autodiff device).
-    pub fn descend(&mut self, loss: Tensor<1>, lr: f64) {
-        let grads = GradientsParams::from_grads(loss.backward(), &self.net);
-        self.net = self.optim.step(lr, self.net.clone(), grads);
-    }
-
-    /// The matching-cost trainers' loop, up to `schedule.steps` (or `stop_after` more steps):
-    /// every step draws a batch (`draw`; `None` when the frame offers none, and the step
-    /// passes) from the frame of [`Self::frame_for_step`] (`load`, kept for `frame_every`
-    /// steps) with a generator seeded by the step, and descends on its `loss`; every
-    /// `log_every` steps and at the end, the network without autodiff is scored on `val` by
-    /// the same `loss` and `line` gets the [`Progress`] (to write the metrics line and the
-    /// checkpoint). A resumed run draws as the first did.
-    #[allow(clippy::too_many_arguments)]
-    pub fn train<F, B>(
+    /// Trains up to the configuration's steps (or `stop_after` more steps): every step draws a
+    /// batch from the frame chosen for the step (kept for `frame_every` steps) with a
+    /// generator seeded by the step, and takes an Adam step on its loss; every `log_every`
+    /// steps and at the end, the network without autodiff is scored on the validation
+    /// batches, the metrics line appended, the checkpoint and `model.safetensors` written and
+    /// `report` called with the line. A resumed run draws as the first did.
+    ///
+    /// # Errors
+    /// [`TrainError`] for unreadable frames or unwritable files.
+    pub fn run(
         &mut self,
-        schedule: &Schedule,
         stop_after: Option<usize>,
-        val: &[B],
-        load: impl Fn(&[Source], usize, u32) -> Result<F, TrainError>,
-        draw: impl Fn(&[Source], &F, &mut SplitMix64) -> Option<B>,
-        loss: impl Fn(&M, &B, &burn::tensor::Device) -> (Tensor<1>, f32),
-        mut line: impl FnMut(&Self, &Progress) -> Result<(), TrainError>,
+        mut report: impl FnMut(&C::Record),
     ) -> Result<(), TrainError> {
+        let val = self.validation()?;
+        let schedule = self.config.schedule();
         let end = stop_after.map_or(schedule.steps, |s| (self.step + s).min(schedule.steps));
         let (mut loss_sum, mut acc_sum, mut count) = (0f32, 0f32, 0usize);
-        let mut frame: Option<F> = None;
+        let mut frame: Option<C::Frame> = None;
         let t0 = Instant::now();
         while self.step < end {
             let step = self.step;
             let current = match frame.take() {
                 Some(loaded) if !step.is_multiple_of(schedule.frame_every) => loaded,
                 _ => {
-                    let (s, f) = self.frame_for_step(
-                        schedule.seed,
-                        step,
-                        schedule.frame_every,
-                        schedule.train_frames,
-                    );
-                    load(&self.sources, s, f)?
+                    let (s, f) = self.frame_for_step(&schedule, step);
+                    self.config.load_frame(&self.sources, s, f)?
                 }
             };
             let mut rng = SplitMix64::for_epoch(schedule.seed ^ 0xA5A5, step);
-            if let Some(batch) = draw(&self.sources, &current, &mut rng) {
-                let (l, acc) = loss(&self.net, &batch, &self.device);
+            if let Some(batch) = self.config.draw(&self.sources, &current, &mut rng) {
+                let (l, acc) = self.config.loss(&self.net, &batch, &self.device);
                 loss_sum += l.clone().into_scalar::<f32>();
                 acc_sum += acc;
                 count += 1;
-                self.descend(l, schedule.lr);
+                let grads = GradientsParams::from_grads(l.backward(), &self.net);
+                self.net = self.optim.step(schedule.lr, self.net.clone(), grads);
             }
             frame = Some(current);
             self.step += 1;
             if self.step.is_multiple_of(schedule.log_every) || self.step == end {
-                let inference = self.net.valid();
-                let device = self.device.clone().without_autodiff();
-                let (mut val_loss, mut val_acc) = (0f32, 0f32);
-                for b in val {
-                    let (l, a) = loss(&inference, b, &device);
-                    val_loss += l.into_scalar::<f32>();
-                    val_acc += a;
-                }
-                let (n, v) = (count.max(1) as f32, val.len().max(1) as f32);
+                let (val_loss, val_acc) = self.score(&val);
+                let n = count.max(1) as f32;
                 let progress = Progress {
                     step: self.step,
                     train_loss: loss_sum / n,
                     train_acc: acc_sum / n,
-                    val_loss: val_loss / v,
-                    val_acc: val_acc / v,
+                    val_loss,
+                    val_acc,
                     seconds: t0.elapsed().as_secs_f64(),
                 };
                 (loss_sum, acc_sum, count) = (0.0, 0.0, 0);
-                line(self, &progress)?;
+                let record = self.config.record(&progress, &val);
+                append_metrics(&self.run_dir, &record)?;
+                save_checkpoint(&self.run_dir, &self.net, &self.optim, self.step)?;
+                C::save(&self.net.valid(), &self.run_dir.join("model.safetensors"))?;
+                report(&record);
             }
         }
         Ok(())
+    }
+
+    /// The mean loss and accuracy of the network without autodiff on `val`.
+    fn score(&self, val: &[C::Batch]) -> (f32, f32) {
+        let inference = self.net.valid();
+        let device = self.device.clone().without_autodiff();
+        let (mut val_loss, mut val_acc) = (0f32, 0f32);
+        for b in val {
+            let (l, a) = self.config.loss(&inference, b, &device);
+            val_loss += l.into_scalar::<f32>();
+            val_acc += a;
+        }
+        let v = val.len().max(1) as f32;
+        (val_loss / v, val_acc / v)
     }
 }

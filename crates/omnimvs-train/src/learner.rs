@@ -12,12 +12,12 @@ use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_core::fs::write_atomic;
 use omnimvs_data::gt::GroundTruth;
+use omnimvs_net::model::{OmniMvsNet, SweepTaps};
 
 use crate::config::{Optimizer, TrainConfig, TrainParts};
 use crate::error::TrainError;
 use crate::sample::Sample;
 use crate::trainable::Trainable;
-use omnimvs_net::model::{OmniMvsNet, SweepTaps};
 
 /// File of the model inside a checkpoint folder.
 pub const MODEL_FILE: &str = "model.bpk";

@@ -9,6 +9,8 @@
 //! - [`photometric`]: per-camera exposure, gamma, vignetting, blur and noise of real cameras.
 //! - [`sample`]: reading one training sample (normalised inputs, ground-truth indices).
 //! - [`loader`]: a loader thread that prepares samples while the step runs.
+//! - [`cost_run`]: the matching-cost networks' one trainer ([`CostModelTrainer`]) over what
+//!   differs between them ([`CostModel`]); [`mccnn`] and [`sweepnet`] implement it.
 //! - [`trainable`]: what the trainer needs of a network family (the paper's, the cascade).
 //! - [`learner`]: the model, the optimiser, the masked L1 loss, one step, checkpoints.
 //! - [`trainer`]: epochs over datasets, validation, metrics log, curves, checkpoints.
@@ -16,7 +18,7 @@
 
 pub mod augment;
 pub mod config;
-mod cost_run;
+pub mod cost_run;
 pub mod error;
 pub mod learner;
 pub mod loader;
@@ -31,6 +33,7 @@ pub mod trainer;
 
 pub use augment::{RotationSet, resample_ground_truth};
 pub use config::{Optimizer, Selection, TrainConfig, TrainParts};
+pub use cost_run::{CostModel, CostModelTrainer};
 pub use error::TrainError;
 pub use learner::{Learner, masked_l1};
 pub use photometric::PhotometricAugment;

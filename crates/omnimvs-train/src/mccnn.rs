@@ -17,7 +17,6 @@
 
 use std::path::{Path, PathBuf};
 
-use burn::module::Module;
 use burn::tensor::{Device, Tensor, TensorData, activation};
 use omnimvs_core::GrayImage;
 use omnimvs_core::interp::mix_2d;
@@ -25,7 +24,7 @@ use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::mccnn::{self, McCnn, McCnnConfig, pool};
 use serde::{Deserialize, Serialize};
 
-use crate::cost_run::{RunState, Schedule, Source, append_metrics, read_run_config};
+use crate::cost_run::{CostModel, CostModelTrainer, Progress, Schedule, Source};
 use crate::error::TrainError;
 use crate::rng::SplitMix64;
 
@@ -61,19 +60,6 @@ pub struct CostTrainConfig {
     pub seed: u64,
 }
 
-impl CostTrainConfig {
-    fn schedule(&self) -> Schedule {
-        Schedule {
-            seed: self.seed,
-            steps: self.steps,
-            frame_every: self.frame_every,
-            train_frames: self.train_frames,
-            log_every: self.log_every,
-            lr: self.lr,
-        }
-    }
-}
-
 impl Default for CostTrainConfig {
     fn default() -> Self {
         Self {
@@ -100,7 +86,7 @@ impl Default for CostTrainConfig {
 pub use crate::cost_run::Progress as CostRecord;
 
 /// One frame ready for drawing samples.
-struct Frame {
+pub struct Frame {
     source: usize,
     /// Normalised, pooled images.
     images: Vec<GrayImage>,
@@ -272,123 +258,92 @@ pub fn batch_loss(
     (loss, acc)
 }
 
-/// A matching-cost training run.
-pub struct CostTrainer {
-    pub config: CostTrainConfig,
-    state: RunState<McCnn>,
-}
+/// A matching-cost training run of the MC-CNN-style network.
+pub type CostTrainer = CostModelTrainer<CostTrainConfig>;
 
-impl CostTrainer {
-    /// A new run in `run_dir` (created; refused if it holds a run already).
-    ///
-    /// # Errors
-    /// [`TrainError`] for unreadable datasets or an existing run.
-    pub fn create(
-        config: CostTrainConfig,
-        run_dir: &Path,
-        device: &Device,
-    ) -> Result<Self, TrainError> {
-        if config.batch == 0 || config.neg_max < config.neg_min || config.frame_every == 0 {
+impl CostModel for CostTrainConfig {
+    type Net = McCnn;
+    type Frame = Frame;
+    /// `[4 batch, 1, p, p]` patches: positive A, positive B, negative A, negative B.
+    type Batch = Vec<f32>;
+    type Record = CostRecord;
+
+    fn data(&self) -> &[PathBuf] {
+        &self.data
+    }
+
+    fn grid(&self) -> (usize, usize, usize) {
+        self.grid
+    }
+
+    fn val_frames(&self) -> (u32, u32) {
+        self.val_frames
+    }
+
+    fn schedule(&self) -> Schedule {
+        Schedule {
+            seed: self.seed,
+            steps: self.steps,
+            frame_every: self.frame_every,
+            train_frames: self.train_frames,
+            log_every: self.log_every,
+            lr: self.lr,
+        }
+    }
+
+    fn set_steps(&mut self, steps: usize) {
+        self.steps = steps;
+    }
+
+    fn check(&self) -> Result<(), TrainError> {
+        if self.batch == 0 || self.neg_max < self.neg_min || self.frame_every == 0 {
             return Err(TrainError::InvalidConfig {
                 field: "batch",
                 message: "expected batch > 0, neg_max >= neg_min, frame_every > 0".into(),
             });
         }
-        let state = RunState::create(
-            run_dir,
-            &config,
-            &config.data,
-            config.grid,
-            config.seed,
-            device,
-            |_| Ok(()),
-            |d| Ok(McCnn::new(&config.net, d)?),
-        )?;
-        Ok(Self { config, state })
+        Ok(())
     }
 
-    /// The run in `run_dir` from its last checkpoint; `steps` raises the total.
-    ///
-    /// # Errors
-    /// [`TrainError`] for a missing or unreadable run.
-    pub fn resume(
-        run_dir: &Path,
-        steps: Option<usize>,
-        device: &Device,
-    ) -> Result<Self, TrainError> {
-        let mut config: CostTrainConfig = read_run_config(run_dir)?;
-        if let Some(s) = steps {
-            config.steps = s;
-        }
-        let state = RunState::resume(run_dir, &config.data, config.grid, device, |d| {
-            Ok(McCnn::new(&config.net, d)?)
-        })?;
-        Ok(Self { config, state })
+    fn build(&self, device: &Device) -> Result<McCnn, TrainError> {
+        Ok(McCnn::new(&self.net, device)?)
     }
 
-    /// The step the run is at.
-    pub fn step(&self) -> usize {
-        self.state.step
+    fn load_frame(
+        &self,
+        sources: &[Source],
+        source: usize,
+        frame: u32,
+    ) -> Result<Frame, TrainError> {
+        load_frame(sources, source, frame, self.net.stride)
     }
 
-    /// The run's folder.
-    pub fn run_dir(&self) -> &Path {
-        &self.state.run_dir
+    fn draw(&self, sources: &[Source], frame: &Frame, rng: &mut SplitMix64) -> Option<Vec<f32>> {
+        let patches = draw_batch(sources, frame, self, rng);
+        (!patches.is_empty()).then_some(patches)
     }
 
-    /// Fixed validation batches: two frames of each dataset's validation range.
-    fn validation(&self) -> Result<Vec<Vec<f32>>, TrainError> {
-        let mut out = Vec::new();
-        let (v0, v1) = self.config.val_frames;
-        for s in 0..self.state.sources.len() {
-            for (j, f) in [v0, v1].into_iter().enumerate() {
-                let frame = load_frame(&self.state.sources, s, f, self.config.net.stride)?;
-                let mut rng = SplitMix64::new(0x5EED ^ (s as u64 * 31 + j as u64));
-                out.push(draw_batch(
-                    &self.state.sources,
-                    &frame,
-                    &self.config,
-                    &mut rng,
-                ));
-            }
-        }
-        Ok(out)
+    /// One batch per frame, empty or not.
+    fn validation_batches(
+        &self,
+        sources: &[Source],
+        frame: &Frame,
+        source: usize,
+        j: usize,
+    ) -> Vec<Vec<f32>> {
+        let mut rng = SplitMix64::new(0x5EED ^ (source as u64 * 31 + j as u64));
+        vec![draw_batch(sources, frame, self, &mut rng)]
     }
 
-    /// Trains up to `self.config.steps` (or `stop_after` more steps), calling `report`
-    /// with each metrics line.
-    ///
-    /// # Errors
-    /// [`TrainError`] for unreadable frames or unwritable files.
-    pub fn run(
-        &mut self,
-        stop_after: Option<usize>,
-        mut report: impl FnMut(&CostRecord),
-    ) -> Result<(), TrainError> {
-        let val = self.validation()?;
-        let config = &self.config;
-        self.state.train(
-            &config.schedule(),
-            stop_after,
-            &val,
-            |sources, s, f| load_frame(sources, s, f, config.net.stride),
-            |sources, frame, rng| {
-                let patches = draw_batch(sources, frame, config, rng);
-                (!patches.is_empty()).then_some(patches)
-            },
-            |net, patches, device| batch_loss(net, patches.clone(), config.margin, device),
-            |state, record| {
-                append_metrics(&state.run_dir, record)?;
-                state.save_checkpoint()?;
-                mccnn::save(&state.net.valid(), &state.run_dir.join("model.safetensors"))?;
-                report(record);
-                Ok(())
-            },
-        )
+    fn loss(&self, net: &McCnn, patches: &Vec<f32>, device: &Device) -> (Tensor<1>, f32) {
+        batch_loss(net, patches.clone(), self.margin, device)
     }
 
-    /// The trained network, without autodiff.
-    pub fn net(&self) -> McCnn {
-        self.state.net.valid()
+    fn record(&self, progress: &Progress, _val: &[Vec<f32>]) -> CostRecord {
+        progress.clone()
+    }
+
+    fn save(net: &McCnn, path: &Path) -> Result<(), TrainError> {
+        Ok(mccnn::save(net, path)?)
     }
 }

@@ -8,16 +8,15 @@ use omnimvs_camera::ValidityMask;
 use omnimvs_core::GrayImage;
 use omnimvs_data::Dataset;
 use omnimvs_data::gt::GroundTruth;
-use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
-
-use crate::photometric::PhotometricAugment;
-
-use crate::augment::{RotationSet, resample_ground_truth, rotate_rig, rotated_grids};
-use crate::error::TrainError;
 use omnimvs_net::cascade::ColumnWindow;
 use omnimvs_net::config::{Family, NetConfig};
 use omnimvs_net::infer::{network_inputs, sweep_geometry};
 use omnimvs_net::taps::SweepGrid;
+use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses};
+
+use crate::augment::{RotationSet, resample_ground_truth, rotate_rig, rotated_grids};
+use crate::error::TrainError;
+use crate::photometric::PhotometricAugment;
 
 /// A prepared sample.
 #[derive(Clone, Debug)]

@@ -15,7 +15,6 @@
 
 use std::path::{Path, PathBuf};
 
-use burn::module::Module;
 use burn::tensor::{Device, Tensor, TensorData, activation};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::sweepnet::{self, SweepNet, SweepNetConfig};
@@ -24,7 +23,7 @@ use omnimvs_stereo::sweepnet::{BandScratch, FeatureLayout, band_features};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::cost_run::{RunState, Schedule, Source, append_metrics, read_run_config};
+use crate::cost_run::{CostModel, CostModelTrainer, Progress, Schedule, Source};
 use crate::error::TrainError;
 use crate::rng::SplitMix64;
 
@@ -54,19 +53,6 @@ pub struct SweepTrainConfig {
     /// Grid and hypotheses of the ground truth (`h`, `w`, `N`).
     pub grid: (usize, usize, usize),
     pub seed: u64,
-}
-
-impl SweepTrainConfig {
-    fn schedule(&self) -> Schedule {
-        Schedule {
-            seed: self.seed,
-            steps: self.steps,
-            frame_every: self.frame_every,
-            train_frames: self.train_frames,
-            log_every: self.log_every,
-            lr: self.lr,
-        }
-    }
 }
 
 impl Default for SweepTrainConfig {
@@ -103,7 +89,7 @@ pub struct SweepRecord {
 }
 
 /// One frame ready for drawing samples.
-struct Frame {
+pub struct Frame {
     source: usize,
     views: Vec<CameraView>,
     gt: GroundTruth,
@@ -273,148 +259,125 @@ pub fn batch_loss(net: &SweepNet, batch: &SweepBatch, device: &Device) -> (Tenso
 }
 
 /// A SweepNet training run.
-pub struct SweepTrainer {
-    pub config: SweepTrainConfig,
-    state: RunState<SweepNet>,
-}
+pub type SweepTrainer = CostModelTrainer<SweepTrainConfig>;
 
-impl SweepTrainer {
-    /// A new run in `run_dir` (created; refused if it holds a run already).
-    ///
-    /// # Errors
-    /// [`TrainError`] for unreadable datasets, a bad configuration or an existing run.
-    pub fn create(
-        config: SweepTrainConfig,
-        run_dir: &Path,
-        device: &Device,
-    ) -> Result<Self, TrainError> {
-        if config.batch == 0 || config.band_rows == 0 || config.frame_every == 0 {
+impl CostModel for SweepTrainConfig {
+    type Net = SweepNet;
+    type Frame = Frame;
+    type Batch = SweepBatch;
+    type Record = SweepRecord;
+
+    fn data(&self) -> &[PathBuf] {
+        &self.data
+    }
+
+    fn grid(&self) -> (usize, usize, usize) {
+        self.grid
+    }
+
+    fn val_frames(&self) -> (u32, u32) {
+        self.val_frames
+    }
+
+    fn schedule(&self) -> Schedule {
+        Schedule {
+            seed: self.seed,
+            steps: self.steps,
+            frame_every: self.frame_every,
+            train_frames: self.train_frames,
+            log_every: self.log_every,
+            lr: self.lr,
+        }
+    }
+
+    fn set_steps(&mut self, steps: usize) {
+        self.steps = steps;
+    }
+
+    fn check(&self) -> Result<(), TrainError> {
+        if self.batch == 0 || self.band_rows == 0 || self.frame_every == 0 {
             return Err(TrainError::InvalidConfig {
                 field: "batch",
                 message: "expected batch > 0, band_rows > 0, frame_every > 0".into(),
             });
         }
-        let cameras = config.net.cameras;
-        let state = RunState::create(
-            run_dir,
-            &config,
-            &config.data,
-            config.grid,
-            config.seed,
-            device,
-            |sources| match sources.iter().find(|s| s.dataset.rig.len() != cameras) {
-                Some(s) => Err(TrainError::InvalidConfig {
-                    field: "data",
-                    message: format!(
-                        "{}: {} cameras, the network reads {cameras}",
-                        s.dataset.root.display(),
-                        s.dataset.rig.len(),
-                    ),
-                }),
-                None => Ok(()),
-            },
-            |d| Ok(SweepNet::new(&config.net, d)?),
-        )?;
-        Ok(Self { config, state })
+        Ok(())
     }
 
-    /// The run in `run_dir` from its last checkpoint; `steps` raises the total.
-    ///
-    /// # Errors
-    /// [`TrainError`] for a missing or unreadable run.
-    pub fn resume(
-        run_dir: &Path,
-        steps: Option<usize>,
-        device: &Device,
-    ) -> Result<Self, TrainError> {
-        let mut config: SweepTrainConfig = read_run_config(run_dir)?;
-        if let Some(s) = steps {
-            config.steps = s;
+    /// Every dataset's rig has the cameras the network reads.
+    fn check_sources(&self, sources: &[Source]) -> Result<(), TrainError> {
+        let cameras = self.net.cameras;
+        match sources.iter().find(|s| s.dataset.rig.len() != cameras) {
+            Some(s) => Err(TrainError::InvalidConfig {
+                field: "data",
+                message: format!(
+                    "{}: {} cameras, the network reads {cameras}",
+                    s.dataset.root.display(),
+                    s.dataset.rig.len(),
+                ),
+            }),
+            None => Ok(()),
         }
-        let state = RunState::resume(run_dir, &config.data, config.grid, device, |d| {
-            Ok(SweepNet::new(&config.net, d)?)
-        })?;
-        Ok(Self { config, state })
     }
 
-    /// The step the run is at.
-    pub fn step(&self) -> usize {
-        self.state.step
+    fn build(&self, device: &Device) -> Result<SweepNet, TrainError> {
+        Ok(SweepNet::new(&self.net, device)?)
     }
 
-    /// The run's folder.
-    pub fn run_dir(&self) -> &Path {
-        &self.state.run_dir
+    fn load_frame(
+        &self,
+        sources: &[Source],
+        source: usize,
+        frame: u32,
+    ) -> Result<Frame, TrainError> {
+        load_frame(sources, source, frame)
     }
 
-    /// Fixed validation batches: two bands of two frames of each dataset's validation range.
-    fn validation(&self) -> Result<Vec<SweepBatch>, TrainError> {
-        let mut out = Vec::new();
-        let (v0, v1) = self.config.val_frames;
-        for s in 0..self.state.sources.len() {
-            for (j, f) in [v0, v1].into_iter().enumerate() {
-                let frame = load_frame(&self.state.sources, s, f)?;
-                for k in 0..2u64 {
-                    let mut rng = SplitMix64::new(0x5EED ^ (s as u64 * 31 + j as u64 * 7 + k));
-                    let batch = draw_batch(&self.state.sources, &frame, &self.config, &mut rng);
-                    if !batch.is_empty() {
-                        out.push(batch);
-                    }
-                }
-            }
-        }
-        Ok(out)
+    fn draw(&self, sources: &[Source], frame: &Frame, rng: &mut SplitMix64) -> Option<SweepBatch> {
+        let batch = draw_batch(sources, frame, self, rng);
+        (!batch.is_empty()).then_some(batch)
     }
 
-    /// Trains up to `self.config.steps` (or `stop_after` more steps), calling `report` with
-    /// each metrics line.
-    ///
-    /// # Errors
-    /// [`TrainError`] for unreadable frames or unwritable files.
-    pub fn run(
-        &mut self,
-        stop_after: Option<usize>,
-        mut report: impl FnMut(&SweepRecord),
-    ) -> Result<(), TrainError> {
-        let val = self.validation()?;
-        let layout = self.config.net.layout();
+    /// Two bands of the frame, the empty ones left out.
+    fn validation_batches(
+        &self,
+        sources: &[Source],
+        frame: &Frame,
+        source: usize,
+        j: usize,
+    ) -> Vec<SweepBatch> {
+        (0..2u64)
+            .filter_map(|k| {
+                let mut rng = SplitMix64::new(0x5EED ^ (source as u64 * 31 + j as u64 * 7 + k));
+                self.draw(sources, frame, &mut rng)
+            })
+            .collect()
+    }
+
+    fn loss(&self, net: &SweepNet, batch: &SweepBatch, device: &Device) -> (Tensor<1>, f32) {
+        batch_loss(net, batch, device)
+    }
+
+    /// With the share of the plain ZNCC cost on the validation pixels.
+    fn record(&self, p: &Progress, val: &[SweepBatch]) -> SweepRecord {
+        let layout = self.net.layout();
         let zncc_acc = val
             .iter()
             .map(|b| within_one(&zncc_costs(b, layout), &b.target, b.ndepth))
             .sum::<f32>()
             / val.len().max(1) as f32;
-        let config = &self.config;
-        self.state.train(
-            &config.schedule(),
-            stop_after,
-            &val,
-            load_frame,
-            |sources, frame, rng| {
-                let batch = draw_batch(sources, frame, config, rng);
-                (!batch.is_empty()).then_some(batch)
-            },
-            batch_loss,
-            |state, p| {
-                let record = SweepRecord {
-                    step: p.step,
-                    train_loss: p.train_loss,
-                    train_acc: p.train_acc,
-                    val_loss: p.val_loss,
-                    val_acc: p.val_acc,
-                    val_zncc_acc: zncc_acc,
-                    seconds: p.seconds,
-                };
-                append_metrics(&state.run_dir, &record)?;
-                state.save_checkpoint()?;
-                sweepnet::save(&state.net.valid(), &state.run_dir.join("model.safetensors"))?;
-                report(&record);
-                Ok(())
-            },
-        )
+        SweepRecord {
+            step: p.step,
+            train_loss: p.train_loss,
+            train_acc: p.train_acc,
+            val_loss: p.val_loss,
+            val_acc: p.val_acc,
+            val_zncc_acc: zncc_acc,
+            seconds: p.seconds,
+        }
     }
 
-    /// The trained network, without autodiff.
-    pub fn net(&self) -> SweepNet {
-        self.state.net.valid()
+    fn save(net: &SweepNet, path: &Path) -> Result<(), TrainError> {
+        Ok(sweepnet::save(net, path)?)
     }
 }

@@ -9,11 +9,6 @@ use burn::module::Module;
 use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Tensor};
 use omnimvs_data::gt::GroundTruth;
-
-use crate::config::TrainParts;
-use crate::error::TrainError;
-use crate::learner::{masked_l1, target_data_with};
-use crate::sample::{Sample, SampleSource};
 use omnimvs_net::cascade::geometry::crop_columns;
 use omnimvs_net::cascade::model::{CascadeFeatures, StageOutput};
 use omnimvs_net::cascade::sampler::coarse_spacing;
@@ -21,6 +16,11 @@ use omnimvs_net::cascade::{CascadeGeometry, CascadeNet};
 use omnimvs_net::config::NetConfig;
 use omnimvs_net::model::{OmniMvsNet, SweepTaps};
 use omnimvs_net::weights;
+
+use crate::config::TrainParts;
+use crate::error::TrainError;
+use crate::learner::{masked_l1, target_data_with};
+use crate::sample::{Sample, SampleSource};
 
 /// A network the [`crate::Trainer`] can train.
 pub trait Trainable: Module + Sized {

@@ -26,6 +26,8 @@ use std::time::Instant;
 
 use burn::tensor::{Device, Tensor};
 use omnimvs_eval::metrics::{Metrics, Protocol, frame_metrics, mean_metrics, protocol_metrics};
+use omnimvs_net::cascade::ColumnWindow;
+use omnimvs_net::model::OmniMvsNet;
 use omnimvs_sweep::SweepSpec;
 use serde::{Deserialize, Serialize};
 
@@ -39,8 +41,6 @@ use crate::plot::plot_curves;
 use crate::rng::SplitMix64;
 use crate::sample::SampleSource;
 use crate::trainable::Trainable;
-use omnimvs_net::cascade::ColumnWindow;
-use omnimvs_net::model::OmniMvsNet;
 
 /// Progress of one training step.
 #[derive(Clone, Copy, Debug)]

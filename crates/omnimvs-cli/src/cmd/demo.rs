@@ -19,6 +19,7 @@ use omnimvs_eval::output::{
     write_text,
 };
 use omnimvs_eval::ply::write_ply;
+use omnimvs_net::bundled::PickChoice;
 use omnimvs_net::{Backend, BundledModel, NetEstimator};
 use omnimvs_stereo::{SgmEstimator, SgmParams};
 use omnimvs_sweep::LutCache;
@@ -28,7 +29,6 @@ use omnimvs_synth::{DatasetWriter, SceneKind, Shard, SynthOptions};
 use crate::args::Size;
 use crate::cmd::{eval, infer, sgm};
 use crate::weights::{Weights, apply_pick};
-use omnimvs_net::bundled::PickChoice;
 
 /// Run the whole pipeline on a rendered scene (no data needed) and print its metrics.
 ///

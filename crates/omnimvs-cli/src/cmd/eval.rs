@@ -10,12 +10,12 @@ use omnimvs_data::{Dataset, DepthEstimator, FrameRange};
 use omnimvs_eval::output::evaluation::write_index_png;
 use omnimvs_eval::output::{EvalReport, Evaluation, MethodScores};
 use omnimvs_net::NetEstimator;
+use omnimvs_net::bundled::PickChoice;
 use omnimvs_stereo::{SgmEstimator, SgmParams};
 use omnimvs_sweep::{LutCache, SweepSpec};
 
 use crate::args::{BACKEND_HELP, Method, Preset, SweepArgs, parse_backend};
 use crate::weights::{BUNDLED, Weights, apply_pick, parse_pick};
-use omnimvs_net::bundled::PickChoice;
 
 /// Evaluate methods against ground truth with the paper's metrics.
 ///

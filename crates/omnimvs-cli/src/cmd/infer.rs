@@ -8,13 +8,13 @@ use omnimvs_core::GrayImage;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, Finishing, FinishingError, FrameRange};
 use omnimvs_eval::metrics::ProtocolMetrics;
 use omnimvs_eval::output::{DepthRun, FrameScene, protocol_tables};
+use omnimvs_net::bundled::PickChoice;
 use omnimvs_net::weights::common_image_size;
 use omnimvs_net::{Backend, NetEstimator};
 use omnimvs_sweep::{CacheStatus, LutCache};
 
 use crate::args::{BACKEND_HELP, Preset, Size, parse_backend};
 use crate::weights::{BUNDLED, Weights, apply_pick, parse_pick};
-use omnimvs_net::bundled::PickChoice;
 
 /// Estimate 360-degree inverse depth with the OmniMVS network.
 ///

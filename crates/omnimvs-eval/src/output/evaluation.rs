@@ -4,18 +4,17 @@
 
 use std::path::{Path, PathBuf};
 
-use omnimvs_sweep::SweepSpec;
-use serde::Serialize;
-
-use super::report::{protocol_tables, write_json, write_text};
-use crate::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics, index_on_eval_grid};
 use omnimvs_data::Dataset;
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::estimate::DepthEstimate;
 use omnimvs_data::gt::{EvalTruth, GroundTruth};
 use omnimvs_data::image_io::write_png_u8;
+use omnimvs_sweep::SweepSpec;
+use serde::Serialize;
 
+use super::report::{protocol_tables, write_json, write_text};
 use crate::EvalError;
+use crate::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics, index_on_eval_grid};
 
 /// The ground truth of some frames on the evaluation sweep.
 pub struct Evaluation {

@@ -5,15 +5,15 @@ use std::path::{Path, PathBuf};
 use omnimvs_camera::Rig;
 use omnimvs_camera::ValidityMask;
 use omnimvs_core::GrayImage;
+use omnimvs_data::colormap::{Colormap, colorize};
+use omnimvs_data::estimate::DepthEstimate;
+use omnimvs_data::gt::{GroundTruth, write_f32_tiff};
+use omnimvs_data::image_io::write_png_u8;
 use omnimvs_sweep::{InvDepthSource, Panorama, compose_panorama};
 
 use super::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
 use crate::EvalError;
 use crate::ply::write_ply;
-use omnimvs_data::colormap::{Colormap, colorize};
-use omnimvs_data::estimate::DepthEstimate;
-use omnimvs_data::gt::{GroundTruth, write_f32_tiff};
-use omnimvs_data::image_io::write_png_u8;
 
 /// `dir/%05d<suffix>`, the path of one of a frame's files.
 pub fn frame_path(dir: &Path, frame: u32, suffix: &str) -> PathBuf {

@@ -1,11 +1,11 @@
 //! Building blocks of the result pictures (RGB8 rows stacked into one image).
 
 use omnimvs_core::GrayImage;
+use omnimvs_data::colormap::{Colormap, colorize};
+use omnimvs_data::gt::GroundTruth;
 use omnimvs_sweep::EquirectGrid;
 
 use crate::ply::ColoredPoint;
-use omnimvs_data::colormap::{Colormap, colorize};
-use omnimvs_data::gt::GroundTruth;
 
 /// Error maps saturate at this error, in percent of N.
 pub const ERROR_MAP_MAX_PCT: f64 = 10.0;

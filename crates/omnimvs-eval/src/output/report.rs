@@ -4,11 +4,11 @@
 use std::path::Path;
 
 use omnimvs_core::fs::write_atomic;
+use omnimvs_data::estimate::StageTimes;
 use serde::Serialize;
 
 use crate::EvalError;
 use crate::metrics::{Metrics, Protocol, ProtocolMetrics};
-use omnimvs_data::estimate::StageTimes;
 
 /// Writes `text` to `path` atomically.
 ///

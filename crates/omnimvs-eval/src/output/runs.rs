@@ -3,6 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
+use omnimvs_data::Dataset;
+use omnimvs_data::estimate::{DepthEstimate, StageTimes};
+use omnimvs_data::gt::EvalTruth;
 use omnimvs_sweep::SweepSpec;
 use serde::Serialize;
 
@@ -10,12 +13,8 @@ use super::files::{FrameScene, write_depth_pictures, write_maps, write_percentil
 use super::report::{
     ConfidenceFrame, ConfidenceSummary, frames_table, metrics_json, write_json, write_text,
 };
-use crate::metrics::{Protocol, ProtocolMetrics, eval_metrics};
-use omnimvs_data::Dataset;
-use omnimvs_data::estimate::{DepthEstimate, StageTimes};
-use omnimvs_data::gt::EvalTruth;
-
 use crate::EvalError;
+use crate::metrics::{Protocol, ProtocolMetrics, eval_metrics};
 
 fn create_dir(dir: &Path) -> Result<(), EvalError> {
     std::fs::create_dir_all(dir).map_err(|e| EvalError::io(dir, e))

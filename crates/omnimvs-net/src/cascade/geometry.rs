@@ -9,6 +9,7 @@ use std::time::Instant;
 use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_camera::Rig;
+use omnimvs_core::interp::BilinearTap;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
 use super::model::{
@@ -24,7 +25,6 @@ use crate::model::SweepTaps;
 use crate::pixel::PixelSampler;
 use crate::taps::{SweepGrid, grid_taps};
 use crate::tensor::{hypothesis_tensor, read_values};
-use omnimvs_core::interp::BilinearTap;
 use rayon::prelude::*;
 
 /// One stage's sampling positions on the device: every camera's taps, the hypotheses, and

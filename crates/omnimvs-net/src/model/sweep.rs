@@ -5,11 +5,11 @@ use std::ops::Range;
 
 use burn::module::Module;
 use burn::tensor::{Device, Int, Tensor, TensorData};
+use omnimvs_core::interp::BilinearTap;
 
 use super::blocks::ConvBn2d;
 use crate::error::NetError;
 use crate::taps::{SweepGrid, grid_taps, warp_features};
-use omnimvs_core::interp::BilinearTap;
 
 /// One camera's bilinear taps as device tensors, for a given feature-map size.
 ///
