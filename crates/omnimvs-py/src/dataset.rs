@@ -8,8 +8,8 @@ use omnimvs_data::Dataset;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 
+use crate::arrays::{gray_to_array, type_name};
 use crate::error::{IntoPyResult, bad_argument, bad_type, detached};
-use crate::images::gray_to_array;
 
 /// A frame number from Python: a non-negative int.
 pub fn frame_number(frame: i64) -> PyResult<u32> {
@@ -212,11 +212,4 @@ pub fn geometry(source: &Bound<'_, PyAny>, name: &str) -> PyResult<Dataset> {
             type_name(source)
         ),
     ))
-}
-
-/// The Python type name of `obj`, for messages.
-pub fn type_name(obj: &Bound<'_, PyAny>) -> String {
-    obj.get_type()
-        .name()
-        .map_or_else(|_| "an object".into(), |n| n.to_string())
 }

@@ -7,15 +7,15 @@ use omnimvs_sweep::EquirectGrid;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::arrays::{shape_text, type_name};
 use crate::dataset::{PyDataset, frame_number};
 use crate::error::{IntoPyResult, bad_argument, detached};
-use crate::images::shape_text;
 
 /// A prediction as `f64` values and its `(height, width)`.
 fn prediction_values(prediction: &Bound<'_, PyAny>) -> PyResult<(Vec<f64>, usize, usize)> {
     let wrong = || {
         let found = prediction.cast::<numpy::PyUntypedArray>().map_or_else(
-            |_| crate::dataset::type_name(prediction),
+            |_| type_name(prediction),
             |a| format!("{} array of shape {}", a.dtype(), shape_text(a.shape())),
         );
         bad_argument(

@@ -1,50 +1,14 @@
 //! numpy arrays to and from gray images, and the two ways a function gets a frame: a dataset
 //! and a frame number, or the images themselves with a rig.
 
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{PyArray2, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use omnimvs_core::GrayImage;
 use omnimvs_data::Dataset;
 use pyo3::prelude::*;
 
-use crate::dataset::{PyDataset, PyRig, frame_number, type_name};
+use crate::arrays::{shape_text, type_name};
+use crate::dataset::{PyDataset, PyRig, frame_number};
 use crate::error::{IntoPyResult, bad_argument, bad_type};
-
-/// A gray image as a `numpy.uint8` array `(height, width)` (values rounded; 16-bit images
-/// were scaled to 0..255 when read).
-pub fn gray_to_array<'py>(
-    py: Python<'py>,
-    image: &GrayImage,
-) -> PyResult<Bound<'py, PyArray2<u8>>> {
-    let pixels: Vec<u8> = image
-        .data
-        .iter()
-        .map(|&v| v.round().clamp(0.0, 255.0) as u8)
-        .collect();
-    PyArray1::from_vec(py, pixels)
-        .reshape([image.height, image.width])
-        .map_err(|e| bad_argument("image", e))
-}
-
-/// A `(height, width)` float32 map as a numpy array.
-pub fn map_to_array(
-    py: Python<'_>,
-    data: Vec<f32>,
-    height: usize,
-    width: usize,
-) -> PyResult<Bound<'_, PyArray2<f32>>> {
-    PyArray1::from_vec(py, data)
-        .reshape([height, width])
-        .map_err(|e| bad_argument("result", e))
-}
-
-/// A shape as Python writes it: `(768, 800)`, `(3,)`.
-pub fn shape_text(shape: &[usize]) -> String {
-    let items: Vec<String> = shape.iter().map(ToString::to_string).collect();
-    match items.len() {
-        1 => format!("({},)", items[0]),
-        _ => format!("({})", items.join(", ")),
-    }
-}
 
 /// Describes an array for messages: `uint8 array of shape (768, 800)`.
 fn describe(obj: &Bound<'_, PyAny>) -> String {

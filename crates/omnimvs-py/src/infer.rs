@@ -12,9 +12,10 @@ use omnimvs_sweep::LutCache;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::arrays::map_to_array;
 use crate::dataset::PyRig;
 use crate::error::{IntoPyResult, bad_argument, detached, with_context};
-use crate::images::{frame_source, map_to_array};
+use crate::images::frame_source;
 
 /// The bundled model `weights` names (`None`: the default one), if any.
 fn bundled_model(weights: Option<&Path>) -> Option<BundledModel> {

@@ -10,6 +10,7 @@
 //! - `images`: numpy arrays to and from gray images, with checks that name the argument.
 //! - `lut`, `sgm`, `infer`, `evaluate`, `synth`: one Python function each.
 
+mod arrays;
 mod dataset;
 mod error;
 mod evaluate;

@@ -6,9 +6,10 @@ use omnimvs_net::learned_sgm::{MatchingCost, sgm_estimator};
 use omnimvs_stereo::SgmParams;
 use pyo3::prelude::*;
 
+use crate::arrays::map_to_array;
 use crate::dataset::PyRig;
 use crate::error::{IntoPyResult, detached};
-use crate::images::{frame_source, map_to_array};
+use crate::images::frame_source;
 
 /// 360-degree inverse depth by the classical method of the paper's Table 3 (9x9 ZNCC over
 /// every camera pair on a spherical sweep, SGM along 8 paths wrapping round in longitude,

@@ -7,7 +7,8 @@ use omnimvs_synth::rig::{RigSource, load_rig, resize_rig};
 use omnimvs_synth::{DatasetWriter, SceneKind, Shard};
 use pyo3::prelude::*;
 
-use crate::dataset::{PyDataset, PyRig, type_name};
+use crate::arrays::type_name;
+use crate::dataset::{PyDataset, PyRig};
 use crate::error::{IntoPyResult, bad_argument, bad_type, detached};
 
 /// The rig argument: `None` (the published rig), a `Rig`, or a `config.yaml` path.

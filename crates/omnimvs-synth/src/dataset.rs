@@ -24,7 +24,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::camera_effects::{CameraEffects, apply_all, auto_expose};
-use crate::mesh::{TriMesh, load_mesh};
+use crate::mesh::TriMesh;
+use crate::mesh_file::load_mesh;
 use crate::rig::{RigSource, rig_radius_m};
 use crate::scene::{SceneKind, SceneSpec, generator_name};
 use crate::{

@@ -7,11 +7,11 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use crate::generate::{GenParams, aabb_distance, random_sky};
 use crate::rng::Rng;
 use crate::scene::{
     LightSpec, ObjectSpec, Placement, SceneKind, SceneSpec, ShapeSpec, generator_name,
 };
+use crate::shared::{GenParams, aabb_distance, random_sky};
 use crate::texture::{Pattern, TextureSpec};
 
 const WALL_THICKNESS_M: f64 = 0.12;

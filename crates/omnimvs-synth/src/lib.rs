@@ -20,12 +20,13 @@ mod error;
 pub mod generate;
 pub mod house;
 pub mod mesh;
-mod ply;
+pub mod mesh_file;
 pub mod primitive;
 pub mod render;
 pub mod rig;
 pub mod rng;
 pub mod scene;
+mod shared;
 pub mod split;
 pub mod texture;
 pub mod things;
@@ -35,10 +36,11 @@ pub use camera_effects::CameraEffects;
 pub use dataset::{DatasetWriter, Frame, FrameEvent, Shard, SynthOptions, SynthSettings};
 pub use difficulty::Difficulty;
 pub use error::SynthError;
-pub use generate::{GenParams, generate};
+pub use generate::generate;
 pub use render::{
     render_fisheye, render_fisheye_into, render_gray_frame, render_inverse_depth,
     render_inverse_depth_map,
 };
 pub use scene::{LightSpec, ObjectSpec, Placement, SceneKind, SceneSpec, ShapeSpec, SkySpec};
+pub use shared::GenParams;
 pub use tracer::{Hit, MeshLibrary, Tracer};

@@ -2,12 +2,9 @@
 //! generated shapes (cylinder, cone, torus, displaced sphere, extrusion) and
 //! user meshes loaded from OBJ or PLY files.
 
-use std::path::Path;
-
 use fastnoise_lite::{FastNoiseLite, FractalType, NoiseType};
 use glam::Vec3A;
 
-use crate::SynthError;
 use crate::rng::Rng;
 
 /// An indexed triangle mesh.
@@ -349,73 +346,7 @@ pub fn lattice(cells: u32, bar: f32) -> TriMesh {
     m
 }
 
-/// Loads a user mesh (`.obj` or `.ply`, ASCII or binary little-endian),
-/// triangulated and normalised into the unit ball.
-///
-/// # Errors
-/// [`SynthError::Mesh`] for an unreadable or malformed file, an unknown
-/// extension, a mesh without triangles or with non-finite coordinates.
-pub fn load_mesh(path: &Path) -> Result<TriMesh, SynthError> {
-    let err = |message: String| SynthError::Mesh {
-        path: path.to_path_buf(),
-        message,
-    };
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    let mut mesh = match ext.as_str() {
-        "obj" => load_obj(path).map_err(err)?,
-        "ply" => {
-            let bytes =
-                std::fs::read(path).map_err(|e| SynthError::io(path, "cannot read mesh", e))?;
-            crate::ply::parse_ply(&bytes).map_err(err)?
-        }
-        _ => {
-            return Err(err(format!(
-                "unknown mesh format {ext:?}, expected .obj or .ply"
-            )));
-        }
-    };
-    if mesh.triangles.is_empty() {
-        return Err(err("the file holds no triangles".to_string()));
-    }
-    if mesh.positions.iter().any(|p| !p.is_finite()) {
-        return Err(err("a vertex has a non-finite coordinate".to_string()));
-    }
-    let n = mesh.positions.len() as u32;
-    if let Some(bad) = mesh.triangles.iter().flatten().find(|&&i| i >= n) {
-        return Err(err(format!(
-            "a face refers to vertex {bad} but there are only {n}"
-        )));
-    }
-    mesh.normalize_to_unit_ball();
-    Ok(mesh)
-}
-
-fn load_obj(path: &Path) -> Result<TriMesh, String> {
-    let opts = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ..Default::default()
-    };
-    let (models, _materials) = tobj::load_obj(path, &opts).map_err(|e| e.to_string())?;
-    let mut mesh = TriMesh::default();
-    for model in models {
-        let base = mesh.positions.len() as u32;
-        let pos = &model.mesh.positions;
-        for p in pos.chunks_exact(3) {
-            mesh.positions.push(Vec3A::new(p[0], p[1], p[2]));
-        }
-        for t in model.mesh.indices.chunks_exact(3) {
-            mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
-        }
-    }
-    Ok(mesh)
-}
-
 #[cfg(test)]
-#[allow(clippy::disallowed_methods)] // fixtures are written directly
 mod tests {
     use super::*;
 
@@ -491,31 +422,5 @@ mod tests {
             assert!((max_radius(&m) - 1.0).abs() < 1e-5);
             assert!(volume(&m).abs() > 0.1);
         }
-    }
-
-    #[test]
-    fn load_mesh_reads_obj_and_rejects_bad_files() {
-        let dir = tempfile::tempdir().unwrap();
-        let obj = dir.path().join("quad.obj");
-        std::fs::write(&obj, "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nf 1 2 3 4\n").unwrap();
-        let m = load_mesh(&obj).unwrap();
-        assert_eq!(m.triangles.len(), 2);
-        assert!((max_radius(&m) - 1.0).abs() < 1e-6);
-
-        let bad = dir.path().join("x.stl");
-        std::fs::write(&bad, "solid").unwrap();
-        assert!(
-            load_mesh(&bad)
-                .unwrap_err()
-                .to_string()
-                .contains("unknown mesh format")
-        );
-        let missing = dir.path().join("missing.obj");
-        assert!(
-            load_mesh(&missing)
-                .unwrap_err()
-                .to_string()
-                .contains("missing.obj")
-        );
     }
 }

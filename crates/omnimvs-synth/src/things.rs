@@ -3,9 +3,9 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use crate::generate::{GenParams, aabb_distance, random_hard_lights, random_light, random_sky};
 use crate::rng::Rng;
 use crate::scene::{ObjectSpec, Placement, SceneKind, SceneSpec, ShapeSpec, generator_name};
+use crate::shared::{GenParams, aabb_distance, random_hard_lights, random_light, random_sky};
 use crate::texture::TextureSpec;
 
 /// Chance that the background is a room rather than a sky.

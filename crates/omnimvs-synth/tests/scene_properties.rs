@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)] // helpers of tests
 
 use omnimvs_sweep::EquirectGrid;
-use omnimvs_synth::mesh::load_mesh;
+use omnimvs_synth::mesh_file::load_mesh;
 use omnimvs_synth::rig::{preset_rig, resize_rig, rig_radius_m};
 use omnimvs_synth::{
     GenParams, SceneKind, ShapeSpec, Tracer, generate, render_fisheye, render_inverse_depth,

@@ -1,4 +1,4 @@
-//! The model and its optimiser: the paper's masked L1 loss, one SGD step, and checkpoints
+//! The model and its optimiser: one SGD step on the loss of [`crate::loss`], and checkpoints
 //! that restore both exactly (burnpack files keep the parameter ids the optimiser state is
 //! keyed by).
 
@@ -9,9 +9,8 @@ use burn::optim::decay::WeightDecayConfig;
 use burn::optim::momentum::MomentumConfig;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer, SgdConfig};
 use burn::store::{BurnpackStore, ModuleSnapshot};
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::{Device, Tensor};
 use omnimvs_core::fs::write_atomic;
-use omnimvs_data::gt::GroundTruth;
 use omnimvs_net::model::{OmniMvsNet, SweepTaps};
 
 use crate::config::{Optimizer, TrainConfig, TrainParts};
@@ -23,54 +22,6 @@ use crate::trainable::Trainable;
 pub const MODEL_FILE: &str = "model.bpk";
 /// File of the optimiser state inside a checkpoint folder.
 pub const OPTIM_FILE: &str = "optim.bpk";
-
-/// `mean over valid pixels of |index - target|`, weighted: `index`, `target` and `mask` (1
-/// for valid pixels, 0 elsewhere, or the per-pixel weights of [`target_data_with`]) are
-/// `[B, H, W]`.
-pub fn masked_l1(index: Tensor<3>, target: Tensor<3>, mask: Tensor<3>) -> Tensor<1> {
-    let count = mask.clone().sum().clamp_min(1.0); // [1]
-    ((index - target).abs() * mask).sum() / count // [1]
-}
-
-/// Rounded ground-truth indices and the valid mask as `[1, H, W]` data.
-pub fn target_data(gt: &GroundTruth) -> (TensorData, TensorData) {
-    target_data_with(gt, true, 1.0)
-}
-
-/// Ground-truth indices (rounded when `round`) and the per-pixel loss weights as `[1, H, W]`
-/// data: 0 for invalid pixels, `sky_weight` for sky, 1 for the rest (with `sky_weight` 1, the
-/// valid mask). Sky is a valid index of exactly 0, which
-/// [`omnimvs_data::gt::ground_truth_index`] gives inverse depth 0 and nothing else finite:
-/// every positive inverse depth lies above `d_0`. [`masked_l1`] divides by the weights' sum,
-/// so it is a weighted mean.
-pub fn target_data_with(
-    gt: &GroundTruth,
-    round: bool,
-    sky_weight: f64,
-) -> (TensorData, TensorData) {
-    let shape = [1, gt.height, gt.width];
-    let target: Vec<f32> = gt
-        .index
-        .iter()
-        .zip(&gt.valid)
-        .map(|(&n, &v)| match (v, round) {
-            (false, _) => 0.0,
-            (true, true) => n.round(),
-            (true, false) => n,
-        })
-        .collect();
-    let mask: Vec<f32> = gt
-        .index
-        .iter()
-        .zip(&gt.valid)
-        .map(|(&n, &v)| match (v, n == 0.0) {
-            (false, _) => 0.0,
-            (true, true) => sky_weight as f32,
-            (true, false) => 1.0,
-        })
-        .collect();
-    (TensorData::new(target, shape), TensorData::new(mask, shape))
-}
 
 fn ckpt_error(path: &Path, message: impl std::fmt::Display) -> TrainError {
     TrainError::Checkpoint {

@@ -10,7 +10,7 @@ use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
 use crate::error::TrainError;
-use crate::trainer::EpochRecord;
+use crate::record::EpochRecord;
 
 /// Width of the picture, pixels.
 pub const WIDTH: u32 = 640;

@@ -19,7 +19,7 @@ use omnimvs_net::weights;
 
 use crate::config::TrainParts;
 use crate::error::TrainError;
-use crate::learner::{masked_l1, target_data_with};
+use crate::loss::{masked_l1, target_data_with};
 use crate::sample::{Sample, SampleSource};
 
 /// A network the [`crate::Trainer`] can train.

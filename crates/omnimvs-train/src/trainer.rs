@@ -34,10 +34,12 @@ use serde::{Deserialize, Serialize};
 use crate::augment::RotationSet;
 use crate::config::{Selection, TrainConfig};
 use crate::error::TrainError;
-use crate::learner::{Learner, target_data};
+use crate::learner::Learner;
 use crate::loader::{Loader, PlanItem};
+use crate::loss::target_data;
 use crate::photometric::PhotometricAugment;
 use crate::plot::plot_curves;
+use crate::record::EpochRecord;
 use crate::rng::SplitMix64;
 use crate::sample::SampleSource;
 use crate::trainable::Trainable;
@@ -55,34 +57,6 @@ pub struct StepInfo {
     pub loss: f32,
     /// Learning rate.
     pub lr: f64,
-}
-
-/// One line of `metrics.jsonl`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct EpochRecord {
-    /// Epoch, 1-based (number of epochs finished).
-    pub epoch: usize,
-    /// Learning rate of the epoch.
-    pub lr: f64,
-    /// Mean training loss (index units).
-    pub train_loss: f64,
-    /// Training steps.
-    pub steps: usize,
-    /// Wall time of the training steps, seconds.
-    pub train_seconds: f64,
-    /// Training steps per second.
-    pub steps_per_second: f64,
-    /// Time the steps waited for the loader thread, seconds.
-    pub loader_wait_seconds: f64,
-    /// Mean validation loss (index units), if there are validation frames.
-    pub val_loss: Option<f64>,
-    /// The paper's metrics on the validation frames (sky scored as index 0, as trained).
-    pub val: Option<Metrics>,
-    /// The same frames under the reference's protocol (sky not scored; absent in older runs).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub val_reference: Option<Metrics>,
-    /// Wall time of the validation, seconds.
-    pub val_seconds: f64,
 }
 
 /// What a checkpoint records besides the tensors.
@@ -562,7 +536,7 @@ impl<M: Trainable> Trainer<M> {
             };
             let index = net.predict(&images, &geometry, source)?;
             let (target, mask) = target_data(&sample.gt);
-            let loss = crate::learner::masked_l1(
+            let loss = crate::loss::masked_l1(
                 index.clone(),
                 Tensor::from_data(target, &device),
                 Tensor::from_data(mask, &device),
