@@ -53,14 +53,16 @@ pub enum DataError {
 }
 
 impl DataError {
-    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    /// A file that cannot be read or written.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Self::Io {
             path: path.into(),
             source,
         }
     }
 
-    pub(crate) fn format(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+    /// A file whose content is not what was expected.
+    pub fn format(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         Self::Format {
             path: path.into(),
             message: message.into(),
@@ -68,7 +70,7 @@ impl DataError {
     }
 
     /// A size or count that does not fit, as [`SweepError::mismatch`].
-    pub(crate) fn mismatch(
+    pub fn mismatch(
         what: impl Into<String>,
         expected: impl ToString,
         found: impl ToString,

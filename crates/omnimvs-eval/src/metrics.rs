@@ -118,7 +118,7 @@ pub fn frame_metrics(
 }
 
 /// The metrics of one frame under `protocol`: as [`frame_metrics`], over the pixels that
-/// `truth` scores under `protocol` ([`EvalTruth::scored`]).
+/// `truth` scores under `protocol` ([`Protocol::scores`]).
 ///
 /// # Errors
 /// [`SweepError::Mismatch`](omnimvs_sweep::SweepError::Mismatch) when the sizes differ or no pixel is scored.

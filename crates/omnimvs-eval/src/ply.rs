@@ -14,7 +14,7 @@ pub struct ColoredPoint {
 /// Writes a binary little-endian PLY file atomically.
 ///
 /// # Errors
-/// [`EvalError::Io`] naming the file.
+/// [`EvalError`] naming the file.
 pub fn write_ply(path: &Path, points: &[ColoredPoint]) -> Result<(), EvalError> {
     omnimvs_core::fs::write_atomic_with(path, |w| {
         write!(

@@ -8,9 +8,9 @@
 //!   confidence map, with the time of each stage.
 //! * [`SgmEstimator`]: the method behind the workspace's one depth interface,
 //!   `omnimvs_data::DepthEstimator`, prepared for a rig, a sweep and its parameters.
-//! * [`SphereProjector`]: where each output pixel meets each sweep sphere in
-//!   each camera, computed on the fly (the lookup table of all spheres would
-//!   not fit the memory budget).
+//! * The sweep's geometry is `omnimvs_sweep::SphereProjector`: where each output pixel meets
+//!   each sweep sphere in each camera, computed on the fly (the lookup table of all spheres
+//!   would not fit the memory budget).
 //! * [`Matcher::cost_volume`]: the ZNCC cost volume ([`CostVolume`], 16-bit).
 //! * [`learned`]: the learned matching costs' one cost-volume driver, and the MC-CNN-style
 //!   cost: per-camera feature maps from a [`FeatureExtractor`] compared by cosine similarity,

@@ -36,9 +36,8 @@ impl Evaluation {
     pub fn new(ds: &Dataset, frames: &[u32], spec: SweepSpec) -> Result<Self, EvalError> {
         let mut truths = Vec::with_capacity(frames.len());
         for &f in frames {
-            truths.push(ds.eval_truth(f, &spec)?.ok_or_else(|| EvalError::Format {
-                path: ds.root.clone(),
-                message: format!("frame {f} has no ground truth"),
+            truths.push(ds.eval_truth(f, &spec)?.ok_or_else(|| {
+                EvalError::format(&ds.root, format!("frame {f} has no ground truth"))
             })?);
         }
         Ok(Self {
@@ -260,7 +259,7 @@ impl EvalReport {
     /// Writes `out/eval.json` and `out/eval.md`.
     ///
     /// # Errors
-    /// [`EvalError::Io`] for a file that cannot be written.
+    /// [`EvalError`] naming a file that cannot be written.
     pub fn write(&self, out: &Path) -> Result<(), EvalError> {
         write_json(&out.join("eval.json"), self, true)?;
         write_text(&out.join("eval.md"), &self.table())
@@ -271,7 +270,7 @@ impl EvalReport {
 /// black where the ground truth is invalid when `mask`.
 ///
 /// # Errors
-/// [`EvalError::Io`] for a file that cannot be written.
+/// [`EvalError`] naming a file that cannot be written.
 pub fn write_index_png(
     path: &Path,
     index: &[f32],

@@ -26,7 +26,7 @@ pub fn frame_path(dir: &Path, frame: u32, suffix: &str) -> PathBuf {
 /// when it has a spread.
 ///
 /// # Errors
-/// [`EvalError::Io`] for a file that cannot be written.
+/// [`EvalError`] naming a file that cannot be written.
 pub fn write_maps(dir: &Path, frame: u32, est: &DepthEstimate) -> Result<(), EvalError> {
     let (w, h) = (est.spec.width(), est.spec.height());
     let path = |suffix| frame_path(dir, frame, suffix);
@@ -63,7 +63,7 @@ pub fn quantile(values: &[f32], q: f64) -> f32 {
 /// frame's 1st and 99th percentiles; returns those two inverse depths (1/m).
 ///
 /// # Errors
-/// [`EvalError::Io`] for a file that cannot be written.
+/// [`EvalError`] naming a file that cannot be written.
 pub fn write_percentile_png(
     dir: &Path,
     frame: u32,
@@ -98,7 +98,7 @@ impl FrameScene<'_> {
     /// The gray panorama seen at the estimate's inverse depth, on its grid.
     ///
     /// # Errors
-    /// [`EvalError::Sweep`] for images that do not fit the rig.
+    /// [`EvalError`] for images that do not fit the rig.
     pub fn panorama(&self, est: &DepthEstimate) -> Result<Panorama, EvalError> {
         Ok(compose_panorama(
             self.rig,

@@ -13,7 +13,7 @@ use crate::metrics::{Metrics, Protocol, ProtocolMetrics};
 /// Writes `text` to `path` atomically.
 ///
 /// # Errors
-/// [`EvalError::Io`] naming the file.
+/// [`EvalError`] naming the file.
 pub fn write_text(path: &Path, text: &str) -> Result<(), EvalError> {
     write_atomic(path, text.as_bytes()).map_err(|e| EvalError::io(path, e))
 }
@@ -21,7 +21,7 @@ pub fn write_text(path: &Path, text: &str) -> Result<(), EvalError> {
 /// Writes `value` as pretty JSON to `path` atomically, with a final newline when `newline`.
 ///
 /// # Errors
-/// [`EvalError::Io`] naming the file.
+/// [`EvalError`] naming the file.
 pub fn write_json(path: &Path, value: &impl Serialize, newline: bool) -> Result<(), EvalError> {
     let mut text = serde_json::to_string_pretty(value)
         .map_err(|e| EvalError::format(path, format!("cannot serialise: {e}")))?;

@@ -43,7 +43,7 @@ impl ConfidenceRun {
     /// A run writing into `dir` (created) on `spec`.
     ///
     /// # Errors
-    /// [`EvalError::Io`] when the folder cannot be created.
+    /// [`EvalError`] when the folder cannot be created.
     pub fn new(dir: &Path, spec: SweepSpec) -> Result<Self, EvalError> {
         create_dir(dir)?;
         Ok(Self {
@@ -93,7 +93,7 @@ impl ConfidenceRun {
     /// truth, and `json_name` summarising the run of `method` with `params` on `ds`.
     ///
     /// # Errors
-    /// [`EvalError::Io`] for a file that cannot be written.
+    /// [`EvalError`] naming a file that cannot be written.
     pub fn finish<P: Serialize>(
         self,
         ds: &Dataset,
@@ -151,7 +151,7 @@ impl DepthRun {
     /// when `ply`.
     ///
     /// # Errors
-    /// [`EvalError::Io`] when the folder or the settings cannot be written.
+    /// [`EvalError`] when the folder or the settings cannot be written.
     pub fn new(
         dir: &Path,
         settings_name: &str,
@@ -190,7 +190,7 @@ impl DepthRun {
     /// Writes `metrics.json` when frames had ground truth; returns the mean metrics.
     ///
     /// # Errors
-    /// [`EvalError::Io`] for a file that cannot be written.
+    /// [`EvalError`] naming a file that cannot be written.
     pub fn finish(self) -> Result<Option<ProtocolMetrics>, EvalError> {
         if self.metrics.is_empty() {
             return Ok(None);
