@@ -202,64 +202,6 @@ pub struct CascadeParams {
     /// The half stage's first convolution grows by one channel per hypothesis.
     #[serde(default, skip_serializing_if = "is_false")]
     pub mid_cue_sgm: bool,
-    /// Semi-global aggregation of the coarse stage's own distribution at inference
-    /// ([`crate::cascade::score_sgm`]; `None`, and left out of the file: none): its
-    /// negative log-probabilities aggregated along 8 wrapping paths with the penalties of
-    /// [`ScoreSgm`] lower the log-probabilities of the spheres a pixel's surroundings rule
-    /// out, so that a region where the evidence is weak takes the sphere of the sure pixels
-    /// around it. No weight depends on it and training steps do not run it (validation
-    /// does). Measured (`research/cascade.md`): with `p1` 1, `p2` 4 and
-    /// a temperature of 8 on the bundled network, the things validation frames' coarse
-    /// answers off by more than 20 fall from 15.0 % to 12.3 % of the pixels, most of them
-    /// sky next to objects; on the pixels the reference's rules score, the final MAE rises
-    /// (3.77 -> 3.89 with the pick), so the bundled network does not use it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub coarse_score_sgm: Option<ScoreSgm>,
-}
-
-/// The penalties and the temperature of [`CascadeParams::coarse_score_sgm`], in nats of the
-/// coarse distribution's negative log-probability (clamped at
-/// [`crate::cascade::score_sgm::SCORE_SGM_MAX_COST`]).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ScoreSgm {
-    /// Penalty of a step of one sphere between neighbouring pixels.
-    pub p1: f32,
-    /// Penalty of a larger step; at least `p1`.
-    pub p2: f32,
-    /// The aggregated costs (summed over the 8 paths) are divided by it before they lower the
-    /// log-probabilities: higher, the network's own distribution counts for more.
-    pub temperature: f32,
-}
-
-impl ScoreSgm {
-    /// Refuses penalties that are not finite, negative, out of order or too large for the
-    /// 16-bit aggregation, and a temperature that is not above 0.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] naming `cascade.coarse_score_sgm`.
-    pub fn check(&self) -> Result<(), NetError> {
-        let max = omnimvs_stereo::SgmParams::max_p2(omnimvs_stereo::Directions::Eight)
-            * crate::cascade::score_sgm::SCORE_SGM_MAX_COST;
-        let ok = self.p1.is_finite()
-            && self.p2.is_finite()
-            && 0.0 <= self.p1
-            && self.p1 <= self.p2
-            && self.p2 <= max
-            && self.temperature.is_finite()
-            && self.temperature > 0.0;
-        if ok {
-            return Ok(());
-        }
-        Err(NetError::InvalidConfig {
-            field: "cascade.coarse_score_sgm",
-            message: format!(
-                "p1 {}, p2 {}, temperature {}: expected 0 <= p1 <= p2 <= {max:.0} (nats) and a \
-                 finite temperature above 0",
-                self.p1, self.p2, self.temperature
-            ),
-        })
-    }
 }
 
 impl CascadeParams {
@@ -373,7 +315,6 @@ impl Default for CascadeParams {
             coarse_cue_depths: 1,
             coarse_cue_sgm: false,
             mid_cue_sgm: false,
-            coarse_score_sgm: None,
         }
     }
 }
@@ -417,6 +358,7 @@ pub const REMOVED_SWITCHES: &[(&str, &str)] = &[
     ("neighbour_hypotheses", "[0, 0]"),
     ("neighbour_start_score", "-5.0"),
     ("neighbour_gain", "1.0"),
+    ("coarse_score_sgm", "null"),
 ];
 
 /// Whether two JSON values are equal, numbers by value (`1` and `1.0` alike).
@@ -704,9 +646,6 @@ impl NetConfig {
                 "needs `zncc_cue` (it aggregates that cue)".into(),
             ));
         }
-        if let Some(sgm) = &p.coarse_score_sgm {
-            sgm.check()?;
-        }
         if p.mid_cue_sgm && !(p.zncc_cue && p.coarse_cue_oversample == 2) {
             return Err(invalid(
                 "cascade.mid_cue_sgm",
@@ -924,42 +863,6 @@ mod tests {
     }
 
     #[test]
-    fn the_coarse_distribution_is_not_aggregated_unless_written() {
-        let json = serde_json::to_string(&NetConfig::cascade()).unwrap();
-        assert!(!json.contains("coarse_score_sgm"), "{json}");
-        let mut agg = NetConfig::cascade();
-        agg.cascade.coarse_score_sgm = Some(ScoreSgm {
-            p1: 1.0,
-            p2: 4.0,
-            temperature: 8.0,
-        });
-        agg.validate().unwrap();
-        let json = serde_json::to_string(&agg).unwrap();
-        assert!(
-            json.contains("\"coarse_score_sgm\":{\"p1\":1.0,\"p2\":4.0,\"temperature\":8.0}"),
-            "{json}"
-        );
-        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), agg);
-        for (p1, p2, temperature) in [
-            (2.0, 1.0, 8.0),
-            (-1.0, 4.0, 8.0),
-            (1.0, 500.0, 8.0),
-            (1.0, f32::NAN, 8.0),
-            (1.0, 4.0, 0.0),
-        ] {
-            agg.cascade.coarse_score_sgm = Some(ScoreSgm {
-                p1,
-                p2,
-                temperature,
-            });
-            let err = agg.validate().unwrap_err().to_string();
-            assert!(err.contains("cascade.coarse_score_sgm"), "{err}");
-        }
-        let typo = json.replace("temperature", "temp");
-        assert!(serde_json::from_str::<NetConfig>(&typo).is_err());
-    }
-
-    #[test]
     fn removed_switches_are_read_at_their_default_only() {
         let json = serde_json::to_string(&NetConfig::cascade()).unwrap();
         let with = |field: &str| json.replace("\"cascade\":{", &format!("\"cascade\":{{{field},"));
@@ -968,11 +871,16 @@ mod tests {
             "\"neighbour_hypotheses\":[0,0]",
             "\"neighbour_start_score\":-5",
             "\"neighbour_gain\":1.0",
+            "\"coarse_score_sgm\":null",
         ] {
             let read: NetConfig = serde_json::from_str(&with(off)).unwrap();
             assert_eq!(read, NetConfig::cascade(), "{off}");
         }
-        for on in ["\"neighbour_hypotheses\":[0,2]", "\"neighbour_gain\":30.0"] {
+        for on in [
+            "\"neighbour_hypotheses\":[0,2]",
+            "\"neighbour_gain\":30.0",
+            "\"coarse_score_sgm\":{\"p1\":1.0,\"p2\":4.0,\"temperature\":8.0}",
+        ] {
             let err = serde_json::from_str::<NetConfig>(&with(on))
                 .unwrap_err()
                 .to_string();

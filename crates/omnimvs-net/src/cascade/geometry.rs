@@ -18,7 +18,6 @@ use super::model::{
 };
 use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
 use super::sampler::{coarse_indices, hypotheses_around};
-use super::score_sgm::aggregated_scores;
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;
@@ -766,7 +765,7 @@ impl CascadeNet {
         choice: SeedChoice,
     ) -> Result<CascadeOutput, NetError> {
         let (levels, photo) = self.feature_levels(images, false)?;
-        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry, false)?;
+        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry)?;
         let coarse_index = read_values(coarse.index.clone(), "coarse index")?;
         let mid_grid = *geometry.samplers[1].grid();
         let cols = 0..mid_grid.width;
@@ -827,7 +826,7 @@ impl CascadeNet {
         training: bool,
     ) -> Result<StageOutput, NetError> {
         let (levels, photo) = self.feature_levels(images, training)?;
-        self.coarse_of(&levels, photo.as_ref(), geometry, training)
+        self.coarse_of(&levels, photo.as_ref(), geometry)
     }
 
     /// Every camera's feature pyramid (strides 2, 4, 8; one batch through the extractor,
@@ -869,39 +868,16 @@ impl CascadeNet {
         Ok((levels, photo))
     }
 
-    /// The coarse stage on the stride-8 features of `levels` (and the photometric cue); out
-    /// of `training`, with `coarse_score_sgm`, its distribution aggregated
-    /// ([`super::score_sgm`]).
+    /// The coarse stage on the stride-8 features of `levels` (and the photometric cue).
     fn coarse_of(
         &self,
         levels: &[Vec<Tensor<4>>; 3],
         photo: Option<&ImagePyramid>,
         geometry: &CascadeGeometry,
-        training: bool,
     ) -> Result<StageOutput, NetError> {
         let cue = geometry.coarse_cue(photo)?;
         let stride4 = geometry.coarse4.as_ref().map(|taps| (&levels[1][..], taps));
-        let coarse = self.coarse_stage(&levels[2], &geometry.coarse, cue, stride4)?;
-        match self.config.cascade.coarse_score_sgm {
-            Some(sgm) if !training => {
-                let [b, k, h, w] = coarse.prob.dims();
-                if b != 1 {
-                    return Err(NetError::Shape {
-                        what: "coarse distribution to aggregate (one frame)".into(),
-                        expected: vec![1, k, h, w],
-                        actual: vec![b, k, h, w],
-                    });
-                }
-                let prob = read_values(coarse.prob, "coarse distribution")?;
-                let scores = aggregated_scores(&prob, k, [h, w], &sgm)?;
-                let scores = Tensor::<4>::from_data(
-                    TensorData::new(scores, [1, k, h, w]),
-                    &coarse.hypotheses.device(),
-                );
-                Ok(Self::soft_argmax(scores, coarse.hypotheses))
-            }
-            _ => Ok(coarse),
-        }
+        self.coarse_stage(&levels[2], &geometry.coarse, cue, stride4)
     }
 
     /// The taps of refinement `stage` (1: half, 2: full resolution) over its columns `cols`,
@@ -986,7 +962,7 @@ impl CascadeNet {
         let mut timings = CascadeTimings::default();
         let (levels, photo) = self.feature_levels(images, training)?;
         timings.features = lap(&device);
-        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry, training)?;
+        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry)?;
         timings.coarse = lap(&device);
         let coarse_values = read_values(coarse.index.clone(), "coarse index")?;
         let mid_cols = window.scaled(2);

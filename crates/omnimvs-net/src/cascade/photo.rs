@@ -22,10 +22,9 @@ use std::sync::OnceLock;
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_core::interp::grid_sample_plane;
 use omnimvs_stereo::params::{COST_SCALE, Directions, cost_units};
-use omnimvs_stereo::{ZNCC_VARIANCE_EPS, camera_pairs};
+use omnimvs_stereo::{CostVolume, SgmParams, ZNCC_VARIANCE_EPS, aggregate, camera_pairs};
 use rayon::prelude::*;
 
-use super::score_sgm::aggregate_eight;
 use crate::error::NetError;
 use crate::pixel::box_sum;
 use crate::taps::SweepGrid;
@@ -436,6 +435,36 @@ fn zncc_plane(samples: &[(Vec<f32>, Vec<f32>)], h: usize, w: usize, r: usize, ou
 fn window_count(y: usize, h: usize, r: usize) -> f32 {
     let rows = (y + r).min(h - 1) - y.saturating_sub(r) + 1;
     (rows * (2 * r + 1)) as f32
+}
+
+/// Semi-global aggregation along 8 paths (columns wrapping: longitude is a ring) of a cost
+/// volume of `planes` costs per pixel in the 16-bit units of `omnimvs_stereo`
+/// ([`cost_units`], pixel-major, `h x w` pixels), penalties `[p1, p2]` in the same units: the
+/// sums over the paths, pixel-major. What the aggregated photometric cues
+/// ([`AggregatedCue`]) are made by.
+///
+/// # Errors
+/// [`NetError::Stereo`] when the aggregation refuses the penalties or the volume (fewer than 2
+/// planes).
+pub(crate) fn aggregate_eight(
+    data: Vec<u16>,
+    planes: usize,
+    [h, w]: [usize; 2],
+    [p1, p2]: [f32; 2],
+) -> Result<Vec<u16>, NetError> {
+    let volume = CostVolume {
+        height: h,
+        width: w,
+        ndepth: planes,
+        data,
+    };
+    let params = SgmParams {
+        p1,
+        p2,
+        directions: Directions::Eight,
+        ..SgmParams::default()
+    };
+    Ok(aggregate(&volume, &params)?.0.data)
 }
 
 #[cfg(test)]

@@ -133,9 +133,8 @@ pub const GROWABLE: &[Growable] = growable! {
     coarse_cue_sgm: switch_on, Grown;
     mid_cue_sgm: switch_on, Grown;
     coarse_stride4: switch_on, Grown;
-    // No weight depends on these: the aggregation of the coarse distribution, the
-    // refinement's hypothesis spacing, the grid and depths of the coarse cue.
-    coarse_score_sgm: any, Built;
+    // No weight depends on these: the refinement's hypothesis spacing, the grid and depths of
+    // the coarse cue.
     stage_intervals: any, Built;
     coarse_cue_oversample: any, Built;
     coarse_cue_depths: any, Built;
