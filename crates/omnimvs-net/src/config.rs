@@ -65,7 +65,7 @@ pub struct CascadeParams {
     /// 2 x 2 blocks do (`research/cascade.md`). With `2` the half stage
     /// centres on the coarse answer itself (no upsampling, so no half-grid selector), the
     /// coarse stage still reads the stride-8 features, and its cue is matched on its own grid
-    /// from the half-size images (`coarse_cue_oversample` must be 1, no `mid_cue_sgm`).
+    /// from the half-size images (`coarse_cue_oversample` must be 1).
     #[serde(default = "four", skip_serializing_if = "is_four")]
     pub coarse_scale: usize,
     /// Whether the coarse stage also correlates the stride-4 features (in `groups[1]` groups)
@@ -191,28 +191,14 @@ pub struct CascadeParams {
     /// switched on from weights without it).
     #[serde(default, skip_serializing_if = "is_false")]
     pub coarse_cue_sgm: bool,
-    /// With `zncc_cue` and `coarse_cue_oversample: 2`, a second cue channel for the
-    /// half-resolution stage (`true`; `false`, and left out of the file: none): the coarse
-    /// cue's planes on the half-resolution grid, before their 2 x 2 means, aggregated by
-    /// semi-global matching over that grid ([`crate::cascade::photo::AggregatedCue`],
-    /// [`crate::cascade::photo::MID_SGM_P1`], [`crate::cascade::photo::MID_SGM_P2`]) and read
-    /// at each pixel's hypotheses, linearly between planes. On things validation frames the
-    /// aggregated half-grid cue alone is off by more than 3 at 6.6 % of far open pixels, the
-    /// network (`cascade-25`'s start) at 21.1 % (`research/cascade.md`).
-    /// The half stage's first convolution grows by one channel per hypothesis.
-    #[serde(default, skip_serializing_if = "is_false")]
-    pub mid_cue_sgm: bool,
 }
 
 impl CascadeParams {
     /// The input channels per hypothesis of refinement stage `i` (0: half, 1: full
-    /// resolution): its groups' correlations, the visibility, the photometric cue with
-    /// `zncc_cue`, and on the half stage the aggregated cue with `mid_cue_sgm`.
+    /// resolution): its groups' correlations, the visibility and the photometric cue with
+    /// `zncc_cue`.
     pub fn stage_evidence_channels(&self, i: usize) -> usize {
-        self.groups[1 - i]
-            + 1
-            + usize::from(self.zncc_cue)
-            + usize::from(i == 0 && self.mid_cue_sgm)
+        self.groups[1 - i] + 1 + usize::from(self.zncc_cue)
     }
 
     /// The input channels per sphere of the coarse stage: the stride-8 groups' correlations,
@@ -314,7 +300,6 @@ impl Default for CascadeParams {
             coarse_cue_oversample: 1,
             coarse_cue_depths: 1,
             coarse_cue_sgm: false,
-            mid_cue_sgm: false,
         }
     }
 }
@@ -359,6 +344,7 @@ pub const REMOVED_SWITCHES: &[(&str, &str)] = &[
     ("neighbour_start_score", "-5.0"),
     ("neighbour_gain", "1.0"),
     ("coarse_score_sgm", "null"),
+    ("mid_cue_sgm", "false"),
 ];
 
 /// Whether two JSON values are equal, numbers by value (`1` and `1.0` alike).
@@ -589,11 +575,11 @@ impl NetConfig {
                 ),
             ));
         }
-        if p.coarse_scale == 2 && (p.coarse_cue_oversample != 1 || p.mid_cue_sgm) {
+        if p.coarse_scale == 2 && p.coarse_cue_oversample != 1 {
             return Err(invalid(
                 "cascade.coarse_scale",
                 "2 (the coarse stage on the half-resolution grid) needs `coarse_cue_oversample: \
-                 1` and no `mid_cue_sgm`: the cue is matched on the coarse grid itself"
+                 1`: the cue is matched on the coarse grid itself"
                     .into(),
             ));
         }
@@ -644,14 +630,6 @@ impl NetConfig {
             return Err(invalid(
                 "cascade.coarse_cue_sgm",
                 "needs `zncc_cue` (it aggregates that cue)".into(),
-            ));
-        }
-        if p.mid_cue_sgm && !(p.zncc_cue && p.coarse_cue_oversample == 2) {
-            return Err(invalid(
-                "cascade.mid_cue_sgm",
-                "needs `zncc_cue` with `coarse_cue_oversample: 2` (it aggregates the coarse \
-                 cue's planes on the half-resolution grid)"
-                    .into(),
             ));
         }
         Ok(())
@@ -845,17 +823,6 @@ mod tests {
         let json = serde_json::to_string(&deep).unwrap();
         assert!(json.contains("\"coarse_cue_sgm\":true"), "{json}");
         assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
-        // The half stage's aggregated cue: off unless written, and only over the coarse cue's
-        // planes on the half grid.
-        assert!(!json.contains("mid_cue_sgm"), "{json}");
-        deep.cascade.mid_cue_sgm = true;
-        let err = deep.validate().unwrap_err().to_string();
-        assert!(err.contains("cascade.mid_cue_sgm"), "{err}");
-        deep.cascade.coarse_cue_oversample = 2;
-        deep.validate().unwrap();
-        let json = serde_json::to_string(&deep).unwrap();
-        assert!(json.contains("\"mid_cue_sgm\":true"), "{json}");
-        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
         let mut wide = NetConfig::cascade();
         wide.cascade.feature_channels[2] = 128;
         let err = wide.validate().unwrap_err().to_string();
@@ -872,6 +839,7 @@ mod tests {
             "\"neighbour_start_score\":-5",
             "\"neighbour_gain\":1.0",
             "\"coarse_score_sgm\":null",
+            "\"mid_cue_sgm\":false",
         ] {
             let read: NetConfig = serde_json::from_str(&with(off)).unwrap();
             assert_eq!(read, NetConfig::cascade(), "{off}");
@@ -880,6 +848,7 @@ mod tests {
             "\"neighbour_hypotheses\":[0,2]",
             "\"neighbour_gain\":30.0",
             "\"coarse_score_sgm\":{\"p1\":1.0,\"p2\":4.0,\"temperature\":8.0}",
+            "\"mid_cue_sgm\":true",
         ] {
             let err = serde_json::from_str::<NetConfig>(&with(on))
                 .unwrap_err()

@@ -321,11 +321,6 @@ fn grow_loaded(net: CascadeNet, config: &NetConfig) -> Result<CascadeNet, NetErr
     } else {
         net
     };
-    let net = if p.mid_cue_sgm {
-        net.with_mid_cue_sgm()?
-    } else {
-        net
-    };
     let net = if p.coarse_stride4 {
         net.with_coarse_stride4()?
     } else {

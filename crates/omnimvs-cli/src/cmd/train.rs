@@ -172,13 +172,6 @@ pub struct Args {
     /// --init weights without it grow into it answering as before (zero weights for it).
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub coarse_cue_sgm: Option<Switch>,
-    /// Cascade with the photometric cue matched on the half grid (`--coarse-cue-oversample
-    /// 2`): a second cue channel for the half-resolution stage, the coarse cue's half-grid
-    /// planes aggregated by semi-global matching and read at each pixel's hypotheses
-    /// (`mid_cue_sgm`, from `cascade-27`). --init weights without it grow into it answering as
-    /// before (zero weights for it).
-    #[arg(long, value_enum, conflicts_with = "resume")]
-    pub mid_cue_sgm: Option<Switch>,
     /// Threads preparing the training samples (decoding the images, augmenting; 1 by
     /// default). The samples and their order do not depend on it: more is for a GPU, whose
     /// steps outrun one thread. Also taken by --resume.
@@ -612,7 +605,6 @@ fn net_config(args: &Args) -> Result<NetConfig> {
         || args.same_grid_selector.is_some()
         || args.coarse_squeeze.is_some()
         || args.coarse_cue_sgm.is_some()
-        || args.mid_cue_sgm.is_some()
     {
         if net.family != Family::Cascade {
             bail!(
@@ -621,8 +613,8 @@ fn net_config(args: &Args) -> Result<NetConfig> {
                  --stage-intervals, --coarse-feature-channels, \
                  --coarse-scale, --coarse-spheres, --coarse-stride4, \
                  --same-grid-selector, --coarse-squeeze, \
-                 --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
-                 --mid-cue-sgm are options of --preset cascade"
+                 --coarse-cue-oversample, --coarse-cue-depths and --coarse-cue-sgm are \
+                 options of --preset cascade"
             );
         }
         if let Some(up) = args.convex_upsampling {
@@ -664,9 +656,6 @@ fn net_config(args: &Args) -> Result<NetConfig> {
         }
         if let Some(sgm) = args.coarse_cue_sgm {
             net.cascade.coarse_cue_sgm = sgm == Switch::On;
-        }
-        if let Some(sgm) = args.mid_cue_sgm {
-            net.cascade.mid_cue_sgm = sgm == Switch::On;
         }
         if let Some(channels) = args.coarse_feature_channels {
             net.cascade.feature_channels[2] = channels;

@@ -16,7 +16,7 @@ use super::model::{
     CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, neighbourhood_candidates,
     same_grid_prior, upsampling_candidates,
 };
-use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
+use super::photo::{ImagePyramid, aggregated_cue};
 use super::sampler::{coarse_indices, hypotheses_around};
 use crate::config::NetConfig;
 use crate::error::NetError;
@@ -315,10 +315,6 @@ impl CascadeGeometry {
         let fine = pyramid.zncc(level, &self.coarse_grids)?;
         let first = &self.coarse_grids[0];
         let (planes, h, w) = (first.num_spheres, first.height, first.width);
-        if p.mid_cue_sgm {
-            // The same planes serve the half-resolution stage (`mid_cue_sgm` needs factor 2).
-            self.mid_aggregate(pyramid, &fine)?;
-        }
         let (ch, cw) = (h / factor, w / factor);
         let scale = 1.0 / (factor * factor) as f32;
         let mut pooled = vec![0f32; planes * ch * cw];
@@ -418,88 +414,13 @@ impl CascadeGeometry {
             p.stage_intervals[stage - 1],
             self.config.num_invdepth,
         );
-        let mid_cue = match images {
-            Some(pyramid) if stage == 1 && p.mid_cue_sgm => {
-                Some(self.mid_cue(pyramid, &index, k, &cols)?)
-            }
-            _ => None,
-        };
         let mut taps = self.taps_for(stage, index, k, cols.clone(), images)?;
         let [h, w] = [sampler.grid().height, cols.len()];
-        if let Some(values) = mid_cue
-            && let Some(cue) = taps.cue.take()
-        {
-            let aggregated =
-                Tensor::from_data(TensorData::new(values, [1, 1, k, h, w]), &self.device);
-            taps.cue = Some(Tensor::cat(vec![cue, aggregated], 1));
-        }
         taps.center = Some(Tensor::<3>::from_data(
             TensorData::new(center, [1, h, w]),
             &self.device,
         ));
         Ok(taps)
-    }
-
-    /// The frame's aggregated cue of the half-resolution grid (`mid_cue_sgm`): the one made
-    /// before, or made now from `fine`, the coarse cue's planes on that grid.
-    ///
-    /// # Errors
-    /// [`NetError`] from the aggregation.
-    fn mid_aggregate<'a>(
-        &self,
-        pyramid: &'a ImagePyramid,
-        fine: &[f32],
-    ) -> Result<&'a AggregatedCue, NetError> {
-        if let Some(done) = pyramid.mid_aggregate() {
-            return Ok(done);
-        }
-        let grid = self.samplers[1].grid();
-        Ok(pyramid.mid_aggregate_or(AggregatedCue::new(
-            fine,
-            &self.coarse_cue_depths,
-            [grid.height, grid.width],
-            [MID_SGM_P1, MID_SGM_P2],
-        )?))
-    }
-
-    /// The half-resolution stage's aggregated cue (`mid_cue_sgm`) at its `k` hypotheses per
-    /// pixel (`index[j * pixels + pixel]`, `N` units) over its columns `cols`: `k x rows x
-    /// cols.len()` values, read from the frame's [`AggregatedCue`] of the half grid (made here
-    /// from the coarse cue's planes if the coarse stage has not made it).
-    ///
-    /// # Errors
-    /// [`NetError`] from the cue's matching or aggregation.
-    fn mid_cue(
-        &self,
-        pyramid: &ImagePyramid,
-        index: &[f32],
-        k: usize,
-        cols: &Range<usize>,
-    ) -> Result<Vec<f32>, NetError> {
-        let grid = self.samplers[1].grid();
-        let [rows, width] = [grid.height, grid.width];
-        let aggregated = match pyramid.mid_aggregate() {
-            Some(done) => done,
-            None => self.mid_aggregate(pyramid, &pyramid.zncc(1, &self.coarse_grids)?)?,
-        };
-        let span = cols.len();
-        let pixels = rows * span;
-        if index.len() != k * pixels {
-            return Err(NetError::Shape {
-                what: "hypotheses of the half-resolution stage".into(),
-                expected: vec![k, rows, span],
-                actual: vec![index.len()],
-            });
-        }
-        Ok(index
-            .iter()
-            .enumerate()
-            .map(|(i, &n)| {
-                let pixel = i % pixels;
-                let (r, c) = (pixel / span, pixel % span);
-                aggregated.at(r * width + cols.start + c, f64::from(n))
-            })
-            .collect())
     }
 
     /// The taps of refinement stage `stage` at `k` given inverse-depth indices per pixel

@@ -128,10 +128,9 @@ pub const GROWABLE: &[Growable] = growable! {
     // The full grid's selector may be left out of the file's network or new.
     convex_upsampling_full: any, Built;
     // New input channels with zero weights (`CascadeNet::with_zncc_cue`,
-    // `with_coarse_cue_sgm`, `with_mid_cue_sgm`, `with_coarse_stride4`).
+    // `with_coarse_cue_sgm`, `with_coarse_stride4`).
     zncc_cue: switch_on, Grown;
     coarse_cue_sgm: switch_on, Grown;
-    mid_cue_sgm: switch_on, Grown;
     coarse_stride4: switch_on, Grown;
     // No weight depends on these: the refinement's hypothesis spacing, the grid and depths of
     // the coarse cue.
@@ -206,23 +205,6 @@ impl CascadeNet {
     fn coarse_stride4_inputs(&self) -> usize {
         let p = &self.config.cascade;
         p.coarse_stride4_groups() * p.coarse_spheres
-    }
-
-    /// The network with the half-resolution stage's aggregated cue switched on
-    /// (`mid_cue_sgm`; the network must have `zncc_cue` with `coarse_cue_oversample: 2`): the
-    /// stage's first convolution gets one input channel per hypothesis, after the existing
-    /// ones, with zero weights, so that it answers exactly as before until training moves
-    /// them. A network that has it is returned as it is.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] when the network cannot have it.
-    pub fn with_mid_cue_sgm(self) -> Result<Self, NetError> {
-        self.with_cue_channel(
-            |p| &mut p.mid_cue_sgm,
-            |net| &mut net.mid.convs[0].conv,
-            |p| p.stage_hypotheses[0],
-            0,
-        )
     }
 
     /// The network with the cue channel that `flag` switches on: unless it is on already, the

@@ -256,9 +256,7 @@ impl CascadeNet {
     ) -> Result<(Tensor<4>, Option<Tensor<3>>), NetError> {
         let groups = self.config.cascade.groups[level];
         let volume = Self::correlation(features, taps, groups)?;
-        // The half-resolution stage's cue has the aggregated channel too with `mid_cue_sgm`.
-        let channels = 1 + usize::from(level == 1 && self.config.cascade.mid_cue_sgm);
-        let volume = self.with_cue(volume, taps.cue.clone(), taps, channels)?;
+        let volume = self.with_cue(volume, taps.cue.clone(), taps, 1)?;
         let regularizer = if level == 1 { &self.mid } else { &self.fine };
         Ok(regularizer.forward(fold_volume(volume))) // [B, K, H, W]
     }
