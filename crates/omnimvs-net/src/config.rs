@@ -42,7 +42,7 @@ pub enum Family {
     #[default]
     OmniMvs,
     /// The coarse-to-fine network ([`crate::cascade::CascadeNet`]): a small cost volume at a
-    /// quarter (or half, `coarse_scale`) of the output resolution, then per-pixel hypotheses
+    /// quarter of the output resolution, then per-pixel hypotheses
     /// around the coarse estimate at half and full resolution.
     Cascade,
 }
@@ -57,37 +57,6 @@ pub struct CascadeParams {
     pub groups: [usize; 3],
     /// Spheres of the coarse cost volume, evenly spaced in index over `0..=N-1`.
     pub coarse_spheres: usize,
-    /// How many times coarser than the output the coarse stage's grid is: `4` (and left out
-    /// of the file: 40 x 160 for the paper's grid, the bundled cascade's) or `2` (the
-    /// half-resolution grid, 80 x 320). At 40 x 160 a quarter of a things frame's pixels hold
-    /// a depth edge in their 4 x 4 block of the output, and 61 % of the coarse stage's misses
-    /// over 20 index units lie there, out of the refinement's reach; at 80 x 320 6.5 % of the
-    /// 2 x 2 blocks do (`research/cascade.md`). With `2` the half stage
-    /// centres on the coarse answer itself (no upsampling, so no half-grid selector), the
-    /// coarse stage still reads the stride-8 features, and its cue is matched on its own grid
-    /// from the half-size images (`coarse_cue_oversample` must be 1).
-    #[serde(default = "four", skip_serializing_if = "is_four")]
-    pub coarse_scale: usize,
-    /// Whether the coarse stage also correlates the stride-4 features (in `groups[1]` groups)
-    /// at its samples, beside the stride-8 ones (`true`; `false`, and left out of the file:
-    /// the stride-8 ones only). On the half-resolution grid (`coarse_scale` 2) the stride-8
-    /// features blur a depth edge over about two of its pixels: moved there and trained,
-    /// the coarse stage still missed by over 20 at a third of the things pixels whose 4 x 4
-    /// output block holds an edge (36.9 % at 40 x 160; `research/errors.md`). The
-    /// first convolution reads `groups[1]` more channels per sphere, after the others (zero
-    /// weights when switched on from weights without them, [`crate::cascade::CascadeNet::with_coarse_stride4`]).
-    #[serde(default, skip_serializing_if = "is_false")]
-    pub coarse_stride4: bool,
-    /// With `coarse_scale` 2 and `convex_upsampling`: whether the half stage centres on a
-    /// learnt choice among the coarse answers of the 3 x 3 pixels around each pixel (`true`:
-    /// the half-grid selector `up_mid` on the coarse grid itself, starting at the pixel's own
-    /// answer, [`crate::cascade::model::same_grid_prior`]) or on the pixel's own answer
-    /// (`false`, and left out of the file). On the half grid the coarse answer is better than
-    /// at 40 x 160, but the half stage refined it less without the choice of side that the
-    /// learnt upsampling made at a depth edge (house: 4.53 -> 4.08 against 4.80 -> 3.94,
-    /// `research/errors.md`).
-    #[serde(default, skip_serializing_if = "is_false")]
-    pub same_grid_selector: bool,
     /// Channels of a 1x1 convolution that the coarse stage's evidence passes through before
     /// its first 3x3 convolution (`0`, and left out of the file: none, the 3x3 convolution
     /// reads every sphere's evidence itself). That first convolution is the coarse stage's
@@ -202,31 +171,10 @@ impl CascadeParams {
     }
 
     /// The input channels per sphere of the coarse stage: the stride-8 groups' correlations,
-    /// the visibility, the photometric cue with `zncc_cue`, the aggregated cue with
-    /// `coarse_cue_sgm`, and last the stride-4 groups' correlations with `coarse_stride4`.
+    /// the visibility, the photometric cue with `zncc_cue` and the aggregated cue with
+    /// `coarse_cue_sgm`.
     pub fn coarse_evidence_channels(&self) -> usize {
-        self.groups[2]
-            + 1
-            + usize::from(self.zncc_cue)
-            + usize::from(self.coarse_cue_sgm)
-            + self.coarse_stride4_groups()
-    }
-
-    /// The stride-4 groups the coarse stage correlates (`coarse_stride4`): `groups[1]` or 0.
-    pub fn coarse_stride4_groups(&self) -> usize {
-        if self.coarse_stride4 {
-            self.groups[1]
-        } else {
-            0
-        }
-    }
-
-    /// Whether the half stage centres on a learnt choice among coarse answers (a half-grid
-    /// selector): with `convex_upsampling`, when the coarse grid is coarser than the half
-    /// grid (`coarse_scale` 4: the learnt upsampling) or with `same_grid_selector` (on the
-    /// half grid itself).
-    pub fn half_grid_selector(&self) -> bool {
-        self.convex_upsampling && (self.coarse_scale == 4 || self.same_grid_selector)
+        self.groups[2] + 1 + usize::from(self.zncc_cue) + usize::from(self.coarse_cue_sgm)
     }
 }
 
@@ -234,16 +182,8 @@ fn one_usize() -> usize {
     1
 }
 
-fn four() -> usize {
-    4
-}
-
 fn is_zero_usize(value: &usize) -> bool {
     *value == 0
-}
-
-fn is_four(value: &usize) -> bool {
-    *value == 4
 }
 
 fn is_one_usize(value: &usize) -> bool {
@@ -280,9 +220,6 @@ impl Default for CascadeParams {
             feature_channels: [8, 16, 16],
             groups: [4, 4, 8],
             coarse_spheres: 32,
-            coarse_scale: 4,
-            coarse_stride4: false,
-            same_grid_selector: false,
             coarse_squeeze: 0,
             coarse_channels: [48, 64, 96],
             stage_hypotheses: [8, 5],
@@ -345,6 +282,9 @@ pub const REMOVED_SWITCHES: &[(&str, &str)] = &[
     ("neighbour_gain", "1.0"),
     ("coarse_score_sgm", "null"),
     ("mid_cue_sgm", "false"),
+    ("coarse_scale", "4"),
+    ("coarse_stride4", "false"),
+    ("same_grid_selector", "false"),
 ];
 
 /// Whether two JSON values are equal, numbers by value (`1` and `1.0` alike).
@@ -528,8 +468,7 @@ impl NetConfig {
     /// full-resolution stages.
     pub fn cascade_sizes(&self) -> [[usize; 2]; 3] {
         let [h, w] = [self.out_height, self.out_width];
-        let s = self.cascade.coarse_scale.max(1);
-        [[h / s, w / s], [h / 2, w / 2], [h, w]]
+        [[h / 4, w / 4], [h / 2, w / 2], [h, w]]
     }
 
     /// Feature-map sizes `[rows, cols]` at strides 2, 4 and 8 of the input (each a 3x3 or 5x5
@@ -547,7 +486,7 @@ impl NetConfig {
         self.validate_cascade_sizes()
     }
 
-    /// The output grid and the coarse stage's grid, selector and squeeze.
+    /// The output grid and the coarse stage's squeeze.
     fn validate_cascade_grid(&self) -> Result<(), NetError> {
         let invalid =
             |field: &'static str, message: String| NetError::InvalidConfig { field, message };
@@ -565,33 +504,6 @@ impl NetConfig {
                     ),
                 ));
             }
-        }
-        if !matches!(p.coarse_scale, 2 | 4) {
-            return Err(invalid(
-                "cascade.coarse_scale",
-                format!(
-                    "{} must be 4 (the coarse grid a quarter of the output's) or 2 (half)",
-                    p.coarse_scale
-                ),
-            ));
-        }
-        if p.coarse_scale == 2 && p.coarse_cue_oversample != 1 {
-            return Err(invalid(
-                "cascade.coarse_scale",
-                "2 (the coarse stage on the half-resolution grid) needs `coarse_cue_oversample: \
-                 1`: the cue is matched on the coarse grid itself"
-                    .into(),
-            ));
-        }
-        if p.same_grid_selector && (p.coarse_scale != 2 || !p.convex_upsampling) {
-            return Err(invalid(
-                "cascade.same_grid_selector",
-                format!(
-                    "needs `coarse_scale: 2` (got {}) and `convex_upsampling: true` (got {}): \
-                     it chooses among the coarse answers on the half grid itself",
-                    p.coarse_scale, p.convex_upsampling
-                ),
-            ));
         }
         let coarse_inputs = p.coarse_evidence_channels() * p.coarse_spheres;
         if p.coarse_squeeze > coarse_inputs {
@@ -840,6 +752,9 @@ mod tests {
             "\"neighbour_gain\":1.0",
             "\"coarse_score_sgm\":null",
             "\"mid_cue_sgm\":false",
+            "\"coarse_scale\":4",
+            "\"coarse_stride4\":false",
+            "\"same_grid_selector\":false",
         ] {
             let read: NetConfig = serde_json::from_str(&with(off)).unwrap();
             assert_eq!(read, NetConfig::cascade(), "{off}");
@@ -849,6 +764,9 @@ mod tests {
             "\"neighbour_gain\":30.0",
             "\"coarse_score_sgm\":{\"p1\":1.0,\"p2\":4.0,\"temperature\":8.0}",
             "\"mid_cue_sgm\":true",
+            "\"coarse_scale\":2",
+            "\"coarse_stride4\":true",
+            "\"same_grid_selector\":true",
         ] {
             let err = serde_json::from_str::<NetConfig>(&with(on))
                 .unwrap_err()

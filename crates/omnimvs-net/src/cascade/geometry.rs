@@ -12,10 +12,7 @@ use omnimvs_camera::Rig;
 use omnimvs_core::interp::BilinearTap;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
-use super::model::{
-    CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, neighbourhood_candidates,
-    same_grid_prior, upsampling_candidates,
-};
+use super::model::{CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, upsampling_candidates};
 use super::photo::{ImagePyramid, aggregated_cue};
 use super::sampler::{coarse_indices, hypotheses_around};
 use crate::config::NetConfig;
@@ -178,9 +175,6 @@ impl StageTaps {
 pub struct CascadeGeometry {
     /// The coarse stage's taps (fixed spheres).
     pub coarse: StageTaps,
-    /// The same samples in the stride-4 feature maps, when the coarse stage also correlates
-    /// those (`coarse_stride4`).
-    pub coarse4: Option<StageTaps>,
     /// Samplers of the coarse, half- and full-resolution grids.
     pub samplers: [PixelSampler; 3],
     /// The `N` hypotheses.
@@ -253,18 +247,6 @@ impl CascadeGeometry {
             .flat_map(|&n| std::iter::repeat_n(n as f32, plane))
             .collect();
         let feature_sizes = config.cascade_feature_sizes();
-        // The same samples in the stride-4 features (`coarse_stride4`).
-        let coarse4 = if config.cascade.coarse_stride4 {
-            Some(StageTaps::new(
-                &coarse_grids,
-                index.clone(),
-                feature_sizes[1],
-                host_correlation,
-                device,
-            )?)
-        } else {
-            None
-        };
         let coarse = StageTaps::new(
             &coarse_grids,
             index,
@@ -283,7 +265,6 @@ impl CascadeGeometry {
         };
         Ok(Self {
             coarse,
-            coarse4,
             samplers,
             hypotheses: *hypotheses,
             config: config.clone(),
@@ -307,11 +288,10 @@ impl CascadeGeometry {
         let p = &self.config.cascade;
         let (factor, depths) = (p.coarse_cue_oversample, p.coarse_cue_depths);
         // Matched on its grid (images of the matching level: the quarter-size ones for the
-        // coarse grid itself at `coarse_scale` 4, the half-size ones at 2), each coarse pixel
-        // the mean of its factor x factor block (itself for factor 1); then each sphere the
-        // best of its depths. `zncc` refuses an empty set of grids, so there is a first one
-        // after it.
-        let level = (p.coarse_scale.trailing_zeros() - factor.trailing_zeros()) as usize;
+        // coarse grid itself, the half-size ones for the half grid), each coarse pixel the mean
+        // of its factor x factor block (itself for factor 1); then each sphere the best of its
+        // depths. `zncc` refuses an empty set of grids, so there is a first one after it.
+        let level = (2 - factor.trailing_zeros()) as usize;
         let fine = pyramid.zncc(level, &self.coarse_grids)?;
         let first = &self.coarse_grids[0];
         let (planes, h, w) = (first.num_spheres, first.height, first.width);
@@ -797,8 +777,7 @@ impl CascadeNet {
         geometry: &CascadeGeometry,
     ) -> Result<StageOutput, NetError> {
         let cue = geometry.coarse_cue(photo)?;
-        let stride4 = geometry.coarse4.as_ref().map(|taps| (&levels[1][..], taps));
-        self.coarse_stage(&levels[2], &geometry.coarse, cue, stride4)
+        self.coarse_stage(&levels[2], &geometry.coarse, cue)
     }
 
     /// The taps of refinement `stage` (1: half, 2: full resolution) over its columns `cols`,
@@ -824,20 +803,10 @@ impl CascadeNet {
         };
         let from = geometry.samplers[stage - 1].grid();
         let rows = geometry.samplers[stage].grid().height;
-        // On the coarse grid itself (`same_grid_selector`) each pixel chooses among its own
-        // neighbourhood, starting at its own answer; else among its parent's, starting at the
-        // bilinear upsampling.
-        let (candidates, prior) = if rows == from.height {
-            (
-                neighbourhood_candidates(previous, [from.height, from.width], 1, cols),
-                same_grid_prior(rows, cols, &geometry.device),
-            )
-        } else {
-            (
-                upsampling_candidates(previous, [from.height, from.width], cols),
-                bilinear_prior(rows, cols, &geometry.device),
-            )
-        };
+        // Each pixel chooses among its parent's neighbourhood, starting at the bilinear
+        // upsampling.
+        let candidates = upsampling_candidates(previous, [from.height, from.width], cols);
+        let prior = bilinear_prior(rows, cols, &geometry.device);
         let candidate_taps =
             geometry.taps_for(stage, candidates, UPSAMPLE_TAPS, cols.clone(), photo)?;
         let up = self.select_centres(level, selector, &levels[level], &candidate_taps, prior)?;

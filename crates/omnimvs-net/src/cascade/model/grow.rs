@@ -10,7 +10,7 @@ use burn::tensor::{Tensor, TensorData};
 
 use super::CascadeNet;
 use super::regularize::squeeze_conv;
-use super::upsample::{CandidateSelector, UPSAMPLE_TAPS};
+use super::upsample::UPSAMPLE_TAPS;
 use crate::config::CascadeParams;
 use crate::error::NetError;
 use crate::tensor::read_values;
@@ -128,10 +128,9 @@ pub const GROWABLE: &[Growable] = growable! {
     // The full grid's selector may be left out of the file's network or new.
     convex_upsampling_full: any, Built;
     // New input channels with zero weights (`CascadeNet::with_zncc_cue`,
-    // `with_coarse_cue_sgm`, `with_coarse_stride4`).
+    // `with_coarse_cue_sgm`).
     zncc_cue: switch_on, Grown;
     coarse_cue_sgm: switch_on, Grown;
-    coarse_stride4: switch_on, Grown;
     // No weight depends on these: the refinement's hypothesis spacing, the grid and depths of
     // the coarse cue.
     stage_intervals: any, Built;
@@ -139,12 +138,8 @@ pub const GROWABLE: &[Growable] = growable! {
     coarse_cue_depths: any, Built;
     // The stride-8 features may widen (`CascadeFeatures::widen8`).
     feature_channels[2]: grow, Grown;
-    // The coarse stage may move to a finer grid over other spheres
-    // (`CascadeNet::with_coarse_grid`) and centre its half stage on a learnt choice
-    // (`CascadeNet::with_same_grid_selector`).
-    coarse_scale: shrink, Grown;
+    // The coarse stage may be resampled to other spheres (`CascadeNet::with_coarse_spheres`).
     coarse_spheres: any, Grown;
-    same_grid_selector: switch_on, Grown;
     // Its evidence may be squeezed, once (`CascadeNet::with_coarse_squeeze`).
     coarse_squeeze: check(|saved, asked| saved.coarse_squeeze == 0
         || saved.coarse_squeeze == asked.coarse_squeeze), Grown;
@@ -166,9 +161,7 @@ impl CascadeNet {
             p.stage_hypotheses[0],
             p.stage_hypotheses[1],
         ];
-        // The coarse stage's cue goes before its stride-4 correlation (`coarse_stride4`).
-        let tail = self.coarse_stride4_inputs();
-        insert_zero_inputs(self.coarse.input_conv(), tail, ks[0]);
+        append_zero_inputs(self.coarse.input_conv(), ks[0]);
         let mut firsts = vec![
             (&mut self.mid.convs[0], ks[1]),
             (&mut self.fine.convs[0], ks[2]),
@@ -190,40 +183,14 @@ impl CascadeNet {
     ///
     /// # Errors
     /// [`NetError::InvalidConfig`] when the network has no `zncc_cue`.
-    pub fn with_coarse_cue_sgm(self) -> Result<Self, NetError> {
-        let tail = self.coarse_stride4_inputs();
-        self.with_cue_channel(
-            |p| &mut p.coarse_cue_sgm,
-            |net| net.coarse.input_conv(),
-            |p| p.coarse_spheres,
-            tail,
-        )
-    }
-
-    /// The input channels of the coarse stage's first convolution that read the stride-4
-    /// correlation (`coarse_stride4`; the last ones): `groups[1]` per sphere, or 0.
-    fn coarse_stride4_inputs(&self) -> usize {
-        let p = &self.config.cascade;
-        p.coarse_stride4_groups() * p.coarse_spheres
-    }
-
-    /// The network with the cue channel that `flag` switches on: unless it is on already, the
-    /// configuration with it must validate, and the convolution `first` reads `k` more input
-    /// channels (one per hypothesis of its stage) with zero weights, before its last `tail`.
-    fn with_cue_channel(
-        mut self,
-        flag: fn(&mut CascadeParams) -> &mut bool,
-        first: fn(&mut Self) -> &mut Conv2d,
-        k: fn(&CascadeParams) -> usize,
-        tail: usize,
-    ) -> Result<Self, NetError> {
+    pub fn with_coarse_cue_sgm(mut self) -> Result<Self, NetError> {
         let mut config = self.config.clone();
-        if *flag(&mut config.cascade) {
+        if config.cascade.coarse_cue_sgm {
             return Ok(self);
         }
-        *flag(&mut config.cascade) = true;
+        config.cascade.coarse_cue_sgm = true;
         config.validate()?;
-        insert_zero_inputs(first(&mut self), tail, k(&config.cascade));
+        append_zero_inputs(self.coarse.input_conv(), config.cascade.coarse_spheres);
         self.config = config;
         Ok(self)
     }
@@ -247,43 +214,19 @@ impl CascadeNet {
         Ok(self)
     }
 
-    /// The network with the coarse stage also correlating the stride-4 features
-    /// (`coarse_stride4`): its first convolution reads `groups[1]` more channels per sphere,
-    /// after all of the others, with zero weights, so that it answers exactly as before until
-    /// training moves them. A network that has them is returned as it is.
+    /// The network with its coarse stage over `spheres` spheres (`coarse_spheres`), from a
+    /// trained one: every weight is kept but the coarse stage's first convolution, which
+    /// reads each evidence channel per sphere, and its scoring convolution, which writes one
+    /// score per sphere. Those are resampled along the spheres ([`sphere_resampling`]): the
+    /// new first convolution gives the old one's output for evidence that varies linearly over
+    /// inverse depth, and each new score is the old scores interpolated at the new sphere's
+    /// inverse depth. A starting point for training, not an answer.
     ///
     /// # Errors
     /// [`NetError::InvalidConfig`] when the configuration with them is not valid.
-    pub fn with_coarse_stride4(mut self) -> Result<Self, NetError> {
-        if self.config.cascade.coarse_stride4 {
-            return Ok(self);
-        }
-        let mut config = self.config.clone();
-        config.cascade.coarse_stride4 = true;
-        config.validate()?;
-        self.config = config;
-        let inputs = self.coarse_stride4_inputs();
-        append_zero_inputs(self.coarse.input_conv(), inputs);
-        Ok(self)
-    }
-
-    /// The network with its coarse stage moved to the grid `scale` times coarser than the
-    /// output (`coarse_scale`) and over `spheres` spheres (`coarse_spheres`), from a trained
-    /// one: every weight is kept but the coarse stage's first convolution, which reads each
-    /// evidence channel per sphere, and its scoring convolution, which writes one score per
-    /// sphere. Those are resampled along the spheres ([`sphere_resampling`]): the new first
-    /// convolution gives the old one's output for evidence that varies linearly over inverse
-    /// depth, and each new score is the old scores interpolated at the new sphere's inverse
-    /// depth. The 2D convolutions keep their kernels, now over pixels half the size with
-    /// `scale` 2; with `scale` 2 the half grid's selector (`up_mid`) goes: the half stage
-    /// centres on the coarse answer itself. A starting point for training, not an answer.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] when the configuration with them is not valid.
-    pub fn with_coarse_grid(mut self, scale: usize, spheres: usize) -> Result<Self, NetError> {
+    pub fn with_coarse_spheres(mut self, spheres: usize) -> Result<Self, NetError> {
         let mut config = self.config.clone();
         let old = config.cascade.coarse_spheres;
-        config.cascade.coarse_scale = scale;
         config.cascade.coarse_spheres = spheres;
         config.validate()?;
         if spheres != old {
@@ -304,32 +247,6 @@ impl CascadeNet {
                 out.bias = Some(Param::from_tensor(bias.reshape([spheres])));
             }
         }
-        if !config.cascade.half_grid_selector() || scale != self.config.cascade.coarse_scale {
-            // A selector that upsampled 40 x 160 does not choose on the half grid.
-            self.up_mid = None;
-        }
-        self.config = config;
-        Ok(self)
-    }
-
-    /// The network with its half stage centred on a learnt choice among the 3 x 3 coarse
-    /// answers around each pixel (`same_grid_selector`; the coarse stage on the half grid):
-    /// a new selector whose last convolution has zero weights, so that it starts at each
-    /// pixel's own answer (the 8 neighbours keeping about 5 % of the weight,
-    /// [`super::same_grid_prior`]). A network that has it is returned as it is.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] unless the network has `coarse_scale` 2 and
-    /// `convex_upsampling`.
-    pub fn with_same_grid_selector(mut self) -> Result<Self, NetError> {
-        if self.config.cascade.same_grid_selector && self.up_mid.is_some() {
-            return Ok(self);
-        }
-        let mut config = self.config.clone();
-        config.cascade.same_grid_selector = true;
-        config.validate()?;
-        let device = self.coarse.out.conv.weight.val().device();
-        self.up_mid = Some(CandidateSelector::for_stage(&config.cascade, 0, &device));
         self.config = config;
         Ok(self)
     }
@@ -503,20 +420,9 @@ fn resample_axis(
 /// `first` reading `k` more input channels, after its own, with zero weights: the network
 /// answers as before until training moves them.
 fn append_zero_inputs(first: &mut Conv2d, k: usize) {
-    insert_zero_inputs(first, 0, k);
-}
-
-/// `first` reading `k` more input channels with zero weights, placed before its last `tail`
-/// input channels (after all of them with `tail` 0).
-fn insert_zero_inputs(first: &mut Conv2d, tail: usize, k: usize) {
     let weight = first.weight.val(); // [C_out, C_in, 3, 3]
-    let [c_out, c_in, kh, kw] = weight.dims();
+    let [c_out, _, kh, kw] = weight.dims();
     let zeros = Tensor::zeros([c_out, k, kh, kw], &weight.device());
-    let head = c_in - tail.min(c_in);
-    let mut parts = vec![weight.clone().narrow(1, 0, head), zeros];
-    if head < c_in {
-        parts.push(weight.narrow(1, head, c_in - head));
-    }
-    let widened = Tensor::cat(parts, 1).detach(); // a leaf again
+    let widened = Tensor::cat(vec![weight, zeros], 1).detach(); // a leaf again
     first.weight = Param::from_tensor(widened);
 }
