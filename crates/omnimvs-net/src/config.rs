@@ -57,16 +57,6 @@ pub struct CascadeParams {
     pub groups: [usize; 3],
     /// Spheres of the coarse cost volume, evenly spaced in index over `0..=N-1`.
     pub coarse_spheres: usize,
-    /// Channels of a 1x1 convolution that the coarse stage's evidence passes through before
-    /// its first 3x3 convolution (`0`, and left out of the file: none, the 3x3 convolution
-    /// reads every sphere's evidence itself). That first convolution is the coarse stage's
-    /// largest layer: at 80 x 320 with 16 spheres it maps 240 channels to 48 in 0.080 s of
-    /// the stage's 0.22 s, and through 64 channels the pair takes 0.027 s (2 cores, the
-    /// `lowrank_bench` study, `research/study-programs.md`). A trained network is factorised
-    /// into it by a truncated SVD of that layer's weights
-    /// ([`crate::cascade::CascadeNet::with_coarse_squeeze`]).
-    #[serde(default, skip_serializing_if = "is_zero_usize")]
-    pub coarse_squeeze: usize,
     /// Channels of the coarse 2D encoder-decoder (full, half and quarter resolution).
     pub coarse_channels: [usize; 3],
     /// Per-pixel hypotheses of the half- and full-resolution stages.
@@ -182,10 +172,6 @@ fn one_usize() -> usize {
     1
 }
 
-fn is_zero_usize(value: &usize) -> bool {
-    *value == 0
-}
-
 fn is_one_usize(value: &usize) -> bool {
     *value == 1
 }
@@ -220,7 +206,6 @@ impl Default for CascadeParams {
             feature_channels: [8, 16, 16],
             groups: [4, 4, 8],
             coarse_spheres: 32,
-            coarse_squeeze: 0,
             coarse_channels: [48, 64, 96],
             stage_hypotheses: [8, 5],
             stage_intervals: [2.0, 1.0],
@@ -285,6 +270,7 @@ pub const REMOVED_SWITCHES: &[(&str, &str)] = &[
     ("coarse_scale", "4"),
     ("coarse_stride4", "false"),
     ("same_grid_selector", "false"),
+    ("coarse_squeeze", "0"),
 ];
 
 /// Whether two JSON values are equal, numbers by value (`1` and `1.0` alike).
@@ -486,11 +472,10 @@ impl NetConfig {
         self.validate_cascade_sizes()
     }
 
-    /// The output grid and the coarse stage's squeeze.
+    /// The output grid.
     fn validate_cascade_grid(&self) -> Result<(), NetError> {
         let invalid =
             |field: &'static str, message: String| NetError::InvalidConfig { field, message };
-        let p = &self.cascade;
         for (field, value) in [
             ("out_height", self.out_height),
             ("out_width", self.out_width),
@@ -504,16 +489,6 @@ impl NetConfig {
                     ),
                 ));
             }
-        }
-        let coarse_inputs = p.coarse_evidence_channels() * p.coarse_spheres;
-        if p.coarse_squeeze > coarse_inputs {
-            return Err(invalid(
-                "cascade.coarse_squeeze",
-                format!(
-                    "{} channels, more than the {coarse_inputs} it would squeeze (0: none)",
-                    p.coarse_squeeze
-                ),
-            ));
         }
         Ok(())
     }
@@ -755,6 +730,7 @@ mod tests {
             "\"coarse_scale\":4",
             "\"coarse_stride4\":false",
             "\"same_grid_selector\":false",
+            "\"coarse_squeeze\":0",
         ] {
             let read: NetConfig = serde_json::from_str(&with(off)).unwrap();
             assert_eq!(read, NetConfig::cascade(), "{off}");
@@ -767,6 +743,7 @@ mod tests {
             "\"coarse_scale\":2",
             "\"coarse_stride4\":true",
             "\"same_grid_selector\":true",
+            "\"coarse_squeeze\":64",
         ] {
             let err = serde_json::from_str::<NetConfig>(&with(on))
                 .unwrap_err()

@@ -324,13 +324,7 @@ fn grow_loaded(net: CascadeNet, config: &NetConfig) -> Result<CascadeNet, NetErr
     let net = net.with_coarse_feature_channels(p.feature_channels[2])?;
     // Everything asked for but the saved spheres by now; the resampling keeps what it has
     // where they are the same.
-    let net = net.with_coarse_spheres(p.coarse_spheres)?;
-    // Last, so that the factorised layer is the one every growth above left.
-    if p.coarse_squeeze > 0 {
-        net.with_coarse_squeeze(p.coarse_squeeze)
-    } else {
-        Ok(net)
-    }
+    net.with_coarse_spheres(p.coarse_spheres)
 }
 
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes

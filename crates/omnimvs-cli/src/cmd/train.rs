@@ -134,12 +134,6 @@ pub struct Args {
     /// scoring convolutions, every other weight kept.
     #[arg(long, conflicts_with = "resume")]
     pub coarse_spheres: Option<usize>,
-    /// Cascade: channels of a 1x1 convolution the coarse stage's evidence passes through
-    /// before its first 3x3 convolution (`coarse_squeeze`; 0 or left out: none), the coarse
-    /// stage's largest layer. --init weights without it are factorised into it by a truncated
-    /// SVD of that layer (the same answers when the channels reach the layer's rank).
-    #[arg(long, conflicts_with = "resume")]
-    pub coarse_squeeze: Option<usize>,
     /// Cascade with the photometric cue: the grid the coarse stage's cue is matched on, 1 the
     /// coarse grid (quarter-size images), 2 the half-resolution grid (half-size images, 2 x 2
     /// means; `coarse_cue_oversample`, from `cascade-22`). No weight depends on it.
@@ -583,7 +577,6 @@ fn net_config(args: &Args) -> Result<NetConfig> {
         || args.coarse_cue_oversample.is_some()
         || args.coarse_cue_depths.is_some()
         || args.coarse_spheres.is_some()
-        || args.coarse_squeeze.is_some()
         || args.coarse_cue_sgm.is_some()
     {
         if net.family != Family::Cascade {
@@ -591,7 +584,7 @@ fn net_config(args: &Args) -> Result<NetConfig> {
                 "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                  --refine-distribution, --sky-weight, --convex-upsampling, \
                  --stage-intervals, --coarse-feature-channels, \
-                 --coarse-spheres, --coarse-squeeze, \
+                 --coarse-spheres, \
                  --coarse-cue-oversample, --coarse-cue-depths and --coarse-cue-sgm are \
                  options of --preset cascade"
             );
@@ -620,9 +613,6 @@ fn net_config(args: &Args) -> Result<NetConfig> {
         }
         if let Some(spheres) = args.coarse_spheres {
             net.cascade.coarse_spheres = spheres;
-        }
-        if let Some(channels) = args.coarse_squeeze {
-            net.cascade.coarse_squeeze = channels;
         }
         if let Some(sgm) = args.coarse_cue_sgm {
             net.cascade.coarse_cue_sgm = sgm == Switch::On;

@@ -9,7 +9,6 @@ use burn::nn::conv::Conv2d;
 use burn::tensor::{Tensor, TensorData};
 
 use super::CascadeNet;
-use super::regularize::squeeze_conv;
 use super::upsample::UPSAMPLE_TAPS;
 use crate::config::CascadeParams;
 use crate::error::NetError;
@@ -140,9 +139,6 @@ pub const GROWABLE: &[Growable] = growable! {
     feature_channels[2]: grow, Grown;
     // The coarse stage may be resampled to other spheres (`CascadeNet::with_coarse_spheres`).
     coarse_spheres: any, Grown;
-    // Its evidence may be squeezed, once (`CascadeNet::with_coarse_squeeze`).
-    coarse_squeeze: check(|saved, asked| saved.coarse_squeeze == 0
-        || saved.coarse_squeeze == asked.coarse_squeeze), Grown;
 };
 
 impl CascadeNet {
@@ -247,90 +243,6 @@ impl CascadeNet {
                 out.bias = Some(Param::from_tensor(bias.reshape([spheres])));
             }
         }
-        self.config = config;
-        Ok(self)
-    }
-
-    /// The network with its coarse evidence squeezed through `channels` channels
-    /// (`coarse_squeeze`) before the first 3x3 convolution, from a trained one. That
-    /// convolution's weights `W[o, i, y, x]`, as a matrix with a row per `(o, y, x)` and a
-    /// column per input `i`, are replaced by their best approximation of rank `channels` (a
-    /// truncated SVD `U S V^T`, the largest singular values kept): the squeeze, a 1x1
-    /// convolution without bias, takes `V^T`, and the 3x3 convolution reads its `channels`
-    /// outputs through `U S`, keeping its bias and batch norm. With `channels` at least the
-    /// matrix's rank the network answers as before up to rounding; below it, as nearly as
-    /// a layer of that rank can. A network with that squeeze, or with none when `channels` is
-    /// 0, is returned as it is.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] when `channels` is more than the evidence channels, or the
-    /// network has a squeeze of another width (a squeeze is not undone); [`NetError::Shape`]
-    /// when the weights cannot be read.
-    pub fn with_coarse_squeeze(mut self, channels: usize) -> Result<Self, NetError> {
-        let have = self.config.cascade.coarse_squeeze;
-        if have == channels {
-            return Ok(self);
-        }
-        if have != 0 {
-            return Err(NetError::InvalidConfig {
-                field: "cascade.coarse_squeeze",
-                message: format!(
-                    "cannot squeeze to {channels} channels a network whose squeeze has {have}: \
-                     factorise a network without one"
-                ),
-            });
-        }
-        let mut config = self.config.clone();
-        config.cascade.coarse_squeeze = channels;
-        config.validate()?;
-        let first = &mut self.coarse.c0[0].conv;
-        let weight = first.weight.val();
-        let device = weight.device();
-        let [outputs, inputs, kh, kw] = weight.dims();
-        let values = read_values(weight, "coarse stage weights")?;
-        let taps = kh * kw;
-        let rows = outputs * taps;
-        // M[(o, y, x), i] = W[o, i, y, x].
-        let mut m = nalgebra::DMatrix::<f64>::zeros(rows, inputs);
-        for o in 0..outputs {
-            for i in 0..inputs {
-                for t in 0..taps {
-                    m[(o * taps + t, i)] = f64::from(values[(o * inputs + i) * taps + t]);
-                }
-            }
-        }
-        let svd = m.svd(true, true);
-        let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-            return Err(NetError::Shape {
-                what: "SVD of the coarse stage's first convolution".into(),
-                expected: vec![rows, inputs],
-                actual: vec![],
-            });
-        };
-        // `svd` sorts the singular values in descending order: the first `channels` are the
-        // largest. Ranks beyond the matrix's own get zero weights on both sides.
-        let mut three = vec![0f32; outputs * channels * taps]; // [o, k, y, x] = U S
-        let mut squeeze = vec![0f32; channels * inputs]; // [k, i] = V^T
-        for (k, &sigma) in svd.singular_values.iter().take(channels).enumerate() {
-            for o in 0..outputs {
-                for t in 0..taps {
-                    three[(o * channels + k) * taps + t] = (u[(o * taps + t, k)] * sigma) as f32;
-                }
-            }
-            for i in 0..inputs {
-                squeeze[k * inputs + i] = v_t[(k, i)] as f32;
-            }
-        }
-        first.weight = Param::from_tensor(Tensor::from_data(
-            TensorData::new(three, [outputs, channels, kh, kw]),
-            &device,
-        ));
-        let mut conv = squeeze_conv(inputs, channels, &device);
-        conv.weight = Param::from_tensor(Tensor::from_data(
-            TensorData::new(squeeze, [channels, inputs, 1, 1]),
-            &device,
-        ));
-        self.coarse.squeeze = Some(conv);
         self.config = config;
         Ok(self)
     }

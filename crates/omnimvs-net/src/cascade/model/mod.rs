@@ -91,7 +91,6 @@ impl CascadeNet {
             features: CascadeFeatures::new(p.feature_channels, p.context_pairs, device),
             coarse: CoarseRegularizer::new(
                 p.coarse_evidence_channels() * p.coarse_spheres,
-                p.coarse_squeeze,
                 p.coarse_spheres,
                 p.coarse_channels,
                 device,
