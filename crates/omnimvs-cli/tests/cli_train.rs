@@ -420,9 +420,6 @@ fn cascade_options_are_checked_and_belong_to_the_cascade() {
             "on",
             "options of --preset cascade",
         ),
-        // The half stage's aggregated cue reads the coarse cue's planes on the half grid.
-        ("cascade", "--mid-cue-sgm", "on", "cascade.mid_cue_sgm"),
-        ("tiny", "--mid-cue-sgm", "on", "options of --preset cascade"),
     ] {
         let o = omnimvs(
             &[

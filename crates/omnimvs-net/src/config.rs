@@ -42,7 +42,7 @@ pub enum Family {
     #[default]
     OmniMvs,
     /// The coarse-to-fine network ([`crate::cascade::CascadeNet`]): a small cost volume at a
-    /// quarter (or half, `coarse_scale`) of the output resolution, then per-pixel hypotheses
+    /// quarter of the output resolution, then per-pixel hypotheses
     /// around the coarse estimate at half and full resolution.
     Cascade,
 }
@@ -57,47 +57,6 @@ pub struct CascadeParams {
     pub groups: [usize; 3],
     /// Spheres of the coarse cost volume, evenly spaced in index over `0..=N-1`.
     pub coarse_spheres: usize,
-    /// How many times coarser than the output the coarse stage's grid is: `4` (and left out
-    /// of the file: 40 x 160 for the paper's grid, the bundled cascade's) or `2` (the
-    /// half-resolution grid, 80 x 320). At 40 x 160 a quarter of a things frame's pixels hold
-    /// a depth edge in their 4 x 4 block of the output, and 61 % of the coarse stage's misses
-    /// over 20 index units lie there, out of the refinement's reach; at 80 x 320 6.5 % of the
-    /// 2 x 2 blocks do (`research/cascade.md`). With `2` the half stage
-    /// centres on the coarse answer itself (no upsampling, so no half-grid selector), the
-    /// coarse stage still reads the stride-8 features, and its cue is matched on its own grid
-    /// from the half-size images (`coarse_cue_oversample` must be 1, no `mid_cue_sgm`).
-    #[serde(default = "four", skip_serializing_if = "is_four")]
-    pub coarse_scale: usize,
-    /// Whether the coarse stage also correlates the stride-4 features (in `groups[1]` groups)
-    /// at its samples, beside the stride-8 ones (`true`; `false`, and left out of the file:
-    /// the stride-8 ones only). On the half-resolution grid (`coarse_scale` 2) the stride-8
-    /// features blur a depth edge over about two of its pixels: moved there and trained,
-    /// the coarse stage still missed by over 20 at a third of the things pixels whose 4 x 4
-    /// output block holds an edge (36.9 % at 40 x 160; `research/errors.md`). The
-    /// first convolution reads `groups[1]` more channels per sphere, after the others (zero
-    /// weights when switched on from weights without them, [`crate::cascade::CascadeNet::with_coarse_stride4`]).
-    #[serde(default, skip_serializing_if = "is_false")]
-    pub coarse_stride4: bool,
-    /// With `coarse_scale` 2 and `convex_upsampling`: whether the half stage centres on a
-    /// learnt choice among the coarse answers of the 3 x 3 pixels around each pixel (`true`:
-    /// the half-grid selector `up_mid` on the coarse grid itself, starting at the pixel's own
-    /// answer, [`crate::cascade::model::same_grid_prior`]) or on the pixel's own answer
-    /// (`false`, and left out of the file). On the half grid the coarse answer is better than
-    /// at 40 x 160, but the half stage refined it less without the choice of side that the
-    /// learnt upsampling made at a depth edge (house: 4.53 -> 4.08 against 4.80 -> 3.94,
-    /// `research/errors.md`).
-    #[serde(default, skip_serializing_if = "is_false")]
-    pub same_grid_selector: bool,
-    /// Channels of a 1x1 convolution that the coarse stage's evidence passes through before
-    /// its first 3x3 convolution (`0`, and left out of the file: none, the 3x3 convolution
-    /// reads every sphere's evidence itself). That first convolution is the coarse stage's
-    /// largest layer: at 80 x 320 with 16 spheres it maps 240 channels to 48 in 0.080 s of
-    /// the stage's 0.22 s, and through 64 channels the pair takes 0.027 s (2 cores, the
-    /// `lowrank_bench` study, `research/study-programs.md`). A trained network is factorised
-    /// into it by a truncated SVD of that layer's weights
-    /// ([`crate::cascade::CascadeNet::with_coarse_squeeze`]).
-    #[serde(default, skip_serializing_if = "is_zero_usize")]
-    pub coarse_squeeze: usize,
     /// Channels of the coarse 2D encoder-decoder (full, half and quarter resolution).
     pub coarse_channels: [usize; 3],
     /// Per-pixel hypotheses of the half- and full-resolution stages.
@@ -191,131 +150,26 @@ pub struct CascadeParams {
     /// switched on from weights without it).
     #[serde(default, skip_serializing_if = "is_false")]
     pub coarse_cue_sgm: bool,
-    /// With `zncc_cue` and `coarse_cue_oversample: 2`, a second cue channel for the
-    /// half-resolution stage (`true`; `false`, and left out of the file: none): the coarse
-    /// cue's planes on the half-resolution grid, before their 2 x 2 means, aggregated by
-    /// semi-global matching over that grid ([`crate::cascade::photo::AggregatedCue`],
-    /// [`crate::cascade::photo::MID_SGM_P1`], [`crate::cascade::photo::MID_SGM_P2`]) and read
-    /// at each pixel's hypotheses, linearly between planes. On things validation frames the
-    /// aggregated half-grid cue alone is off by more than 3 at 6.6 % of far open pixels, the
-    /// network (`cascade-25`'s start) at 21.1 % (`research/cascade.md`).
-    /// The half stage's first convolution grows by one channel per hypothesis.
-    #[serde(default, skip_serializing_if = "is_false")]
-    pub mid_cue_sgm: bool,
-    /// Semi-global aggregation of the coarse stage's own distribution at inference
-    /// ([`crate::cascade::score_sgm`]; `None`, and left out of the file: none): its
-    /// negative log-probabilities aggregated along 8 wrapping paths with the penalties of
-    /// [`ScoreSgm`] lower the log-probabilities of the spheres a pixel's surroundings rule
-    /// out, so that a region where the evidence is weak takes the sphere of the sure pixels
-    /// around it. No weight depends on it and training steps do not run it (validation
-    /// does). Measured (`research/cascade.md`): with `p1` 1, `p2` 4 and
-    /// a temperature of 8 on the bundled network, the things validation frames' coarse
-    /// answers off by more than 20 fall from 15.0 % to 12.3 % of the pixels, most of them
-    /// sky next to objects; on the pixels the reference's rules score, the final MAE rises
-    /// (3.77 -> 3.89 with the pick), so the bundled network does not use it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub coarse_score_sgm: Option<ScoreSgm>,
-}
-
-/// The penalties and the temperature of [`CascadeParams::coarse_score_sgm`], in nats of the
-/// coarse distribution's negative log-probability (clamped at
-/// [`crate::cascade::score_sgm::SCORE_SGM_MAX_COST`]).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ScoreSgm {
-    /// Penalty of a step of one sphere between neighbouring pixels.
-    pub p1: f32,
-    /// Penalty of a larger step; at least `p1`.
-    pub p2: f32,
-    /// The aggregated costs (summed over the 8 paths) are divided by it before they lower the
-    /// log-probabilities: higher, the network's own distribution counts for more.
-    pub temperature: f32,
-}
-
-impl ScoreSgm {
-    /// Refuses penalties that are not finite, negative, out of order or too large for the
-    /// 16-bit aggregation, and a temperature that is not above 0.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] naming `cascade.coarse_score_sgm`.
-    pub fn check(&self) -> Result<(), NetError> {
-        let max = omnimvs_stereo::SgmParams::max_p2(omnimvs_stereo::Directions::Eight)
-            * crate::cascade::score_sgm::SCORE_SGM_MAX_COST;
-        let ok = self.p1.is_finite()
-            && self.p2.is_finite()
-            && 0.0 <= self.p1
-            && self.p1 <= self.p2
-            && self.p2 <= max
-            && self.temperature.is_finite()
-            && self.temperature > 0.0;
-        if ok {
-            return Ok(());
-        }
-        Err(NetError::InvalidConfig {
-            field: "cascade.coarse_score_sgm",
-            message: format!(
-                "p1 {}, p2 {}, temperature {}: expected 0 <= p1 <= p2 <= {max:.0} (nats) and a \
-                 finite temperature above 0",
-                self.p1, self.p2, self.temperature
-            ),
-        })
-    }
 }
 
 impl CascadeParams {
     /// The input channels per hypothesis of refinement stage `i` (0: half, 1: full
-    /// resolution): its groups' correlations, the visibility, the photometric cue with
-    /// `zncc_cue`, and on the half stage the aggregated cue with `mid_cue_sgm`.
+    /// resolution): its groups' correlations, the visibility and the photometric cue with
+    /// `zncc_cue`.
     pub fn stage_evidence_channels(&self, i: usize) -> usize {
-        self.groups[1 - i]
-            + 1
-            + usize::from(self.zncc_cue)
-            + usize::from(i == 0 && self.mid_cue_sgm)
+        self.groups[1 - i] + 1 + usize::from(self.zncc_cue)
     }
 
     /// The input channels per sphere of the coarse stage: the stride-8 groups' correlations,
-    /// the visibility, the photometric cue with `zncc_cue`, the aggregated cue with
-    /// `coarse_cue_sgm`, and last the stride-4 groups' correlations with `coarse_stride4`.
+    /// the visibility, the photometric cue with `zncc_cue` and the aggregated cue with
+    /// `coarse_cue_sgm`.
     pub fn coarse_evidence_channels(&self) -> usize {
-        self.groups[2]
-            + 1
-            + usize::from(self.zncc_cue)
-            + usize::from(self.coarse_cue_sgm)
-            + self.coarse_stride4_groups()
-    }
-
-    /// The stride-4 groups the coarse stage correlates (`coarse_stride4`): `groups[1]` or 0.
-    pub fn coarse_stride4_groups(&self) -> usize {
-        if self.coarse_stride4 {
-            self.groups[1]
-        } else {
-            0
-        }
-    }
-
-    /// Whether the half stage centres on a learnt choice among coarse answers (a half-grid
-    /// selector): with `convex_upsampling`, when the coarse grid is coarser than the half
-    /// grid (`coarse_scale` 4: the learnt upsampling) or with `same_grid_selector` (on the
-    /// half grid itself).
-    pub fn half_grid_selector(&self) -> bool {
-        self.convex_upsampling && (self.coarse_scale == 4 || self.same_grid_selector)
+        self.groups[2] + 1 + usize::from(self.zncc_cue) + usize::from(self.coarse_cue_sgm)
     }
 }
 
 fn one_usize() -> usize {
     1
-}
-
-fn four() -> usize {
-    4
-}
-
-fn is_zero_usize(value: &usize) -> bool {
-    *value == 0
-}
-
-fn is_four(value: &usize) -> bool {
-    *value == 4
 }
 
 fn is_one_usize(value: &usize) -> bool {
@@ -352,10 +206,6 @@ impl Default for CascadeParams {
             feature_channels: [8, 16, 16],
             groups: [4, 4, 8],
             coarse_spheres: 32,
-            coarse_scale: 4,
-            coarse_stride4: false,
-            same_grid_selector: false,
-            coarse_squeeze: 0,
             coarse_channels: [48, 64, 96],
             stage_hypotheses: [8, 5],
             stage_intervals: [2.0, 1.0],
@@ -372,8 +222,6 @@ impl Default for CascadeParams {
             coarse_cue_oversample: 1,
             coarse_cue_depths: 1,
             coarse_cue_sgm: false,
-            mid_cue_sgm: false,
-            coarse_score_sgm: None,
         }
     }
 }
@@ -417,6 +265,12 @@ pub const REMOVED_SWITCHES: &[(&str, &str)] = &[
     ("neighbour_hypotheses", "[0, 0]"),
     ("neighbour_start_score", "-5.0"),
     ("neighbour_gain", "1.0"),
+    ("coarse_score_sgm", "null"),
+    ("mid_cue_sgm", "false"),
+    ("coarse_scale", "4"),
+    ("coarse_stride4", "false"),
+    ("same_grid_selector", "false"),
+    ("coarse_squeeze", "0"),
 ];
 
 /// Whether two JSON values are equal, numbers by value (`1` and `1.0` alike).
@@ -600,8 +454,7 @@ impl NetConfig {
     /// full-resolution stages.
     pub fn cascade_sizes(&self) -> [[usize; 2]; 3] {
         let [h, w] = [self.out_height, self.out_width];
-        let s = self.cascade.coarse_scale.max(1);
-        [[h / s, w / s], [h / 2, w / 2], [h, w]]
+        [[h / 4, w / 4], [h / 2, w / 2], [h, w]]
     }
 
     /// Feature-map sizes `[rows, cols]` at strides 2, 4 and 8 of the input (each a 3x3 or 5x5
@@ -619,11 +472,10 @@ impl NetConfig {
         self.validate_cascade_sizes()
     }
 
-    /// The output grid and the coarse stage's grid, selector and squeeze.
+    /// The output grid.
     fn validate_cascade_grid(&self) -> Result<(), NetError> {
         let invalid =
             |field: &'static str, message: String| NetError::InvalidConfig { field, message };
-        let p = &self.cascade;
         for (field, value) in [
             ("out_height", self.out_height),
             ("out_width", self.out_width),
@@ -637,43 +489,6 @@ impl NetConfig {
                     ),
                 ));
             }
-        }
-        if !matches!(p.coarse_scale, 2 | 4) {
-            return Err(invalid(
-                "cascade.coarse_scale",
-                format!(
-                    "{} must be 4 (the coarse grid a quarter of the output's) or 2 (half)",
-                    p.coarse_scale
-                ),
-            ));
-        }
-        if p.coarse_scale == 2 && (p.coarse_cue_oversample != 1 || p.mid_cue_sgm) {
-            return Err(invalid(
-                "cascade.coarse_scale",
-                "2 (the coarse stage on the half-resolution grid) needs `coarse_cue_oversample: \
-                 1` and no `mid_cue_sgm`: the cue is matched on the coarse grid itself"
-                    .into(),
-            ));
-        }
-        if p.same_grid_selector && (p.coarse_scale != 2 || !p.convex_upsampling) {
-            return Err(invalid(
-                "cascade.same_grid_selector",
-                format!(
-                    "needs `coarse_scale: 2` (got {}) and `convex_upsampling: true` (got {}): \
-                     it chooses among the coarse answers on the half grid itself",
-                    p.coarse_scale, p.convex_upsampling
-                ),
-            ));
-        }
-        let coarse_inputs = p.coarse_evidence_channels() * p.coarse_spheres;
-        if p.coarse_squeeze > coarse_inputs {
-            return Err(invalid(
-                "cascade.coarse_squeeze",
-                format!(
-                    "{} channels, more than the {coarse_inputs} it would squeeze (0: none)",
-                    p.coarse_squeeze
-                ),
-            ));
         }
         Ok(())
     }
@@ -702,17 +517,6 @@ impl NetConfig {
             return Err(invalid(
                 "cascade.coarse_cue_sgm",
                 "needs `zncc_cue` (it aggregates that cue)".into(),
-            ));
-        }
-        if let Some(sgm) = &p.coarse_score_sgm {
-            sgm.check()?;
-        }
-        if p.mid_cue_sgm && !(p.zncc_cue && p.coarse_cue_oversample == 2) {
-            return Err(invalid(
-                "cascade.mid_cue_sgm",
-                "needs `zncc_cue` with `coarse_cue_oversample: 2` (it aggregates the coarse \
-                 cue's planes on the half-resolution grid)"
-                    .into(),
             ));
         }
         Ok(())
@@ -906,57 +710,10 @@ mod tests {
         let json = serde_json::to_string(&deep).unwrap();
         assert!(json.contains("\"coarse_cue_sgm\":true"), "{json}");
         assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
-        // The half stage's aggregated cue: off unless written, and only over the coarse cue's
-        // planes on the half grid.
-        assert!(!json.contains("mid_cue_sgm"), "{json}");
-        deep.cascade.mid_cue_sgm = true;
-        let err = deep.validate().unwrap_err().to_string();
-        assert!(err.contains("cascade.mid_cue_sgm"), "{err}");
-        deep.cascade.coarse_cue_oversample = 2;
-        deep.validate().unwrap();
-        let json = serde_json::to_string(&deep).unwrap();
-        assert!(json.contains("\"mid_cue_sgm\":true"), "{json}");
-        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), deep);
         let mut wide = NetConfig::cascade();
         wide.cascade.feature_channels[2] = 128;
         let err = wide.validate().unwrap_err().to_string();
         assert!(err.contains("cascade.feature_channels"), "{err}");
-    }
-
-    #[test]
-    fn the_coarse_distribution_is_not_aggregated_unless_written() {
-        let json = serde_json::to_string(&NetConfig::cascade()).unwrap();
-        assert!(!json.contains("coarse_score_sgm"), "{json}");
-        let mut agg = NetConfig::cascade();
-        agg.cascade.coarse_score_sgm = Some(ScoreSgm {
-            p1: 1.0,
-            p2: 4.0,
-            temperature: 8.0,
-        });
-        agg.validate().unwrap();
-        let json = serde_json::to_string(&agg).unwrap();
-        assert!(
-            json.contains("\"coarse_score_sgm\":{\"p1\":1.0,\"p2\":4.0,\"temperature\":8.0}"),
-            "{json}"
-        );
-        assert_eq!(serde_json::from_str::<NetConfig>(&json).unwrap(), agg);
-        for (p1, p2, temperature) in [
-            (2.0, 1.0, 8.0),
-            (-1.0, 4.0, 8.0),
-            (1.0, 500.0, 8.0),
-            (1.0, f32::NAN, 8.0),
-            (1.0, 4.0, 0.0),
-        ] {
-            agg.cascade.coarse_score_sgm = Some(ScoreSgm {
-                p1,
-                p2,
-                temperature,
-            });
-            let err = agg.validate().unwrap_err().to_string();
-            assert!(err.contains("cascade.coarse_score_sgm"), "{err}");
-        }
-        let typo = json.replace("temperature", "temp");
-        assert!(serde_json::from_str::<NetConfig>(&typo).is_err());
     }
 
     #[test]
@@ -968,11 +725,26 @@ mod tests {
             "\"neighbour_hypotheses\":[0,0]",
             "\"neighbour_start_score\":-5",
             "\"neighbour_gain\":1.0",
+            "\"coarse_score_sgm\":null",
+            "\"mid_cue_sgm\":false",
+            "\"coarse_scale\":4",
+            "\"coarse_stride4\":false",
+            "\"same_grid_selector\":false",
+            "\"coarse_squeeze\":0",
         ] {
             let read: NetConfig = serde_json::from_str(&with(off)).unwrap();
             assert_eq!(read, NetConfig::cascade(), "{off}");
         }
-        for on in ["\"neighbour_hypotheses\":[0,2]", "\"neighbour_gain\":30.0"] {
+        for on in [
+            "\"neighbour_hypotheses\":[0,2]",
+            "\"neighbour_gain\":30.0",
+            "\"coarse_score_sgm\":{\"p1\":1.0,\"p2\":4.0,\"temperature\":8.0}",
+            "\"mid_cue_sgm\":true",
+            "\"coarse_scale\":2",
+            "\"coarse_stride4\":true",
+            "\"same_grid_selector\":true",
+            "\"coarse_squeeze\":64",
+        ] {
             let err = serde_json::from_str::<NetConfig>(&with(on))
                 .unwrap_err()
                 .to_string();

@@ -321,31 +321,10 @@ fn grow_loaded(net: CascadeNet, config: &NetConfig) -> Result<CascadeNet, NetErr
     } else {
         net
     };
-    let net = if p.mid_cue_sgm {
-        net.with_mid_cue_sgm()?
-    } else {
-        net
-    };
-    let net = if p.coarse_stride4 {
-        net.with_coarse_stride4()?
-    } else {
-        net
-    };
     let net = net.with_coarse_feature_channels(p.feature_channels[2])?;
-    // Everything asked for but the saved grid and spheres by now; the move keeps what it has
+    // Everything asked for but the saved spheres by now; the resampling keeps what it has
     // where they are the same.
-    let net = net.with_coarse_grid(p.coarse_scale, p.coarse_spheres)?;
-    let net = if p.same_grid_selector {
-        net.with_same_grid_selector()?
-    } else {
-        net
-    };
-    // Last, so that the factorised layer is the one every growth above left.
-    if p.coarse_squeeze > 0 {
-        net.with_coarse_squeeze(p.coarse_squeeze)
-    } else {
-        Ok(net)
-    }
+    net.with_coarse_spheres(p.coarse_spheres)
 }
 
 /// Loads a network from in-memory files: the configuration JSON and the safetensors bytes

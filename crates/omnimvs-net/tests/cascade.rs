@@ -1,7 +1,6 @@
 //! The cascade network: per-pixel sampling equals the lookup table on the spheres they share,
 //! every stage has the expected shape, folding the batch norms keeps its answers, the host correlation equals the tensor one, a window of longitudes answers as the whole panorama,
 //! the refinement stages follow the centres a caller gives them (another method's answer),
-//! the coarse distribution is aggregated at inference only when `coarse_score_sgm` asks,
 //! and its weight files round-trip (training it: `omnimvs-train`'s `tests/cascade.rs`). Uses the published rig of `sunny_single` from
 //! `../shared/data/omnimvs-samples`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -122,36 +121,6 @@ fn stages_have_the_expected_shapes_and_stay_in_range() {
         .collect();
     assert!(net.forward(&two, &geometry).is_err());
     assert!(net.forward(&learner_images[..3], &geometry).is_err());
-}
-
-#[test]
-fn the_coarse_distribution_is_aggregated_at_inference_only_when_asked() {
-    let (config, net, geometry, images) = micro_net();
-    let plain = net.forward(&images, &geometry).unwrap();
-    let mut aggregated_config = config.clone();
-    aggregated_config.cascade.coarse_score_sgm = Some(omnimvs_net::config::ScoreSgm {
-        p1: 1.0,
-        p2: 4.0,
-        temperature: 8.0,
-    });
-    let aggregated_net = CascadeNet {
-        config: aggregated_config,
-        ..net.clone()
-    };
-    let aggregated = aggregated_net.forward(&images, &geometry).unwrap();
-    let values = |t: burn::tensor::Tensor<3>| read_values(t, "index").unwrap();
-    let (before, after) = (
-        values(plain.stages[0].index.clone()),
-        values(aggregated.stages[0].index.clone()),
-    );
-    assert!(max_difference(&before, &after) > 1e-3, "nothing aggregated");
-    assert!(after.iter().all(|&n| (0.0..=31.0 + 1e-3).contains(&n)));
-    let sums = read_values(aggregated.stages[0].prob.clone().sum_dim(1), "sums").unwrap();
-    assert!(sums.iter().all(|s| (s - 1.0).abs() < 1e-4));
-    // Training steps see the network's own distribution.
-    let coarse_of =
-        |n: &CascadeNet| values(n.forward_coarse(&images, &geometry, true).unwrap().index);
-    assert_eq!(coarse_of(&net), coarse_of(&aggregated_net));
 }
 
 /// Gives a batch norm inference statistics and an affine part away from the identity, from

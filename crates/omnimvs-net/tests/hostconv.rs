@@ -164,7 +164,6 @@ fn a_cascade_with_its_convolutions_on_the_host_answers_as_with_burns() {
     config.cascade.convex_upsampling = true;
     config.cascade.stage_gates = true;
     config.cascade.context_pairs = 2;
-    config.cascade.coarse_squeeze = 8;
     config.validate().unwrap();
     let device = Device::flex();
     device.seed(7);

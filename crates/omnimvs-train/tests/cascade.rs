@@ -313,13 +313,11 @@ fn training_only_the_half_stage_moves_its_weights_and_nothing_else() {
     config.net.cascade.convex_upsampling = true;
     config.net.cascade.zncc_cue = true;
     config.net.cascade.coarse_cue_oversample = 2;
-    config.net.cascade.mid_cue_sgm = true;
     config.train_only = TrainParts::Mid;
     let device = Device::flex();
     let (mut learner, geometry, sample) = learner_on_sunny(&config);
     // Frozen first: the features, the coarse stage, the full-resolution stage, the
-    // selectors; then the half stage's own weights (its first convolution reads the
-    // aggregated cue too).
+    // selectors; then the half stage's own weights.
     let weights = |net: &CascadeNet| {
         [
             net.features.conv0.conv.weight.val(),

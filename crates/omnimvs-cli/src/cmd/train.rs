@@ -129,34 +129,11 @@ pub struct Args {
     /// before (up to a perturbation of about 1 % of the coarse correlation).
     #[arg(long, conflicts_with = "resume")]
     pub coarse_feature_channels: Option<usize>,
-    /// Cascade: how many times coarser than the output the coarse stage's grid is
-    /// (`coarse_scale`): 4 (40 x 160 at the paper's grid, the bundled cascade's) or 2
-    /// (80 x 320, where the half stage centres on the coarse answer itself; needs
-    /// --coarse-cue-oversample 1). --init weights with the coarse stage at 4 move to it: its
-    /// first and scoring convolutions resampled along the spheres, every other weight kept.
-    #[arg(long, conflicts_with = "resume")]
-    pub coarse_scale: Option<usize>,
     /// Cascade: spheres of the coarse cost volume (`coarse_spheres`, 32 in the preset). --init
-    /// weights over other spheres are resampled along them (as for --coarse-scale).
+    /// weights over other spheres are resampled along them: the coarse stage's first and
+    /// scoring convolutions, every other weight kept.
     #[arg(long, conflicts_with = "resume")]
     pub coarse_spheres: Option<usize>,
-    /// Cascade: whether the coarse stage also correlates the stride-4 features at its samples
-    /// (`coarse_stride4`; sharper evidence at depth edges than the stride-8 ones). --init
-    /// weights without it grow into it answering as before (zero weights for the new inputs).
-    #[arg(long, value_enum, conflicts_with = "resume")]
-    pub coarse_stride4: Option<Switch>,
-    /// Cascade with --coarse-scale 2 and --convex-upsampling: whether the half stage centres
-    /// on a learnt choice among the coarse answers of the 3 x 3 pixels around each pixel
-    /// (`same_grid_selector`) instead of the pixel's own. --init weights without it grow a
-    /// selector that starts at the pixel's own answer (within the 5 % its other taps keep).
-    #[arg(long, value_enum, conflicts_with = "resume")]
-    pub same_grid_selector: Option<Switch>,
-    /// Cascade: channels of a 1x1 convolution the coarse stage's evidence passes through
-    /// before its first 3x3 convolution (`coarse_squeeze`; 0 or left out: none), the coarse
-    /// stage's largest layer. --init weights without it are factorised into it by a truncated
-    /// SVD of that layer (the same answers when the channels reach the layer's rank).
-    #[arg(long, conflicts_with = "resume")]
-    pub coarse_squeeze: Option<usize>,
     /// Cascade with the photometric cue: the grid the coarse stage's cue is matched on, 1 the
     /// coarse grid (quarter-size images), 2 the half-resolution grid (half-size images, 2 x 2
     /// means; `coarse_cue_oversample`, from `cascade-22`). No weight depends on it.
@@ -172,13 +149,6 @@ pub struct Args {
     /// --init weights without it grow into it answering as before (zero weights for it).
     #[arg(long, value_enum, conflicts_with = "resume")]
     pub coarse_cue_sgm: Option<Switch>,
-    /// Cascade with the photometric cue matched on the half grid (`--coarse-cue-oversample
-    /// 2`): a second cue channel for the half-resolution stage, the coarse cue's half-grid
-    /// planes aggregated by semi-global matching and read at each pixel's hypotheses
-    /// (`mid_cue_sgm`, from `cascade-27`). --init weights without it grow into it answering as
-    /// before (zero weights for it).
-    #[arg(long, value_enum, conflicts_with = "resume")]
-    pub mid_cue_sgm: Option<Switch>,
     /// Threads preparing the training samples (decoding the images, augmenting; 1 by
     /// default). The samples and their order do not depend on it: more is for a GPU, whose
     /// steps outrun one thread. Also taken by --resume.
@@ -606,23 +576,17 @@ fn net_config(args: &Args) -> Result<NetConfig> {
         || args.coarse_feature_channels.is_some()
         || args.coarse_cue_oversample.is_some()
         || args.coarse_cue_depths.is_some()
-        || args.coarse_scale.is_some()
         || args.coarse_spheres.is_some()
-        || args.coarse_stride4.is_some()
-        || args.same_grid_selector.is_some()
-        || args.coarse_squeeze.is_some()
         || args.coarse_cue_sgm.is_some()
-        || args.mid_cue_sgm.is_some()
     {
         if net.family != Family::Cascade {
             bail!(
                 "--context-pairs, --stage-gates, --zncc-cue, --coarse-distribution, \
                  --refine-distribution, --sky-weight, --convex-upsampling, \
                  --stage-intervals, --coarse-feature-channels, \
-                 --coarse-scale, --coarse-spheres, --coarse-stride4, \
-                 --same-grid-selector, --coarse-squeeze, \
-                 --coarse-cue-oversample, --coarse-cue-depths, --coarse-cue-sgm and \
-                 --mid-cue-sgm are options of --preset cascade"
+                 --coarse-spheres, \
+                 --coarse-cue-oversample, --coarse-cue-depths and --coarse-cue-sgm are \
+                 options of --preset cascade"
             );
         }
         if let Some(up) = args.convex_upsampling {
@@ -647,26 +611,11 @@ fn net_config(args: &Args) -> Result<NetConfig> {
         if let Some(depths) = args.coarse_cue_depths {
             net.cascade.coarse_cue_depths = depths;
         }
-        if let Some(scale) = args.coarse_scale {
-            net.cascade.coarse_scale = scale;
-        }
         if let Some(spheres) = args.coarse_spheres {
             net.cascade.coarse_spheres = spheres;
         }
-        if let Some(stride4) = args.coarse_stride4 {
-            net.cascade.coarse_stride4 = stride4 == Switch::On;
-        }
-        if let Some(selector) = args.same_grid_selector {
-            net.cascade.same_grid_selector = selector == Switch::On;
-        }
-        if let Some(channels) = args.coarse_squeeze {
-            net.cascade.coarse_squeeze = channels;
-        }
         if let Some(sgm) = args.coarse_cue_sgm {
             net.cascade.coarse_cue_sgm = sgm == Switch::On;
-        }
-        if let Some(sgm) = args.mid_cue_sgm {
-            net.cascade.mid_cue_sgm = sgm == Switch::On;
         }
         if let Some(channels) = args.coarse_feature_channels {
             net.cascade.feature_channels[2] = channels;

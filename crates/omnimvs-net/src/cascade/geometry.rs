@@ -12,13 +12,9 @@ use omnimvs_camera::Rig;
 use omnimvs_core::interp::BilinearTap;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 
-use super::model::{
-    CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, neighbourhood_candidates,
-    same_grid_prior, upsampling_candidates,
-};
-use super::photo::{AggregatedCue, ImagePyramid, MID_SGM_P1, MID_SGM_P2, aggregated_cue};
+use super::model::{CascadeNet, StageOutput, UPSAMPLE_TAPS, bilinear_prior, upsampling_candidates};
+use super::photo::{ImagePyramid, aggregated_cue};
 use super::sampler::{coarse_indices, hypotheses_around};
-use super::score_sgm::aggregated_scores;
 use crate::config::NetConfig;
 use crate::error::NetError;
 use crate::model::SweepTaps;
@@ -179,9 +175,6 @@ impl StageTaps {
 pub struct CascadeGeometry {
     /// The coarse stage's taps (fixed spheres).
     pub coarse: StageTaps,
-    /// The same samples in the stride-4 feature maps, when the coarse stage also correlates
-    /// those (`coarse_stride4`).
-    pub coarse4: Option<StageTaps>,
     /// Samplers of the coarse, half- and full-resolution grids.
     pub samplers: [PixelSampler; 3],
     /// The `N` hypotheses.
@@ -254,18 +247,6 @@ impl CascadeGeometry {
             .flat_map(|&n| std::iter::repeat_n(n as f32, plane))
             .collect();
         let feature_sizes = config.cascade_feature_sizes();
-        // The same samples in the stride-4 features (`coarse_stride4`).
-        let coarse4 = if config.cascade.coarse_stride4 {
-            Some(StageTaps::new(
-                &coarse_grids,
-                index.clone(),
-                feature_sizes[1],
-                host_correlation,
-                device,
-            )?)
-        } else {
-            None
-        };
         let coarse = StageTaps::new(
             &coarse_grids,
             index,
@@ -284,7 +265,6 @@ impl CascadeGeometry {
         };
         Ok(Self {
             coarse,
-            coarse4,
             samplers,
             hypotheses: *hypotheses,
             config: config.clone(),
@@ -308,18 +288,13 @@ impl CascadeGeometry {
         let p = &self.config.cascade;
         let (factor, depths) = (p.coarse_cue_oversample, p.coarse_cue_depths);
         // Matched on its grid (images of the matching level: the quarter-size ones for the
-        // coarse grid itself at `coarse_scale` 4, the half-size ones at 2), each coarse pixel
-        // the mean of its factor x factor block (itself for factor 1); then each sphere the
-        // best of its depths. `zncc` refuses an empty set of grids, so there is a first one
-        // after it.
-        let level = (p.coarse_scale.trailing_zeros() - factor.trailing_zeros()) as usize;
+        // coarse grid itself, the half-size ones for the half grid), each coarse pixel the mean
+        // of its factor x factor block (itself for factor 1); then each sphere the best of its
+        // depths. `zncc` refuses an empty set of grids, so there is a first one after it.
+        let level = (2 - factor.trailing_zeros()) as usize;
         let fine = pyramid.zncc(level, &self.coarse_grids)?;
         let first = &self.coarse_grids[0];
         let (planes, h, w) = (first.num_spheres, first.height, first.width);
-        if p.mid_cue_sgm {
-            // The same planes serve the half-resolution stage (`mid_cue_sgm` needs factor 2).
-            self.mid_aggregate(pyramid, &fine)?;
-        }
         let (ch, cw) = (h / factor, w / factor);
         let scale = 1.0 / (factor * factor) as f32;
         let mut pooled = vec![0f32; planes * ch * cw];
@@ -419,88 +394,13 @@ impl CascadeGeometry {
             p.stage_intervals[stage - 1],
             self.config.num_invdepth,
         );
-        let mid_cue = match images {
-            Some(pyramid) if stage == 1 && p.mid_cue_sgm => {
-                Some(self.mid_cue(pyramid, &index, k, &cols)?)
-            }
-            _ => None,
-        };
         let mut taps = self.taps_for(stage, index, k, cols.clone(), images)?;
         let [h, w] = [sampler.grid().height, cols.len()];
-        if let Some(values) = mid_cue
-            && let Some(cue) = taps.cue.take()
-        {
-            let aggregated =
-                Tensor::from_data(TensorData::new(values, [1, 1, k, h, w]), &self.device);
-            taps.cue = Some(Tensor::cat(vec![cue, aggregated], 1));
-        }
         taps.center = Some(Tensor::<3>::from_data(
             TensorData::new(center, [1, h, w]),
             &self.device,
         ));
         Ok(taps)
-    }
-
-    /// The frame's aggregated cue of the half-resolution grid (`mid_cue_sgm`): the one made
-    /// before, or made now from `fine`, the coarse cue's planes on that grid.
-    ///
-    /// # Errors
-    /// [`NetError`] from the aggregation.
-    fn mid_aggregate<'a>(
-        &self,
-        pyramid: &'a ImagePyramid,
-        fine: &[f32],
-    ) -> Result<&'a AggregatedCue, NetError> {
-        if let Some(done) = pyramid.mid_aggregate() {
-            return Ok(done);
-        }
-        let grid = self.samplers[1].grid();
-        Ok(pyramid.mid_aggregate_or(AggregatedCue::new(
-            fine,
-            &self.coarse_cue_depths,
-            [grid.height, grid.width],
-            [MID_SGM_P1, MID_SGM_P2],
-        )?))
-    }
-
-    /// The half-resolution stage's aggregated cue (`mid_cue_sgm`) at its `k` hypotheses per
-    /// pixel (`index[j * pixels + pixel]`, `N` units) over its columns `cols`: `k x rows x
-    /// cols.len()` values, read from the frame's [`AggregatedCue`] of the half grid (made here
-    /// from the coarse cue's planes if the coarse stage has not made it).
-    ///
-    /// # Errors
-    /// [`NetError`] from the cue's matching or aggregation.
-    fn mid_cue(
-        &self,
-        pyramid: &ImagePyramid,
-        index: &[f32],
-        k: usize,
-        cols: &Range<usize>,
-    ) -> Result<Vec<f32>, NetError> {
-        let grid = self.samplers[1].grid();
-        let [rows, width] = [grid.height, grid.width];
-        let aggregated = match pyramid.mid_aggregate() {
-            Some(done) => done,
-            None => self.mid_aggregate(pyramid, &pyramid.zncc(1, &self.coarse_grids)?)?,
-        };
-        let span = cols.len();
-        let pixels = rows * span;
-        if index.len() != k * pixels {
-            return Err(NetError::Shape {
-                what: "hypotheses of the half-resolution stage".into(),
-                expected: vec![k, rows, span],
-                actual: vec![index.len()],
-            });
-        }
-        Ok(index
-            .iter()
-            .enumerate()
-            .map(|(i, &n)| {
-                let pixel = i % pixels;
-                let (r, c) = (pixel / span, pixel % span);
-                aggregated.at(r * width + cols.start + c, f64::from(n))
-            })
-            .collect())
     }
 
     /// The taps of refinement stage `stage` at `k` given inverse-depth indices per pixel
@@ -766,7 +666,7 @@ impl CascadeNet {
         choice: SeedChoice,
     ) -> Result<CascadeOutput, NetError> {
         let (levels, photo) = self.feature_levels(images, false)?;
-        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry, false)?;
+        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry)?;
         let coarse_index = read_values(coarse.index.clone(), "coarse index")?;
         let mid_grid = *geometry.samplers[1].grid();
         let cols = 0..mid_grid.width;
@@ -827,7 +727,7 @@ impl CascadeNet {
         training: bool,
     ) -> Result<StageOutput, NetError> {
         let (levels, photo) = self.feature_levels(images, training)?;
-        self.coarse_of(&levels, photo.as_ref(), geometry, training)
+        self.coarse_of(&levels, photo.as_ref(), geometry)
     }
 
     /// Every camera's feature pyramid (strides 2, 4, 8; one batch through the extractor,
@@ -869,39 +769,15 @@ impl CascadeNet {
         Ok((levels, photo))
     }
 
-    /// The coarse stage on the stride-8 features of `levels` (and the photometric cue); out
-    /// of `training`, with `coarse_score_sgm`, its distribution aggregated
-    /// ([`super::score_sgm`]).
+    /// The coarse stage on the stride-8 features of `levels` (and the photometric cue).
     fn coarse_of(
         &self,
         levels: &[Vec<Tensor<4>>; 3],
         photo: Option<&ImagePyramid>,
         geometry: &CascadeGeometry,
-        training: bool,
     ) -> Result<StageOutput, NetError> {
         let cue = geometry.coarse_cue(photo)?;
-        let stride4 = geometry.coarse4.as_ref().map(|taps| (&levels[1][..], taps));
-        let coarse = self.coarse_stage(&levels[2], &geometry.coarse, cue, stride4)?;
-        match self.config.cascade.coarse_score_sgm {
-            Some(sgm) if !training => {
-                let [b, k, h, w] = coarse.prob.dims();
-                if b != 1 {
-                    return Err(NetError::Shape {
-                        what: "coarse distribution to aggregate (one frame)".into(),
-                        expected: vec![1, k, h, w],
-                        actual: vec![b, k, h, w],
-                    });
-                }
-                let prob = read_values(coarse.prob, "coarse distribution")?;
-                let scores = aggregated_scores(&prob, k, [h, w], &sgm)?;
-                let scores = Tensor::<4>::from_data(
-                    TensorData::new(scores, [1, k, h, w]),
-                    &coarse.hypotheses.device(),
-                );
-                Ok(Self::soft_argmax(scores, coarse.hypotheses))
-            }
-            _ => Ok(coarse),
-        }
+        self.coarse_stage(&levels[2], &geometry.coarse, cue)
     }
 
     /// The taps of refinement `stage` (1: half, 2: full resolution) over its columns `cols`,
@@ -927,20 +803,10 @@ impl CascadeNet {
         };
         let from = geometry.samplers[stage - 1].grid();
         let rows = geometry.samplers[stage].grid().height;
-        // On the coarse grid itself (`same_grid_selector`) each pixel chooses among its own
-        // neighbourhood, starting at its own answer; else among its parent's, starting at the
-        // bilinear upsampling.
-        let (candidates, prior) = if rows == from.height {
-            (
-                neighbourhood_candidates(previous, [from.height, from.width], 1, cols),
-                same_grid_prior(rows, cols, &geometry.device),
-            )
-        } else {
-            (
-                upsampling_candidates(previous, [from.height, from.width], cols),
-                bilinear_prior(rows, cols, &geometry.device),
-            )
-        };
+        // Each pixel chooses among its parent's neighbourhood, starting at the bilinear
+        // upsampling.
+        let candidates = upsampling_candidates(previous, [from.height, from.width], cols);
+        let prior = bilinear_prior(rows, cols, &geometry.device);
         let candidate_taps =
             geometry.taps_for(stage, candidates, UPSAMPLE_TAPS, cols.clone(), photo)?;
         let up = self.select_centres(level, selector, &levels[level], &candidate_taps, prior)?;
@@ -986,7 +852,7 @@ impl CascadeNet {
         let mut timings = CascadeTimings::default();
         let (levels, photo) = self.feature_levels(images, training)?;
         timings.features = lap(&device);
-        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry, training)?;
+        let coarse = self.coarse_of(&levels, photo.as_ref(), geometry)?;
         timings.coarse = lap(&device);
         let coarse_values = read_values(coarse.index.clone(), "coarse index")?;
         let mid_cols = window.scaled(2);

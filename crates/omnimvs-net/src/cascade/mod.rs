@@ -23,8 +23,6 @@
 //! - [`model`]: the burn modules.
 //! - [`photo`]: the photometric cue (`zncc_cue`), ZNCC of the cameras' own images at a
 //!   stage's samples, one more channel of its volume.
-//! - [`score_sgm`]: semi-global aggregation of the coarse stage's own distribution at
-//!   inference (`coarse_score_sgm`).
 //! - [`infer`]: the network on a dataset's frames.
 
 pub mod geometry;
@@ -33,7 +31,6 @@ pub mod infer;
 pub mod model;
 pub mod photo;
 pub mod sampler;
-pub mod score_sgm;
 
 pub use crate::pixel::PixelSampler;
 pub use geometry::{

@@ -17,15 +17,12 @@
 //! slot (the same offset from their own centres), which are the same depth where the centre
 //! map is smooth.
 
-use std::sync::OnceLock;
-
 use burn::tensor::{Device, Tensor, TensorData};
 use omnimvs_core::interp::grid_sample_plane;
 use omnimvs_stereo::params::{COST_SCALE, Directions, cost_units};
-use omnimvs_stereo::{ZNCC_VARIANCE_EPS, camera_pairs};
+use omnimvs_stereo::{CostVolume, SgmParams, ZNCC_VARIANCE_EPS, aggregate, camera_pairs};
 use rayon::prelude::*;
 
-use super::score_sgm::aggregate_eight;
 use crate::error::NetError;
 use crate::pixel::box_sum;
 use crate::taps::SweepGrid;
@@ -47,9 +44,6 @@ pub struct ImagePyramid {
     levels: [Vec<Vec<f32>>; 3],
     /// `[rows, cols]` of each level.
     sizes: [[usize; 2]; 3],
-    /// The half-resolution stage's aggregated cue of this frame (`mid_cue_sgm`), made once
-    /// from the coarse cue's half-grid planes ([`ImagePyramid::mid_aggregate_or`]).
-    mid_aggregate: OnceLock<AggregatedCue>,
 }
 
 impl ImagePyramid {
@@ -76,7 +70,6 @@ impl ImagePyramid {
         Ok(Self {
             levels: [images, half, quarter],
             sizes: [[rows, cols], [hr, hc], [hr / 2, hc / 2]],
-            mid_aggregate: OnceLock::new(),
         })
     }
 
@@ -119,16 +112,6 @@ impl ImagePyramid {
     /// `[rows, cols]` of `level`.
     pub fn size(&self, level: usize) -> [usize; 2] {
         self.sizes[level]
-    }
-
-    /// The frame's half-resolution aggregated cue when it has been made.
-    pub fn mid_aggregate(&self) -> Option<&AggregatedCue> {
-        self.mid_aggregate.get()
-    }
-
-    /// The frame's half-resolution aggregated cue: the one made before, or `made` kept.
-    pub fn mid_aggregate_or(&self, made: AggregatedCue) -> &AggregatedCue {
-        self.mid_aggregate.get_or_init(|| made)
     }
 
     /// The cue at the samples of `grids` (one per camera, `K` planes of `rows x cols`
@@ -208,16 +191,6 @@ pub const COARSE_SGM_P1: f32 = 0.05;
 /// Penalty of the coarse cue's aggregation for larger changes (see [`COARSE_SGM_P1`]).
 pub const COARSE_SGM_P2: f32 = 1.0;
 
-/// Penalty of the half-resolution stage's aggregated cue (`mid_cue_sgm`) for a change of one
-/// depth between neighbours (ZNCC+SGM's own default), in cost units; with
-/// [`MID_SGM_P2`] the better of the two settings tried on the half grid
-/// (`research/cascade.md`).
-pub const MID_SGM_P1: f32 = 0.1;
-
-/// Penalty of the half-resolution stage's aggregated cue for larger changes (see
-/// [`MID_SGM_P1`]).
-pub const MID_SGM_P2: f32 = 2.0;
-
 /// A photometric cue aggregated by semi-global matching ([`AggregatedCue::new`]): for every
 /// pixel of an `h x w` grid and every plane in the order of its inverse depth, `1 - 2 min(e,
 /// 1)` with `e` the plane's mean path cost above the pixel's best (1 at the best plane).
@@ -283,27 +256,6 @@ impl AggregatedCue {
             order,
             values,
         })
-    }
-
-    /// The value at `pixel` for inverse depth `index` (index units), linear between the two
-    /// planes around it (the first or last plane beyond them).
-    pub fn at(&self, pixel: usize, index: f64) -> f32 {
-        let planes = self.depths.len();
-        let row = &self.values[pixel * planes..(pixel + 1) * planes];
-        let above = self.depths.partition_point(|&d| d < index);
-        if above == 0 {
-            return row[0];
-        }
-        if above == planes {
-            return row[planes - 1];
-        }
-        let (d0, d1) = (self.depths[above - 1], self.depths[above]);
-        let t = if d1 > d0 {
-            (index - d0) / (d1 - d0)
-        } else {
-            0.0
-        };
-        row[above - 1] + (t as f32) * (row[above] - row[above - 1])
     }
 }
 
@@ -438,6 +390,36 @@ fn window_count(y: usize, h: usize, r: usize) -> f32 {
     (rows * (2 * r + 1)) as f32
 }
 
+/// Semi-global aggregation along 8 paths (columns wrapping: longitude is a ring) of a cost
+/// volume of `planes` costs per pixel in the 16-bit units of `omnimvs_stereo`
+/// ([`cost_units`], pixel-major, `h x w` pixels), penalties `[p1, p2]` in the same units: the
+/// sums over the paths, pixel-major. What the aggregated photometric cues
+/// ([`AggregatedCue`]) are made by.
+///
+/// # Errors
+/// [`NetError::Stereo`] when the aggregation refuses the penalties or the volume (fewer than 2
+/// planes).
+pub(crate) fn aggregate_eight(
+    data: Vec<u16>,
+    planes: usize,
+    [h, w]: [usize; 2],
+    [p1, p2]: [f32; 2],
+) -> Result<Vec<u16>, NetError> {
+    let volume = CostVolume {
+        height: h,
+        width: w,
+        ndepth: planes,
+        data,
+    };
+    let params = SgmParams {
+        p1,
+        p2,
+        directions: Directions::Eight,
+        ..SgmParams::default()
+    };
+    Ok(aggregate(&volume, &params)?.0.data)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -503,9 +485,9 @@ mod tests {
     }
 
     #[test]
-    fn the_aggregated_cue_is_read_linearly_between_its_planes() {
+    fn the_aggregated_cue_orders_its_planes_by_depth() {
         // Two pixels, three planes at depths 2, 0, 4 (stored in that order): at each pixel the
-        // planes in depth order, ascending, and between them a linear reading.
+        // planes in depth order, ascending.
         let (h, w) = (1, 2);
         let depths = [2.0, 0.0, 4.0];
         // Pixel 0 best at depth 2, pixel 1 best at depth 4, clearly.
@@ -515,18 +497,10 @@ mod tests {
         assert_eq!(aggregated.order, vec![1, 0, 2]);
         // No penalties: each pixel its own cost; the best plane reads 1, the others 1 - 2e with
         // e = 0.7 (the cost difference), so -0.4.
-        let expect = |p: usize, d: f64| -> f32 {
-            let row = &aggregated.values[p * 3..p * 3 + 3];
-            assert_eq!(row.iter().copied().fold(f32::MIN, f32::max), 1.0);
-            aggregated.at(p, d)
-        };
-        assert!((expect(0, 2.0) - 1.0).abs() < 1e-3);
-        assert!((expect(0, 0.0) + 0.4).abs() < 1e-2);
-        assert!((expect(0, 1.0) - 0.3).abs() < 1e-2, "{}", expect(0, 1.0));
-        assert!((expect(1, 3.0) - 0.3).abs() < 1e-2);
-        // Beyond the planes: the first or the last.
-        assert_eq!(expect(1, -5.0), expect(1, 0.0));
-        assert_eq!(expect(1, 9.0), expect(1, 4.0));
+        let near = |a: f32, b: f32| (a - b).abs() < 1e-2;
+        let row = |p: usize| &aggregated.values[p * 3..p * 3 + 3];
+        assert!(near(row(0)[1], 1.0) && near(row(0)[0], -0.4) && near(row(0)[2], -0.4));
+        assert!(near(row(1)[2], 1.0) && near(row(1)[0], -0.4) && near(row(1)[1], -0.4));
         assert!(AggregatedCue::new(&cue[1..], &depths, [h, w], [0.0, 0.0]).is_err());
     }
 

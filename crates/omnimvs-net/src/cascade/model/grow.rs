@@ -9,8 +9,7 @@ use burn::nn::conv::Conv2d;
 use burn::tensor::{Tensor, TensorData};
 
 use super::CascadeNet;
-use super::regularize::squeeze_conv;
-use super::upsample::{CandidateSelector, UPSAMPLE_TAPS};
+use super::upsample::UPSAMPLE_TAPS;
 use crate::config::CascadeParams;
 use crate::error::NetError;
 use crate::tensor::read_values;
@@ -128,28 +127,18 @@ pub const GROWABLE: &[Growable] = growable! {
     // The full grid's selector may be left out of the file's network or new.
     convex_upsampling_full: any, Built;
     // New input channels with zero weights (`CascadeNet::with_zncc_cue`,
-    // `with_coarse_cue_sgm`, `with_mid_cue_sgm`, `with_coarse_stride4`).
+    // `with_coarse_cue_sgm`).
     zncc_cue: switch_on, Grown;
     coarse_cue_sgm: switch_on, Grown;
-    mid_cue_sgm: switch_on, Grown;
-    coarse_stride4: switch_on, Grown;
-    // No weight depends on these: the aggregation of the coarse distribution, the
-    // refinement's hypothesis spacing, the grid and depths of the coarse cue.
-    coarse_score_sgm: any, Built;
+    // No weight depends on these: the refinement's hypothesis spacing, the grid and depths of
+    // the coarse cue.
     stage_intervals: any, Built;
     coarse_cue_oversample: any, Built;
     coarse_cue_depths: any, Built;
     // The stride-8 features may widen (`CascadeFeatures::widen8`).
     feature_channels[2]: grow, Grown;
-    // The coarse stage may move to a finer grid over other spheres
-    // (`CascadeNet::with_coarse_grid`) and centre its half stage on a learnt choice
-    // (`CascadeNet::with_same_grid_selector`).
-    coarse_scale: shrink, Grown;
+    // The coarse stage may be resampled to other spheres (`CascadeNet::with_coarse_spheres`).
     coarse_spheres: any, Grown;
-    same_grid_selector: switch_on, Grown;
-    // Its evidence may be squeezed, once (`CascadeNet::with_coarse_squeeze`).
-    coarse_squeeze: check(|saved, asked| saved.coarse_squeeze == 0
-        || saved.coarse_squeeze == asked.coarse_squeeze), Grown;
 };
 
 impl CascadeNet {
@@ -168,9 +157,7 @@ impl CascadeNet {
             p.stage_hypotheses[0],
             p.stage_hypotheses[1],
         ];
-        // The coarse stage's cue goes before its stride-4 correlation (`coarse_stride4`).
-        let tail = self.coarse_stride4_inputs();
-        insert_zero_inputs(self.coarse.input_conv(), tail, ks[0]);
+        append_zero_inputs(self.coarse.input_conv(), ks[0]);
         let mut firsts = vec![
             (&mut self.mid.convs[0], ks[1]),
             (&mut self.fine.convs[0], ks[2]),
@@ -192,57 +179,14 @@ impl CascadeNet {
     ///
     /// # Errors
     /// [`NetError::InvalidConfig`] when the network has no `zncc_cue`.
-    pub fn with_coarse_cue_sgm(self) -> Result<Self, NetError> {
-        let tail = self.coarse_stride4_inputs();
-        self.with_cue_channel(
-            |p| &mut p.coarse_cue_sgm,
-            |net| net.coarse.input_conv(),
-            |p| p.coarse_spheres,
-            tail,
-        )
-    }
-
-    /// The input channels of the coarse stage's first convolution that read the stride-4
-    /// correlation (`coarse_stride4`; the last ones): `groups[1]` per sphere, or 0.
-    fn coarse_stride4_inputs(&self) -> usize {
-        let p = &self.config.cascade;
-        p.coarse_stride4_groups() * p.coarse_spheres
-    }
-
-    /// The network with the half-resolution stage's aggregated cue switched on
-    /// (`mid_cue_sgm`; the network must have `zncc_cue` with `coarse_cue_oversample: 2`): the
-    /// stage's first convolution gets one input channel per hypothesis, after the existing
-    /// ones, with zero weights, so that it answers exactly as before until training moves
-    /// them. A network that has it is returned as it is.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] when the network cannot have it.
-    pub fn with_mid_cue_sgm(self) -> Result<Self, NetError> {
-        self.with_cue_channel(
-            |p| &mut p.mid_cue_sgm,
-            |net| &mut net.mid.convs[0].conv,
-            |p| p.stage_hypotheses[0],
-            0,
-        )
-    }
-
-    /// The network with the cue channel that `flag` switches on: unless it is on already, the
-    /// configuration with it must validate, and the convolution `first` reads `k` more input
-    /// channels (one per hypothesis of its stage) with zero weights, before its last `tail`.
-    fn with_cue_channel(
-        mut self,
-        flag: fn(&mut CascadeParams) -> &mut bool,
-        first: fn(&mut Self) -> &mut Conv2d,
-        k: fn(&CascadeParams) -> usize,
-        tail: usize,
-    ) -> Result<Self, NetError> {
+    pub fn with_coarse_cue_sgm(mut self) -> Result<Self, NetError> {
         let mut config = self.config.clone();
-        if *flag(&mut config.cascade) {
+        if config.cascade.coarse_cue_sgm {
             return Ok(self);
         }
-        *flag(&mut config.cascade) = true;
+        config.cascade.coarse_cue_sgm = true;
         config.validate()?;
-        insert_zero_inputs(first(&mut self), tail, k(&config.cascade));
+        append_zero_inputs(self.coarse.input_conv(), config.cascade.coarse_spheres);
         self.config = config;
         Ok(self)
     }
@@ -266,43 +210,19 @@ impl CascadeNet {
         Ok(self)
     }
 
-    /// The network with the coarse stage also correlating the stride-4 features
-    /// (`coarse_stride4`): its first convolution reads `groups[1]` more channels per sphere,
-    /// after all of the others, with zero weights, so that it answers exactly as before until
-    /// training moves them. A network that has them is returned as it is.
+    /// The network with its coarse stage over `spheres` spheres (`coarse_spheres`), from a
+    /// trained one: every weight is kept but the coarse stage's first convolution, which
+    /// reads each evidence channel per sphere, and its scoring convolution, which writes one
+    /// score per sphere. Those are resampled along the spheres ([`sphere_resampling`]): the
+    /// new first convolution gives the old one's output for evidence that varies linearly over
+    /// inverse depth, and each new score is the old scores interpolated at the new sphere's
+    /// inverse depth. A starting point for training, not an answer.
     ///
     /// # Errors
     /// [`NetError::InvalidConfig`] when the configuration with them is not valid.
-    pub fn with_coarse_stride4(mut self) -> Result<Self, NetError> {
-        if self.config.cascade.coarse_stride4 {
-            return Ok(self);
-        }
-        let mut config = self.config.clone();
-        config.cascade.coarse_stride4 = true;
-        config.validate()?;
-        self.config = config;
-        let inputs = self.coarse_stride4_inputs();
-        append_zero_inputs(self.coarse.input_conv(), inputs);
-        Ok(self)
-    }
-
-    /// The network with its coarse stage moved to the grid `scale` times coarser than the
-    /// output (`coarse_scale`) and over `spheres` spheres (`coarse_spheres`), from a trained
-    /// one: every weight is kept but the coarse stage's first convolution, which reads each
-    /// evidence channel per sphere, and its scoring convolution, which writes one score per
-    /// sphere. Those are resampled along the spheres ([`sphere_resampling`]): the new first
-    /// convolution gives the old one's output for evidence that varies linearly over inverse
-    /// depth, and each new score is the old scores interpolated at the new sphere's inverse
-    /// depth. The 2D convolutions keep their kernels, now over pixels half the size with
-    /// `scale` 2; with `scale` 2 the half grid's selector (`up_mid`) goes: the half stage
-    /// centres on the coarse answer itself. A starting point for training, not an answer.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] when the configuration with them is not valid.
-    pub fn with_coarse_grid(mut self, scale: usize, spheres: usize) -> Result<Self, NetError> {
+    pub fn with_coarse_spheres(mut self, spheres: usize) -> Result<Self, NetError> {
         let mut config = self.config.clone();
         let old = config.cascade.coarse_spheres;
-        config.cascade.coarse_scale = scale;
         config.cascade.coarse_spheres = spheres;
         config.validate()?;
         if spheres != old {
@@ -323,116 +243,6 @@ impl CascadeNet {
                 out.bias = Some(Param::from_tensor(bias.reshape([spheres])));
             }
         }
-        if !config.cascade.half_grid_selector() || scale != self.config.cascade.coarse_scale {
-            // A selector that upsampled 40 x 160 does not choose on the half grid.
-            self.up_mid = None;
-        }
-        self.config = config;
-        Ok(self)
-    }
-
-    /// The network with its half stage centred on a learnt choice among the 3 x 3 coarse
-    /// answers around each pixel (`same_grid_selector`; the coarse stage on the half grid):
-    /// a new selector whose last convolution has zero weights, so that it starts at each
-    /// pixel's own answer (the 8 neighbours keeping about 5 % of the weight,
-    /// [`super::same_grid_prior`]). A network that has it is returned as it is.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] unless the network has `coarse_scale` 2 and
-    /// `convex_upsampling`.
-    pub fn with_same_grid_selector(mut self) -> Result<Self, NetError> {
-        if self.config.cascade.same_grid_selector && self.up_mid.is_some() {
-            return Ok(self);
-        }
-        let mut config = self.config.clone();
-        config.cascade.same_grid_selector = true;
-        config.validate()?;
-        let device = self.coarse.out.conv.weight.val().device();
-        self.up_mid = Some(CandidateSelector::for_stage(&config.cascade, 0, &device));
-        self.config = config;
-        Ok(self)
-    }
-
-    /// The network with its coarse evidence squeezed through `channels` channels
-    /// (`coarse_squeeze`) before the first 3x3 convolution, from a trained one. That
-    /// convolution's weights `W[o, i, y, x]`, as a matrix with a row per `(o, y, x)` and a
-    /// column per input `i`, are replaced by their best approximation of rank `channels` (a
-    /// truncated SVD `U S V^T`, the largest singular values kept): the squeeze, a 1x1
-    /// convolution without bias, takes `V^T`, and the 3x3 convolution reads its `channels`
-    /// outputs through `U S`, keeping its bias and batch norm. With `channels` at least the
-    /// matrix's rank the network answers as before up to rounding; below it, as nearly as
-    /// a layer of that rank can. A network with that squeeze, or with none when `channels` is
-    /// 0, is returned as it is.
-    ///
-    /// # Errors
-    /// [`NetError::InvalidConfig`] when `channels` is more than the evidence channels, or the
-    /// network has a squeeze of another width (a squeeze is not undone); [`NetError::Shape`]
-    /// when the weights cannot be read.
-    pub fn with_coarse_squeeze(mut self, channels: usize) -> Result<Self, NetError> {
-        let have = self.config.cascade.coarse_squeeze;
-        if have == channels {
-            return Ok(self);
-        }
-        if have != 0 {
-            return Err(NetError::InvalidConfig {
-                field: "cascade.coarse_squeeze",
-                message: format!(
-                    "cannot squeeze to {channels} channels a network whose squeeze has {have}: \
-                     factorise a network without one"
-                ),
-            });
-        }
-        let mut config = self.config.clone();
-        config.cascade.coarse_squeeze = channels;
-        config.validate()?;
-        let first = &mut self.coarse.c0[0].conv;
-        let weight = first.weight.val();
-        let device = weight.device();
-        let [outputs, inputs, kh, kw] = weight.dims();
-        let values = read_values(weight, "coarse stage weights")?;
-        let taps = kh * kw;
-        let rows = outputs * taps;
-        // M[(o, y, x), i] = W[o, i, y, x].
-        let mut m = nalgebra::DMatrix::<f64>::zeros(rows, inputs);
-        for o in 0..outputs {
-            for i in 0..inputs {
-                for t in 0..taps {
-                    m[(o * taps + t, i)] = f64::from(values[(o * inputs + i) * taps + t]);
-                }
-            }
-        }
-        let svd = m.svd(true, true);
-        let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-            return Err(NetError::Shape {
-                what: "SVD of the coarse stage's first convolution".into(),
-                expected: vec![rows, inputs],
-                actual: vec![],
-            });
-        };
-        // `svd` sorts the singular values in descending order: the first `channels` are the
-        // largest. Ranks beyond the matrix's own get zero weights on both sides.
-        let mut three = vec![0f32; outputs * channels * taps]; // [o, k, y, x] = U S
-        let mut squeeze = vec![0f32; channels * inputs]; // [k, i] = V^T
-        for (k, &sigma) in svd.singular_values.iter().take(channels).enumerate() {
-            for o in 0..outputs {
-                for t in 0..taps {
-                    three[(o * channels + k) * taps + t] = (u[(o * taps + t, k)] * sigma) as f32;
-                }
-            }
-            for i in 0..inputs {
-                squeeze[k * inputs + i] = v_t[(k, i)] as f32;
-            }
-        }
-        first.weight = Param::from_tensor(Tensor::from_data(
-            TensorData::new(three, [outputs, channels, kh, kw]),
-            &device,
-        ));
-        let mut conv = squeeze_conv(inputs, channels, &device);
-        conv.weight = Param::from_tensor(Tensor::from_data(
-            TensorData::new(squeeze, [channels, inputs, 1, 1]),
-            &device,
-        ));
-        self.coarse.squeeze = Some(conv);
         self.config = config;
         Ok(self)
     }
@@ -522,20 +332,9 @@ fn resample_axis(
 /// `first` reading `k` more input channels, after its own, with zero weights: the network
 /// answers as before until training moves them.
 fn append_zero_inputs(first: &mut Conv2d, k: usize) {
-    insert_zero_inputs(first, 0, k);
-}
-
-/// `first` reading `k` more input channels with zero weights, placed before its last `tail`
-/// input channels (after all of them with `tail` 0).
-fn insert_zero_inputs(first: &mut Conv2d, tail: usize, k: usize) {
     let weight = first.weight.val(); // [C_out, C_in, 3, 3]
-    let [c_out, c_in, kh, kw] = weight.dims();
+    let [c_out, _, kh, kw] = weight.dims();
     let zeros = Tensor::zeros([c_out, k, kh, kw], &weight.device());
-    let head = c_in - tail.min(c_in);
-    let mut parts = vec![weight.clone().narrow(1, 0, head), zeros];
-    if head < c_in {
-        parts.push(weight.narrow(1, head, c_in - head));
-    }
-    let widened = Tensor::cat(parts, 1).detach(); // a leaf again
+    let widened = Tensor::cat(vec![weight, zeros], 1).detach(); // a leaf again
     first.weight = Param::from_tensor(widened);
 }

@@ -1,6 +1,5 @@
 //! The coarse-to-fine network: features at three strides, a group-wise correlation cost
-//! volume over a few spheres at a quarter (or, with `coarse_scale` 2, half) of the output
-//! resolution regularised by a small 2D encoder-decoder (hypotheses as channels), then two
+//! volume over a few spheres at a quarter of the output resolution regularised by a small 2D encoder-decoder (hypotheses as channels), then two
 //! stages of per-pixel hypotheses around the previous estimate.
 //!
 //! This file holds the network ([`CascadeNet`]: building, batch-norm folding, host
@@ -22,8 +21,7 @@ pub use features::CascadeFeatures;
 pub use grow::{GROWABLE, GrowRule, GrowWeights, Growable, sphere_resampling};
 pub use regularize::{CoarseRegularizer, StageRegularizer, Up2d};
 pub use upsample::{
-    CandidateSelector, UPSAMPLE_TAPS, bilinear_prior, convex_combination, neighbourhood_candidates,
-    same_grid_prior, upsampling_candidates,
+    CandidateSelector, UPSAMPLE_TAPS, bilinear_prior, convex_combination, upsampling_candidates,
 };
 
 use burn::module::Module;
@@ -93,7 +91,6 @@ impl CascadeNet {
             features: CascadeFeatures::new(p.feature_channels, p.context_pairs, device),
             coarse: CoarseRegularizer::new(
                 p.coarse_evidence_channels() * p.coarse_spheres,
-                p.coarse_squeeze,
                 p.coarse_spheres,
                 p.coarse_channels,
                 device,
@@ -113,7 +110,7 @@ impl CascadeNet {
                 device,
             ),
             up_mid: p
-                .half_grid_selector()
+                .convex_upsampling
                 .then(|| CandidateSelector::for_stage(p, 0, device)),
             up_fine: (p.convex_upsampling && p.convex_upsampling_full)
                 .then(|| CandidateSelector::for_stage(p, 1, device)),

@@ -3,8 +3,8 @@
 //! convolutions that wrap in longitude ([`ConvBn2d::pano`]).
 
 use burn::module::Module;
-use burn::nn::conv::{Conv2d, Conv2dConfig, ConvTranspose2d, ConvTranspose2dConfig};
-use burn::nn::{BatchNorm, BatchNormConfig, PaddingConfig2d};
+use burn::nn::conv::{Conv2d, ConvTranspose2d, ConvTranspose2dConfig};
+use burn::nn::{BatchNorm, BatchNormConfig};
 use burn::tensor::activation::{relu, sigmoid};
 use burn::tensor::{Device, Tensor};
 
@@ -43,9 +43,6 @@ impl Up2d {
 /// two stride-2 levels, skip additions, one score per sphere.
 #[derive(Module, Debug)]
 pub struct CoarseRegularizer {
-    /// The 1x1 convolution (no bias) the evidence passes through first (`coarse_squeeze`),
-    /// when the network has one.
-    pub squeeze: Option<Conv2d>,
     /// Full-resolution convolutions.
     pub c0: Vec<ConvBn2d>,
     /// Half resolution.
@@ -73,19 +70,10 @@ fn run(blocks: &[ConvBn2d], x: Tensor<4>) -> Tensor<4> {
 }
 
 impl CoarseRegularizer {
-    /// `squeeze` 0: none ([`CoarseRegularizer::squeeze`]).
-    pub(super) fn new(
-        cin: usize,
-        squeeze: usize,
-        spheres: usize,
-        [a, b, c]: [usize; 3],
-        device: &Device,
-    ) -> Self {
+    pub(super) fn new(cin: usize, spheres: usize, [a, b, c]: [usize; 3], device: &Device) -> Self {
         let conv = |i, o, s| ConvBn2d::pano([i, o], s, true, device);
-        let first = if squeeze > 0 { squeeze } else { cin };
         Self {
-            squeeze: (squeeze > 0).then(|| squeeze_conv(cin, squeeze, device)),
-            c0: vec![conv(first, a, 1), conv(a, a, 1)],
+            c0: vec![conv(cin, a, 1), conv(a, a, 1)],
             c1: vec![conv(a, b, 2), conv(b, b, 1)],
             c2: vec![conv(b, c, 2), conv(c, c, 1)],
             up1: Up2d::new([c, b], device),
@@ -99,7 +87,6 @@ impl CoarseRegularizer {
     #[must_use]
     pub fn fold_batch_norm(self) -> Self {
         Self {
-            squeeze: self.squeeze,
             c0: fold_pano(self.c0),
             c1: fold_pano(self.c1),
             c2: fold_pano(self.c2),
@@ -123,10 +110,6 @@ impl CoarseRegularizer {
 
     /// `[B, C, H, W]` -> scores `[B, D, H, W]`.
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
-        let x = match &self.squeeze {
-            Some(squeeze) => squeeze.forward(x), // [B, squeeze, H, W]
-            None => x,
-        };
         let x0 = run(&self.c0, x); // [B, a, H, W]
         let x1 = run(&self.c1, x0.clone()); // [B, b, H/2, W/2]
         let x2 = run(&self.c2, x1.clone()); // [B, c, H/4, W/4]
@@ -135,22 +118,11 @@ impl CoarseRegularizer {
         self.out.forward(y0, None) // [B, D, H, W]
     }
 
-    /// The convolution that reads the evidence channels: the squeeze when there is one, else
-    /// the first 3x3 convolution. Growing or resampling the evidence changes its inputs.
+    /// The convolution that reads the evidence channels, the first 3x3 convolution. Growing
+    /// or resampling the evidence changes its inputs.
     pub(super) fn input_conv(&mut self) -> &mut Conv2d {
-        match &mut self.squeeze {
-            Some(squeeze) => squeeze,
-            None => &mut self.c0[0].conv,
-        }
+        &mut self.c0[0].conv
     }
-}
-
-/// A 1x1 convolution from `cin` to `cout` channels without bias ([`CoarseRegularizer::squeeze`]).
-pub(super) fn squeeze_conv(cin: usize, cout: usize, device: &Device) -> Conv2d {
-    Conv2dConfig::new([cin, cout], [1, 1])
-        .with_padding(PaddingConfig2d::Valid)
-        .with_bias(false)
-        .init(device)
 }
 
 /// A refinement stage's 2D convolutions over its per-pixel hypotheses.

@@ -135,39 +135,20 @@ impl CascadeNet {
     }
 
     /// Coarse stage from the stride-8 features of every camera and, with `zncc_cue`, the
-    /// photometric cue at its samples; with `coarse_stride4`, `stride4` gives the stride-4
-    /// features and their taps at the same samples, whose group-wise correlation (without a
-    /// second visibility) follows everything else.
+    /// photometric cue at its samples.
     ///
     /// # Errors
-    /// See [`CascadeNet::correlation`]; a missing cue, or stride-4 features missing where the
-    /// network reads them (or given where it does not).
+    /// See [`CascadeNet::correlation`]; a missing cue.
     pub fn coarse_stage(
         &self,
         features: &[Tensor<4>],
         taps: &StageTaps,
         cue: Option<Tensor<5>>,
-        stride4: Option<(&[Tensor<4>], &StageTaps)>,
     ) -> Result<StageOutput, NetError> {
         let p = &self.config.cascade;
         let volume = Self::correlation(features, taps, p.groups[2])?;
         let channels = 1 + usize::from(p.coarse_cue_sgm);
-        let mut volume = self.with_cue(volume, cue, taps, channels)?;
-        match (p.coarse_stride4, stride4) {
-            (false, None) => {}
-            (true, Some((features4, taps4))) => {
-                let fine = Self::correlation(features4, taps4, p.groups[1])?;
-                let fine = fine.narrow(1, 0, p.groups[1]); // the visibility is there already
-                volume = Tensor::cat(vec![volume, fine], 1);
-            }
-            (has, given) => {
-                return Err(NetError::Shape {
-                    what: "stride-4 features of the coarse stage (`coarse_stride4`)".into(),
-                    expected: vec![usize::from(has)],
-                    actual: vec![usize::from(given.is_some())],
-                });
-            }
-        }
+        let volume = self.with_cue(volume, cue, taps, channels)?;
         let scores = self.coarse.forward(fold_volume(volume)); // [B, K, H, W]
         Ok(Self::soft_argmax(scores, taps.hypotheses.clone()))
     }
@@ -256,9 +237,7 @@ impl CascadeNet {
     ) -> Result<(Tensor<4>, Option<Tensor<3>>), NetError> {
         let groups = self.config.cascade.groups[level];
         let volume = Self::correlation(features, taps, groups)?;
-        // The half-resolution stage's cue has the aggregated channel too with `mid_cue_sgm`.
-        let channels = 1 + usize::from(level == 1 && self.config.cascade.mid_cue_sgm);
-        let volume = self.with_cue(volume, taps.cue.clone(), taps, channels)?;
+        let volume = self.with_cue(volume, taps.cue.clone(), taps, 1)?;
         let regularizer = if level == 1 { &self.mid } else { &self.fine };
         Ok(regularizer.forward(fold_volume(volume))) // [B, K, H, W]
     }

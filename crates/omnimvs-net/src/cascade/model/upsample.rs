@@ -80,20 +80,10 @@ impl CandidateSelector {
 /// columns, of which `cols`. Rows beyond the top and bottom repeat the edge; columns wrap.
 pub fn upsampling_candidates(
     coarse: &[f32],
-    coarse_dims: [usize; 2],
-    cols: &std::ops::Range<usize>,
-) -> Vec<f32> {
-    neighbourhood_candidates(coarse, coarse_dims, 2, cols)
-}
-
-/// [`upsampling_candidates`] for a grid `factor` (1 or 2) times finer than `coarse`'s: with
-/// 1 (`same_grid_selector`) each pixel is its own parent, and tap 4 is its own value.
-pub fn neighbourhood_candidates(
-    coarse: &[f32],
     [coarse_rows, coarse_cols]: [usize; 2],
-    factor: usize,
     cols: &std::ops::Range<usize>,
 ) -> Vec<f32> {
+    let factor = 2;
     let rows = factor * coarse_rows;
     let n = rows * cols.len();
     let mut out = vec![0.0f32; UPSAMPLE_TAPS * n];
@@ -127,20 +117,6 @@ pub fn bilinear_prior(rows: usize, cols: &std::ops::Range<usize>, device: &Devic
             }
         }
     }
-    Tensor::from_data(
-        TensorData::new(out, [1, UPSAMPLE_TAPS, rows, cols.len()]),
-        device,
-    )
-}
-
-/// The prior logits of a selector on the coarse grid itself (`same_grid_selector`),
-/// `[1, 9, rows, cols.len()]`: 0 for the pixel's own answer (tap 4), `UNUSED_TAP_LOGIT` (-5) for
-/// its 8 neighbours', so that a grown selector starts at the pixel's own answer (the
-/// neighbours together keep about 5 % of the weight).
-pub fn same_grid_prior(rows: usize, cols: &std::ops::Range<usize>, device: &Device) -> Tensor<4> {
-    let n = rows * cols.len();
-    let mut out = vec![UNUSED_TAP_LOGIT; UPSAMPLE_TAPS * n];
-    out[UPSAMPLE_TAPS / 2 * n..(UPSAMPLE_TAPS / 2 + 1) * n].fill(0.0);
     Tensor::from_data(
         TensorData::new(out, [1, UPSAMPLE_TAPS, rows, cols.len()]),
         device,
