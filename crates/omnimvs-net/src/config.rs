@@ -4,6 +4,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::NetError;
 
+/// Most feature channels a cascade level may have: the host correlation kernel's limit (its
+/// per-sample sums live on the stack).
+pub const MAX_CHANNELS: usize = 64;
+
 /// Number of stride-2 levels of the 3D encoder below the half-resolution cost volume.
 ///
 /// The transposed convolutions of the decoder restore the encoder's sizes only when the
@@ -538,12 +542,12 @@ impl NetConfig {
             ));
         }
         for (level, (&ch, &g)) in p.feature_channels.iter().zip(&p.groups).enumerate() {
-            if ch > crate::cascade::host::MAX_CHANNELS {
+            if ch > MAX_CHANNELS {
                 return Err(invalid(
                     "cascade.feature_channels",
                     format!(
                         "level {level}: {ch} channels, at most {} (the host correlation's limit)",
-                        crate::cascade::host::MAX_CHANNELS
+                        MAX_CHANNELS
                     ),
                 ));
             }

@@ -15,8 +15,7 @@ use super::geometry::HostTaps;
 use crate::error::NetError;
 use crate::tensor::with_values;
 
-/// Most feature channels the kernel takes (its per-sample sums live on the stack).
-pub const MAX_CHANNELS: usize = 64;
+pub use crate::config::MAX_CHANNELS;
 
 /// Group-wise correlation of one stage from every camera's features `[1, C, rows, cols]` and
 /// the stage's host taps over `dims = [K, H, W]`: `[1, groups + 1, K, H, W]`, the mean
