@@ -182,8 +182,8 @@ mod tests {
         // col = fx / denom + cx = 309.82390150407323,
         // row = -2 fy / denom + cy = 147.17204723345659.
         let px = tumvi_left().project(&Vector3::new(1.0, -2.0, 3.0)).unwrap();
-        assert!((px.col - 309.82390150407323).abs() < 1e-9, "{px:?}");
-        assert!((px.row - 147.17204723345659).abs() < 1e-9, "{px:?}");
+        assert!((px.col - 309.823_901_504_073_2).abs() < 1e-9, "{px:?}");
+        assert!((px.row - 147.172_047_233_456_6).abs() < 1e-9, "{px:?}");
     }
 
     #[test]

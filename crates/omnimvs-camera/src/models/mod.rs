@@ -90,7 +90,7 @@ pub(crate) fn check_range(
     }
 }
 
-/// Shared test helpers: grids of rays and pixels for the round-trip tests.
+/// Grids of rays and pixels shared by the models' round-trip tests.
 #[cfg(test)]
 pub(crate) mod test_support {
     use nalgebra::Vector3;

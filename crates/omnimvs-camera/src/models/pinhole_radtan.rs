@@ -162,7 +162,7 @@ mod tests {
         // row = 457.296 y'' + 248.375 = 38.395707543115719.
         let px = euroc_cam0().project(&Vector3::new(1.0, -2.0, 4.0)).unwrap();
         assert!((px.col - 472.53282549557473).abs() < 1e-9, "{px:?}");
-        assert!((px.row - 38.395707543115719).abs() < 1e-9, "{px:?}");
+        assert!((px.row - 38.395_707_543_115_72).abs() < 1e-9, "{px:?}");
     }
 
     #[test]

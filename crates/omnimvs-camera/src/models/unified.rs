@@ -242,7 +242,7 @@ mod tests {
             let half_fov = cam.max_fov_deg().to_radians() / 2.0;
             // Near the sphere limit |m| grows without bound, and with
             // distortion r^5 terms put the distorted point far beyond the
-            // iteration's reach; stop 5 % short of it there.
+            // iteration's reach; end 5 % short of it there.
             let margin = if cam.radtan() == [0.0; 4] {
                 1e-4
             } else {
