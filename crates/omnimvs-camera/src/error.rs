@@ -19,6 +19,15 @@ pub enum CameraError {
         field: String,
         message: String,
     },
+    /// A camera model parameter outside the model's valid range.
+    #[error("{model} camera model: parameter `{param}`: {message}")]
+    Param {
+        /// The model's short name, e.g. `ds`.
+        model: &'static str,
+        /// The parameter's name as the calibration tools write it, e.g. `alpha`.
+        param: &'static str,
+        message: String,
+    },
     #[error("{path}: line {line}: {message}")]
     Line {
         path: PathBuf,
@@ -52,6 +61,18 @@ impl CameraError {
         Self::Field {
             path: path.into(),
             field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn param(
+        model: &'static str,
+        param: &'static str,
+        message: impl Into<String>,
+    ) -> Self {
+        Self::Param {
+            model,
+            param,
             message: message.into(),
         }
     }

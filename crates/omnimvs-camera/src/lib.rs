@@ -6,6 +6,9 @@
 //! * Readers for the reference `config.yaml` ([`read_config_rig`]) and for the
 //!   released datasets' `ocamN.txt` + `poses.txt` ([`read_ocam_txt_rig`]).
 //! * [`ValidityMask`]: the pixels of a fisheye image that carry scene content.
+//! * [`models`]: the double sphere, extended unified, unified, Kannala-Brandt
+//!   and pinhole radial-tangential models, with exact projection and
+//!   unprojection.
 //!
 //! Frames: the camera frame has x right (image columns), y down (image rows),
 //! z forward (optical axis). Pixel positions are [`Pixel`] `(col, row)`,
@@ -16,6 +19,7 @@ mod config_yaml;
 mod error;
 mod mask;
 mod model;
+pub mod models;
 mod ocam;
 mod ocam_txt;
 mod pixel;
@@ -35,6 +39,7 @@ pub use config_yaml::{
 pub use error::CameraError;
 pub use mask::ValidityMask;
 pub use model::CameraModel;
+pub use models::{DoubleSphere, ExtendedUnified, KannalaBrandt4, PinholeRadtan, Unified};
 pub use ocam::OcamModel;
 pub use ocam_txt::{
     LengthUnit, parse_ocam_txt, read_ocam_txt_rig, read_ocam_txt_rig_in, write_ocam_txt_rig,
