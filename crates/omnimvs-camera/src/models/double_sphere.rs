@@ -1,6 +1,6 @@
 use nalgebra::Vector3;
 
-use super::{check_finite, check_focal, check_range};
+use super::{Focal, check_range};
 use crate::{CameraError, Pixel};
 
 const MODEL: &str = "ds";
@@ -23,10 +23,7 @@ const MODEL: &str = "ds";
 /// projection is one-to-one, so the two directions agree on it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DoubleSphere {
-    fx: f64,
-    fy: f64,
-    cx: f64,
-    cy: f64,
+    focal: Focal,
     xi: f64,
     alpha: f64,
 }
@@ -50,33 +47,15 @@ impl DoubleSphere {
         alpha: f64,
     ) -> Result<Self, CameraError> {
         Ok(Self {
-            fx: check_focal(MODEL, "fx", fx)?,
-            fy: check_focal(MODEL, "fy", fy)?,
-            cx: check_finite(MODEL, "cx", cx)?,
-            cy: check_finite(MODEL, "cy", cy)?,
+            focal: Focal::new(MODEL, fx, fy, cx, cy)?,
             xi: check_range(MODEL, "xi", xi, -1.0, 1.0)?,
             alpha: check_range(MODEL, "alpha", alpha, 0.0, 1.0)?,
         })
     }
 
-    /// Focal length along columns, pixels.
-    pub fn fx(&self) -> f64 {
-        self.fx
-    }
-
-    /// Focal length along rows, pixels.
-    pub fn fy(&self) -> f64 {
-        self.fy
-    }
-
-    /// Principal point column, pixels, 0-based.
-    pub fn cx(&self) -> f64 {
-        self.cx
-    }
-
-    /// Principal point row, pixels, 0-based.
-    pub fn cy(&self) -> f64 {
-        self.cy
+    /// Focal lengths and principal point, pixels.
+    pub fn focal(&self) -> Focal {
+        self.focal
     }
 
     /// Shift between the two spheres, in units of their radius.
@@ -125,10 +104,7 @@ impl DoubleSphere {
         if denom <= 0.0 {
             return None;
         }
-        Some(Pixel::new(
-            self.fx * x / denom + self.cx,
-            self.fy * y / denom + self.cy,
-        ))
+        Some(self.focal.pixel(x / denom, y / denom))
     }
 
     /// The unit ray (camera frame) of a pixel. `None` where
@@ -136,8 +112,7 @@ impl DoubleSphere {
     /// (`mx = (col - cx) / fx`, `my = (row - cy) / fy`), or where the ray
     /// falls outside the valid domain of [`Self::project`].
     pub fn unproject(&self, px: Pixel) -> Option<Vector3<f64>> {
-        let mx = (px.col - self.cx) / self.fx;
-        let my = (px.row - self.cy) / self.fy;
+        let (mx, my) = self.focal.plane(px);
         let r2 = mx * mx + my * my;
         let alpha = self.alpha;
         if alpha > 0.5 && r2 > 1.0 / (2.0 * alpha - 1.0) {
@@ -190,8 +165,12 @@ mod tests {
     fn optical_axis_is_the_principal_point() {
         let cam = tumvi_left();
         let px = cam.project(&Vector3::new(0.0, 0.0, 2.0)).unwrap();
-        assert!((px.col - cam.cx()).abs() < 1e-12 && (px.row - cam.cy()).abs() < 1e-12);
-        let ray = cam.unproject(Pixel::new(cam.cx(), cam.cy())).unwrap();
+        assert!(
+            (px.col - cam.focal().cx()).abs() < 1e-12 && (px.row - cam.focal().cy()).abs() < 1e-12
+        );
+        let ray = cam
+            .unproject(Pixel::new(cam.focal().cx(), cam.focal().cy()))
+            .unwrap();
         assert!((ray - Vector3::z()).norm() < 1e-12);
     }
 
@@ -232,7 +211,10 @@ mod tests {
         assert!(cam.project(&Vector3::zeros()).is_none());
         // alpha > 0.5: pixels beyond r^2 = 1 / (2 alpha - 1) do not unproject.
         let r_max = (1.0 / (2.0 * cam.alpha() - 1.0)).sqrt();
-        let far = Pixel::new(cam.cx() + cam.fx() * r_max * 1.01, cam.cy());
+        let far = Pixel::new(
+            cam.focal().cx() + cam.focal().fx() * r_max * 1.01,
+            cam.focal().cy(),
+        );
         assert!(cam.unproject(far).is_none());
     }
 

@@ -1,6 +1,6 @@
 use nalgebra::Vector3;
 
-use super::{check_finite, check_focal, check_range};
+use super::{Focal, check_finite, check_range};
 use crate::{CameraError, Pixel};
 
 const MODEL: &str = "eucm";
@@ -22,10 +22,7 @@ const MODEL: &str = "eucm";
 /// one-to-one only inside the cone.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ExtendedUnified {
-    fx: f64,
-    fy: f64,
-    cx: f64,
-    cy: f64,
+    focal: Focal,
     alpha: f64,
     beta: f64,
 }
@@ -49,10 +46,7 @@ impl ExtendedUnified {
         beta: f64,
     ) -> Result<Self, CameraError> {
         let model = Self {
-            fx: check_focal(MODEL, "fx", fx)?,
-            fy: check_focal(MODEL, "fy", fy)?,
-            cx: check_finite(MODEL, "cx", cx)?,
-            cy: check_finite(MODEL, "cy", cy)?,
+            focal: Focal::new(MODEL, fx, fy, cx, cy)?,
             alpha: check_range(MODEL, "alpha", alpha, 0.0, 1.0)?,
             beta: check_finite(MODEL, "beta", beta)?,
         };
@@ -66,24 +60,9 @@ impl ExtendedUnified {
         Ok(model)
     }
 
-    /// Focal length along columns, pixels.
-    pub fn fx(&self) -> f64 {
-        self.fx
-    }
-
-    /// Focal length along rows, pixels.
-    pub fn fy(&self) -> f64 {
-        self.fy
-    }
-
-    /// Principal point column, pixels, 0-based.
-    pub fn cx(&self) -> f64 {
-        self.cx
-    }
-
-    /// Principal point row, pixels, 0-based.
-    pub fn cy(&self) -> f64 {
-        self.cy
+    /// Focal lengths and principal point, pixels.
+    pub fn focal(&self) -> Focal {
+        self.focal
     }
 
     /// Weight of the ellipsoid projection against the pinhole.
@@ -134,10 +113,7 @@ impl ExtendedUnified {
         if denom <= 0.0 {
             return None;
         }
-        Some(Pixel::new(
-            self.fx * x / denom + self.cx,
-            self.fy * y / denom + self.cy,
-        ))
+        Some(self.focal.pixel(x / denom, y / denom))
     }
 
     /// The unit ray (camera frame) of a pixel. `None` where
@@ -145,8 +121,7 @@ impl ExtendedUnified {
     /// `alpha > 0.5` (`mx = (col - cx) / fx`, `my = (row - cy) / fy`), or
     /// where the ray falls outside the valid domain of [`Self::project`].
     pub fn unproject(&self, px: Pixel) -> Option<Vector3<f64>> {
-        let mx = (px.col - self.cx) / self.fx;
-        let my = (px.row - self.cy) / self.fy;
+        let (mx, my) = self.focal.plane(px);
         let r2 = mx * mx + my * my;
         let (alpha, beta) = (self.alpha, self.beta);
         if alpha > 0.5 && r2 > 1.0 / (beta * (2.0 * alpha - 1.0)) {

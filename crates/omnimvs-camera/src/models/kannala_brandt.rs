@@ -1,6 +1,6 @@
 use nalgebra::Vector3;
 
-use super::{check_finite, check_focal};
+use super::{Focal, check_finite};
 use crate::{CameraError, Pixel};
 
 const MODEL: &str = "kb4";
@@ -30,10 +30,7 @@ const SCAN_STEP_RAD: f64 = 1e-3;
 /// 250 degrees).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KannalaBrandt4 {
-    fx: f64,
-    fy: f64,
-    cx: f64,
-    cy: f64,
+    focal: Focal,
     k1: f64,
     k2: f64,
     k3: f64,
@@ -63,10 +60,7 @@ impl KannalaBrandt4 {
         k4: f64,
     ) -> Result<Self, CameraError> {
         let mut model = Self {
-            fx: check_focal(MODEL, "fx", fx)?,
-            fy: check_focal(MODEL, "fy", fy)?,
-            cx: check_finite(MODEL, "cx", cx)?,
-            cy: check_finite(MODEL, "cy", cy)?,
+            focal: Focal::new(MODEL, fx, fy, cx, cy)?,
             k1: check_finite(MODEL, "k1", k1)?,
             k2: check_finite(MODEL, "k2", k2)?,
             k3: check_finite(MODEL, "k3", k3)?,
@@ -110,24 +104,9 @@ impl KannalaBrandt4 {
         })
     }
 
-    /// Focal length along columns, pixels.
-    pub fn fx(&self) -> f64 {
-        self.fx
-    }
-
-    /// Focal length along rows, pixels.
-    pub fn fy(&self) -> f64 {
-        self.fy
-    }
-
-    /// Principal point column, pixels, 0-based.
-    pub fn cx(&self) -> f64 {
-        self.cx
-    }
-
-    /// Principal point row, pixels, 0-based.
-    pub fn cy(&self) -> f64 {
-        self.cy
+    /// Focal lengths and principal point, pixels.
+    pub fn focal(&self) -> Focal {
+        self.focal
     }
 
     /// The distortion coefficients `[k1, k2, k3, k4]`.
@@ -191,13 +170,10 @@ impl KannalaBrandt4 {
         }
         let r = p_cam.x.hypot(p_cam.y);
         if r == 0.0 {
-            return Some(Pixel::new(self.cx, self.cy));
+            return Some(self.focal.pixel(0.0, 0.0));
         }
         let scale = self.d(r.atan2(p_cam.z)) / r;
-        Some(Pixel::new(
-            self.fx * scale * p_cam.x + self.cx,
-            self.fy * scale * p_cam.y + self.cy,
-        ))
+        Some(self.focal.pixel(scale * p_cam.x, scale * p_cam.y))
     }
 
     /// The unit ray (camera frame) of a pixel: `theta` solves
@@ -206,8 +182,7 @@ impl KannalaBrandt4 {
     /// `[0, max_theta]` by bisection, to 1e-12 relative. `None` beyond the
     /// field of view or if it does not converge.
     pub fn unproject(&self, px: Pixel) -> Option<Vector3<f64>> {
-        let mx = (px.col - self.cx) / self.fx;
-        let my = (px.row - self.cy) / self.fy;
+        let (mx, my) = self.focal.plane(px);
         let r = mx.hypot(my);
         if r == 0.0 {
             return Some(Vector3::z());

@@ -35,7 +35,65 @@ pub use kannala_brandt::KannalaBrandt4;
 pub use pinhole_radtan::PinholeRadtan;
 pub use unified::Unified;
 
-use crate::CameraError;
+use crate::{CameraError, Pixel};
+
+/// The pinhole step every model ends with: focal lengths and principal point, pixels
+/// (`fx`, `cx` along columns, `fy`, `cy` along rows, 0-based).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Focal {
+    fx: f64,
+    fy: f64,
+    cx: f64,
+    cy: f64,
+}
+
+impl Focal {
+    /// Checks the four values of `model`.
+    pub(crate) fn new(
+        model: &'static str,
+        fx: f64,
+        fy: f64,
+        cx: f64,
+        cy: f64,
+    ) -> Result<Self, CameraError> {
+        Ok(Self {
+            fx: check_focal(model, "fx", fx)?,
+            fy: check_focal(model, "fy", fy)?,
+            cx: check_finite(model, "cx", cx)?,
+            cy: check_finite(model, "cy", cy)?,
+        })
+    }
+
+    /// Focal length along columns, pixels.
+    pub fn fx(&self) -> f64 {
+        self.fx
+    }
+
+    /// Focal length along rows, pixels.
+    pub fn fy(&self) -> f64 {
+        self.fy
+    }
+
+    /// Principal point column, pixels, 0-based.
+    pub fn cx(&self) -> f64 {
+        self.cx
+    }
+
+    /// Principal point row, pixels, 0-based.
+    pub fn cy(&self) -> f64 {
+        self.cy
+    }
+
+    /// The pixel of a point `(mx, my)` of the model's image plane.
+    pub(crate) fn pixel(&self, mx: f64, my: f64) -> Pixel {
+        Pixel::new(self.fx * mx + self.cx, self.fy * my + self.cy)
+    }
+
+    /// The image-plane point of a pixel, the inverse of [`Self::pixel`].
+    pub(crate) fn plane(&self, px: Pixel) -> (f64, f64) {
+        ((px.col - self.cx) / self.fx, (px.row - self.cy) / self.fy)
+    }
+}
 
 /// Checks that a focal length is finite and positive.
 pub(crate) fn check_focal(

@@ -1,7 +1,7 @@
 use nalgebra::{Vector2, Vector3};
 
 use super::radtan::RadTan;
-use super::{check_finite, check_focal};
+use super::{Focal, check_finite};
 use crate::{CameraError, Pixel};
 
 const MODEL: &str = "pinhole-radtan";
@@ -24,10 +24,7 @@ const MIN_COS_ANGLE: f64 = 1e-9;
 /// positive Jacobian determinant of the distortion.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PinholeRadtan {
-    fx: f64,
-    fy: f64,
-    cx: f64,
-    cy: f64,
+    focal: Focal,
     distortion: RadTan,
 }
 
@@ -52,10 +49,7 @@ impl PinholeRadtan {
         p2: f64,
     ) -> Result<Self, CameraError> {
         Ok(Self {
-            fx: check_focal(MODEL, "fx", fx)?,
-            fy: check_focal(MODEL, "fy", fy)?,
-            cx: check_finite(MODEL, "cx", cx)?,
-            cy: check_finite(MODEL, "cy", cy)?,
+            focal: Focal::new(MODEL, fx, fy, cx, cy)?,
             distortion: RadTan {
                 k1: check_finite(MODEL, "k1", k1)?,
                 k2: check_finite(MODEL, "k2", k2)?,
@@ -65,24 +59,9 @@ impl PinholeRadtan {
         })
     }
 
-    /// Focal length along columns, pixels.
-    pub fn fx(&self) -> f64 {
-        self.fx
-    }
-
-    /// Focal length along rows, pixels.
-    pub fn fy(&self) -> f64 {
-        self.fy
-    }
-
-    /// Principal point column, pixels, 0-based.
-    pub fn cx(&self) -> f64 {
-        self.cx
-    }
-
-    /// Principal point row, pixels, 0-based.
-    pub fn cy(&self) -> f64 {
-        self.cy
+    /// Focal lengths and principal point, pixels.
+    pub fn focal(&self) -> Focal {
+        self.focal
     }
 
     /// The distortion coefficients `[k1, k2, p1, p2]`.
@@ -118,14 +97,15 @@ impl PinholeRadtan {
     /// valid domain ([`Self::is_valid_point`]).
     pub fn project(&self, p_cam: &Vector3<f64>) -> Option<Pixel> {
         let m = self.distortion.distort(self.normalised(p_cam)?);
-        Some(Pixel::new(self.fx * m.x + self.cx, self.fy * m.y + self.cy))
+        Some(self.focal.pixel(m.x, m.y))
     }
 
     /// The unit ray (camera frame) of a pixel, inverting the distortion by
     /// Gauss-Newton iteration; `None` if it does not converge or converges
     /// outside the valid domain.
     pub fn unproject(&self, px: Pixel) -> Option<Vector3<f64>> {
-        let m_distorted = Vector2::new((px.col - self.cx) / self.fx, (px.row - self.cy) / self.fy);
+        let (mx, my) = self.focal.plane(px);
+        let m_distorted = Vector2::new(mx, my);
         let m = self.distortion.undistort(m_distorted)?;
         Vector3::new(m.x, m.y, 1.0).try_normalize(0.0)
     }

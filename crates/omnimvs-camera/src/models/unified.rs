@@ -1,7 +1,7 @@
 use nalgebra::{Vector2, Vector3};
 
 use super::radtan::RadTan;
-use super::{check_finite, check_focal};
+use super::{Focal, check_finite};
 use crate::{CameraError, Pixel};
 
 const MODEL: &str = "omni";
@@ -26,10 +26,7 @@ const MODEL: &str = "omni";
 /// `1 + 3 k1 r^2 + 5 k2 r^4` and a positive Jacobian determinant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Unified {
-    fx: f64,
-    fy: f64,
-    cx: f64,
-    cy: f64,
+    focal: Focal,
     xi: f64,
     distortion: RadTan,
 }
@@ -62,10 +59,7 @@ impl Unified {
         [k1, k2, p1, p2]: [f64; 4],
     ) -> Result<Self, CameraError> {
         let model = Self {
-            fx: check_focal(MODEL, "fx", fx)?,
-            fy: check_focal(MODEL, "fy", fy)?,
-            cx: check_finite(MODEL, "cx", cx)?,
-            cy: check_finite(MODEL, "cy", cy)?,
+            focal: Focal::new(MODEL, fx, fy, cx, cy)?,
             xi: check_finite(MODEL, "xi", xi)?,
             distortion: RadTan {
                 k1: check_finite(MODEL, "k1", k1)?,
@@ -84,24 +78,9 @@ impl Unified {
         Ok(model)
     }
 
-    /// Focal length along columns, pixels.
-    pub fn fx(&self) -> f64 {
-        self.fx
-    }
-
-    /// Focal length along rows, pixels.
-    pub fn fy(&self) -> f64 {
-        self.fy
-    }
-
-    /// Principal point column, pixels, 0-based.
-    pub fn cx(&self) -> f64 {
-        self.cx
-    }
-
-    /// Principal point row, pixels, 0-based.
-    pub fn cy(&self) -> f64 {
-        self.cy
+    /// Focal lengths and principal point, pixels.
+    pub fn focal(&self) -> Focal {
+        self.focal
     }
 
     /// Distance of the projection centre behind the unit sphere's centre.
@@ -169,7 +148,7 @@ impl Unified {
     /// valid domain ([`Self::is_valid_point`]).
     pub fn project(&self, p_cam: &Vector3<f64>) -> Option<Pixel> {
         let m = self.distortion.distort(self.normalised(p_cam)?);
-        Some(Pixel::new(self.fx * m.x + self.cx, self.fy * m.y + self.cy))
+        Some(self.focal.pixel(m.x, m.y))
     }
 
     /// The unit ray (camera frame) of a pixel: the distortion is inverted by
@@ -178,7 +157,8 @@ impl Unified {
     /// `None` if the iteration does not converge, or outside the image of the
     /// valid domain (for `xi > 1`, `r^2 >= 1 / (xi^2 - 1)`).
     pub fn unproject(&self, px: Pixel) -> Option<Vector3<f64>> {
-        let m_distorted = Vector2::new((px.col - self.cx) / self.fx, (px.row - self.cy) / self.fy);
+        let (mx, my) = self.focal.plane(px);
+        let m_distorted = Vector2::new(mx, my);
         let m = self.distortion.undistort(m_distorted)?;
         let r2 = m.norm_squared();
         let disc = 1.0 + (1.0 - self.xi * self.xi) * r2;
