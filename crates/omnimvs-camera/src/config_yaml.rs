@@ -7,7 +7,10 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_saphyr::{DoubleQuoted, FlowSeq};
 
-use crate::{Camera, CameraError, CameraModel, OcamModel, Pose, Rig};
+use crate::{
+    Camera, CameraError, CameraModel, CentralCamera, DoubleSphere, ExtendedUnified, KannalaBrandt4,
+    Lens, OcamModel, PinholeRadtan, Pose, Rig, Unified,
+};
 
 /// One entry of `cameras:` of a reference `config.yaml`, read by [`parse_config_rig`] and
 /// written by [`config_cameras_yaml`] (lists in flow style and folder names quoted, as the
@@ -18,47 +21,74 @@ pub struct ConfigCamera {
     #[serde(skip_serializing_if = "Option::is_none")]
     img_dir: Option<DoubleQuoted<String>>,
     model: Option<String>,
-    /// `[count, a0, a1, ...]`.
-    poly: FlowSeq<Vec<f64>>,
-    /// `[count, a0, a1, ...]`.
-    inv_poly: FlowSeq<Vec<f64>>,
-    /// `[row, col]`.
-    center: FlowSeq<[f64; 2]>,
-    /// `[c, d, e]`.
-    affine: FlowSeq<[f64; 3]>,
+    /// OCamCalib: `[count, a0, a1, ...]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    poly: Option<FlowSeq<Vec<f64>>>,
+    /// OCamCalib: `[count, a0, a1, ...]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    inv_poly: Option<FlowSeq<Vec<f64>>>,
+    /// OCamCalib: `[row, col]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    center: Option<FlowSeq<[f64; 2]>>,
+    /// OCamCalib: `[c, d, e]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    affine: Option<FlowSeq<[f64; 3]>>,
+    /// The closed-form models: `[fx, fy, cx, cy]` then the model's own parameters (`ds`:
+    /// `xi, alpha`; `eucm`: `alpha, beta`; `ucm`: `xi`; `kb4` and `pinhole-radtan`: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    intrinsics: Option<FlowSeq<Vec<f64>>>,
+    /// `kb4`: `[k1, k2, k3, k4]`; `ucm` (optional) and `pinhole-radtan`: `[k1, k2, p1, p2]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    distortion: Option<FlowSeq<Vec<f64>>>,
     /// `[height, width]`.
     image_size: FlowSeq<[u32; 2]>,
     #[serde(skip_serializing_if = "Option::is_none")]
     invalid_mask: Option<DoubleQuoted<String>>,
     /// `[rx, ry, rz, tx, ty, tz]`.
     pose: FlowSeq<[f64; 6]>,
-    /// Degrees.
-    max_fov: f64,
+    /// Degrees (OCamCalib: required; the closed-form models: the model's widest if absent).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max_fov: Option<f64>,
 }
 
 impl ConfigCamera {
     /// The entry of `cam`: every number at full precision, so that reading it back gives
     /// the same camera bit for bit.
     pub fn of(cam: &Camera) -> Self {
-        let CameraModel::Ocam(m) = &cam.model;
         let counted = |coeffs: &[f64]| {
             let mut v = vec![coeffs.len() as f64];
             v.extend(coeffs);
             FlowSeq(v)
         };
-        Self {
+        let mut entry = Self {
             cam_id: Some(cam.id),
             img_dir: Some(DoubleQuoted(cam.img_dir.clone())),
-            model: Some("ocam".into()),
-            poly: counted(&m.poly),
-            inv_poly: counted(&m.inv_poly),
-            center: FlowSeq([m.center_row, m.center_col]),
-            affine: FlowSeq([m.c, m.d, m.e]),
-            image_size: FlowSeq([m.height, m.width]),
+            model: Some(cam.model.name().into()),
+            poly: None,
+            inv_poly: None,
+            center: None,
+            affine: None,
+            intrinsics: None,
+            distortion: None,
+            image_size: FlowSeq([cam.model.height(), cam.model.width()]),
             invalid_mask: cam.invalid_mask.clone().map(DoubleQuoted),
             pose: FlowSeq(cam.pose.to_array()),
-            max_fov: m.max_fov_deg,
+            max_fov: Some(cam.model.max_fov_deg()),
+        };
+        match &cam.model {
+            CameraModel::Ocam(m) => {
+                entry.poly = Some(counted(&m.poly));
+                entry.inv_poly = Some(counted(&m.inv_poly));
+                entry.center = Some(FlowSeq([m.center_row, m.center_col]));
+                entry.affine = Some(FlowSeq([m.c, m.d, m.e]));
+            }
+            CameraModel::Central(c) => {
+                let (intrinsics, distortion) = lens_parameters(&c.lens);
+                entry.intrinsics = Some(FlowSeq(intrinsics));
+                entry.distortion = distortion.map(FlowSeq);
+            }
         }
+        entry
     }
 
     /// The entries of every camera of `rig`, in order.
@@ -281,31 +311,11 @@ fn camera_from_entry(
 ) -> Result<Camera, CameraError> {
     let prefix = format!("cameras[{index}].");
     let model_name = entry.model.as_deref().unwrap_or("ocam");
-    if model_name != "ocam" {
-        return Err(CameraError::field(
-            path,
-            format!("{prefix}model"),
-            format!("unknown camera model {model_name:?}, expected \"ocam\""),
-        ));
-    }
-    let poly = split_counted_poly(path, &format!("{prefix}poly"), &entry.poly.0)?;
-    let inv_poly = split_counted_poly(path, &format!("{prefix}inv_poly"), &entry.inv_poly.0)?;
-    let [center_row, center_col] = entry.center.0;
-    let [c, d, e] = entry.affine.0;
-    let [height, width] = entry.image_size.0;
-    let model = OcamModel {
-        poly,
-        inv_poly,
-        center_row,
-        center_col,
-        c,
-        d,
-        e,
-        width,
-        height,
-        max_fov_deg: entry.max_fov,
+    let model = if model_name == "ocam" {
+        CameraModel::Ocam(ocam_from_entry(path, &prefix, entry)?)
+    } else {
+        CameraModel::Central(central_from_entry(path, &prefix, model_name, entry)?)
     };
-    validate_ocam(path, &prefix, &model)?;
     if entry.pose.0.iter().any(|v| !v.is_finite()) {
         return Err(CameraError::field(
             path,
@@ -322,13 +332,168 @@ fn camera_from_entry(
     Ok(Camera::new(
         id,
         img_dir,
-        CameraModel::Ocam(model),
+        model,
         Pose {
             rvec: [rx, ry, rz],
             t_m: [tx, ty, tz],
         },
         entry.invalid_mask.as_ref().map(|mask| mask.0.clone()),
     ))
+}
+
+/// A field an entry of the model needs.
+fn required<'a, T>(
+    path: &Path,
+    prefix: &str,
+    field: &str,
+    value: &'a Option<T>,
+) -> Result<&'a T, CameraError> {
+    value.as_ref().ok_or_else(|| {
+        CameraError::field(
+            path,
+            format!("{prefix}{field}"),
+            "missing: the model needs it",
+        )
+    })
+}
+
+/// The OCamCalib model of an entry.
+fn ocam_from_entry(
+    path: &Path,
+    prefix: &str,
+    entry: &ConfigCamera,
+) -> Result<OcamModel, CameraError> {
+    let poly = required(path, prefix, "poly", &entry.poly)?;
+    let inv_poly = required(path, prefix, "inv_poly", &entry.inv_poly)?;
+    let poly = split_counted_poly(path, &format!("{prefix}poly"), &poly.0)?;
+    let inv_poly = split_counted_poly(path, &format!("{prefix}inv_poly"), &inv_poly.0)?;
+    let [center_row, center_col] = required(path, prefix, "center", &entry.center)?.0;
+    let [c, d, e] = required(path, prefix, "affine", &entry.affine)?.0;
+    let [height, width] = entry.image_size.0;
+    let model = OcamModel {
+        poly,
+        inv_poly,
+        center_row,
+        center_col,
+        c,
+        d,
+        e,
+        width,
+        height,
+        max_fov_deg: *required(path, prefix, "max_fov", &entry.max_fov)?,
+    };
+    validate_ocam(path, prefix, &model)?;
+    Ok(model)
+}
+
+/// The closed-form camera of an entry (`model: ds | eucm | ucm | kb4 | pinhole-radtan`).
+fn central_from_entry(
+    path: &Path,
+    prefix: &str,
+    model_name: &str,
+    entry: &ConfigCamera,
+) -> Result<CentralCamera, CameraError> {
+    let field =
+        |name: &str, message: String| CameraError::field(path, format!("{prefix}{name}"), message);
+    const KNOWN: [&str; 5] = ["ds", "eucm", "ucm", "kb4", "pinhole-radtan"];
+    if !KNOWN.contains(&model_name) {
+        return Err(field(
+            "model",
+            format!(
+                "unknown camera model {model_name:?}, expected \"ocam\", \"ds\", \"eucm\", \"ucm\", \"kb4\" or \"pinhole-radtan\""
+            ),
+        ));
+    }
+    let intrinsics = &required(path, prefix, "intrinsics", &entry.intrinsics)?.0;
+    let distortion = entry.distortion.as_ref().map(|d| d.0.as_slice());
+    let lens = lens_from_parameters(model_name, intrinsics, distortion).map_err(|e| match e {
+        LensError::Model => field("model", format!("unknown camera model {model_name:?}")),
+        LensError::Count { field: name, want } => field(
+            name,
+            format!("expected {want} numbers for model {model_name:?}"),
+        ),
+        LensError::Param(e) => e,
+    })?;
+    let [height, width] = entry.image_size.0;
+    CentralCamera::new(lens, width, height, entry.max_fov)
+}
+
+/// Why the parameters of a closed-form lens could not be read.
+enum LensError {
+    /// An unknown model name.
+    Model,
+    /// A list of the wrong length.
+    Count {
+        field: &'static str,
+        want: &'static str,
+    },
+    /// A parameter the model refuses.
+    Param(CameraError),
+}
+
+/// The lens of `model` from its `intrinsics` (`[fx, fy, cx, cy, ...]`) and `distortion`.
+fn lens_from_parameters(
+    model: &str,
+    intrinsics: &[f64],
+    distortion: Option<&[f64]>,
+) -> Result<Lens, LensError> {
+    let count = |field, want: &'static str| LensError::Count { field, want };
+    let four = |d: Option<&[f64]>, want| -> Result<Option<[f64; 4]>, LensError> {
+        d.map(|d| <[f64; 4]>::try_from(d).map_err(|_| count("distortion", want)))
+            .transpose()
+    };
+    let lens = match (model, intrinsics) {
+        ("ds", &[fx, fy, cx, cy, xi, alpha]) => {
+            DoubleSphere::new(fx, fy, cx, cy, xi, alpha).map(Lens::DoubleSphere)
+        }
+        ("eucm", &[fx, fy, cx, cy, alpha, beta]) => {
+            ExtendedUnified::new(fx, fy, cx, cy, alpha, beta).map(Lens::ExtendedUnified)
+        }
+        ("ucm", &[fx, fy, cx, cy, xi]) => match four(distortion, "4 (k1, k2, p1, p2)")? {
+            Some(k) => Unified::with_radtan(fx, fy, cx, cy, xi, k).map(Lens::Unified),
+            None => Unified::new(fx, fy, cx, cy, xi).map(Lens::Unified),
+        },
+        ("kb4", &[fx, fy, cx, cy]) => {
+            let k = four(distortion, "4 (k1, k2, k3, k4)")?
+                .ok_or(count("distortion", "4 (k1, k2, k3, k4)"))?;
+            let [k1, k2, k3, k4] = k;
+            KannalaBrandt4::new(fx, fy, cx, cy, k1, k2, k3, k4).map(Lens::KannalaBrandt4)
+        }
+        ("pinhole-radtan", &[fx, fy, cx, cy]) => {
+            let k = four(distortion, "4 (k1, k2, p1, p2)")?.unwrap_or([0.0; 4]);
+            let [k1, k2, p1, p2] = k;
+            PinholeRadtan::new(fx, fy, cx, cy, k1, k2, p1, p2).map(Lens::PinholeRadtan)
+        }
+        ("ds", _) => return Err(count("intrinsics", "6 (fx, fy, cx, cy, xi, alpha)")),
+        ("eucm", _) => return Err(count("intrinsics", "6 (fx, fy, cx, cy, alpha, beta)")),
+        ("ucm", _) => return Err(count("intrinsics", "5 (fx, fy, cx, cy, xi)")),
+        ("kb4" | "pinhole-radtan", _) => return Err(count("intrinsics", "4 (fx, fy, cx, cy)")),
+        _ => return Err(LensError::Model),
+    };
+    lens.map_err(LensError::Param)
+}
+
+/// A lens's `intrinsics` and `distortion` as [`lens_from_parameters`] reads them.
+fn lens_parameters(lens: &Lens) -> (Vec<f64>, Option<Vec<f64>>) {
+    let f = lens.focal();
+    let mut intrinsics = vec![f.fx(), f.fy(), f.cx(), f.cy()];
+    let distortion = match lens {
+        Lens::DoubleSphere(m) => {
+            intrinsics.extend([m.xi(), m.alpha()]);
+            None
+        }
+        Lens::ExtendedUnified(m) => {
+            intrinsics.extend([m.alpha(), m.beta()]);
+            None
+        }
+        Lens::Unified(m) => {
+            intrinsics.push(m.xi());
+            Some(m.radtan().to_vec()).filter(|k| k.iter().any(|&v| v != 0.0))
+        }
+        Lens::KannalaBrandt4(m) => Some(m.k().to_vec()),
+        Lens::PinholeRadtan(m) => Some(m.radtan().to_vec()),
+    };
+    (intrinsics, distortion)
 }
 
 /// The `cameras:` section of a reference `config.yaml` for `rig`, the inverse

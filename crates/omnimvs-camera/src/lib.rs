@@ -15,6 +15,7 @@
 //! 0-based, in pixel units; OCamCalib's `(row, col)` order is converted where
 //! files are read.
 
+mod central;
 mod config_yaml;
 mod error;
 mod mask;
@@ -32,6 +33,7 @@ mod rig;
 #[path = "../tests/support/sunny_cam1.rs"]
 mod sunny_cam1;
 
+pub use central::{CentralCamera, Lens};
 pub use config_yaml::{
     ConfigCamera, ConfigFile, DatasetSection, SweepSection, config_cameras_yaml, parse_config_rig,
     read_config_rig,

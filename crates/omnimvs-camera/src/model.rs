@@ -1,14 +1,15 @@
 use nalgebra::Vector3;
 
-use crate::{OcamModel, Pixel, RadialProjection};
+use crate::{CentralCamera, OcamModel, Pixel, RadialProjection};
 
 /// A camera's intrinsic model. An enum rather than a trait object so that a
-/// rig stays `Clone + PartialEq + Send + Sync` and can be hashed for caching;
-/// further models (double sphere, Kannala-Brandt) become further variants.
+/// rig stays `Clone + PartialEq + Send + Sync` and can be hashed for caching.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CameraModel {
     /// OCamCalib (`model: ocam` in `config.yaml`).
     Ocam(OcamModel),
+    /// A closed-form model (`model: ds | eucm | ucm | kb4 | pinhole-radtan`).
+    Central(CentralCamera),
 }
 
 impl CameraModel {
@@ -16,6 +17,7 @@ impl CameraModel {
     pub fn project(&self, p_cam: &Vector3<f64>) -> Option<Pixel> {
         match self {
             Self::Ocam(m) => m.project(p_cam),
+            Self::Central(c) => c.project(p_cam),
         }
     }
 
@@ -23,6 +25,7 @@ impl CameraModel {
     pub fn unproject(&self, px: Pixel) -> Option<Vector3<f64>> {
         match self {
             Self::Ocam(m) => m.unproject(px),
+            Self::Central(c) => c.unproject(px),
         }
     }
 
@@ -30,6 +33,7 @@ impl CameraModel {
     pub fn width(&self) -> u32 {
         match self {
             Self::Ocam(m) => m.width,
+            Self::Central(c) => c.width,
         }
     }
 
@@ -37,6 +41,7 @@ impl CameraModel {
     pub fn height(&self) -> u32 {
         match self {
             Self::Ocam(m) => m.height,
+            Self::Central(c) => c.height,
         }
     }
 
@@ -44,6 +49,7 @@ impl CameraModel {
     pub fn max_fov_deg(&self) -> f64 {
         match self {
             Self::Ocam(m) => m.max_fov_deg,
+            Self::Central(c) => c.max_fov_deg,
         }
     }
 
@@ -52,6 +58,7 @@ impl CameraModel {
     pub fn half_fov_rad(&self) -> f64 {
         match self {
             Self::Ocam(m) => m.half_fov_rad(),
+            Self::Central(c) => c.half_fov_rad(),
         }
     }
 
@@ -62,14 +69,17 @@ impl CameraModel {
         debug_assert!(height > 0 && width > 0);
         match self {
             Self::Ocam(m) => Self::Ocam(m.resized(height, width)),
+            Self::Central(c) => Self::Central(c.resized(height, width)),
         }
     }
 
     /// The projection as a radial function of the angle from the optical axis
-    /// and an affine map, for projectors that tabulate it.
-    pub fn radial_projection(&self) -> RadialProjection {
+    /// and an affine map, for projectors that tabulate it; `None` for a lens with tangential
+    /// distortion, whose projection is not radial.
+    pub fn radial_projection(&self) -> Option<RadialProjection> {
         match self {
-            Self::Ocam(m) => RadialProjection::ocam(m),
+            Self::Ocam(m) => Some(RadialProjection::ocam(m)),
+            Self::Central(c) => c.lens.is_radial().then(|| RadialProjection::central(c)),
         }
     }
 
@@ -77,6 +87,12 @@ impl CameraModel {
     pub fn contains(&self, px: Pixel) -> bool {
         match self {
             Self::Ocam(m) => m.contains(px),
+            Self::Central(c) => {
+                px.col >= 0.0
+                    && px.row >= 0.0
+                    && px.col <= f64::from(c.width) - 1.0
+                    && px.row <= f64::from(c.height) - 1.0
+            }
         }
     }
 
@@ -84,6 +100,7 @@ impl CameraModel {
     pub fn name(&self) -> &'static str {
         match self {
             Self::Ocam(_) => "ocam",
+            Self::Central(c) => c.lens.name(),
         }
     }
 }

@@ -262,9 +262,25 @@ pub fn write_ocam_txt_rig(rig: &Rig, dir: &Path) -> Result<(), CameraError> {
             .collect::<Vec<_>>()
             .join(" ")
     };
+    // Every camera is checked before any file is written.
+    if let Some((i, cam)) =
+        (rig.cameras.iter().enumerate()).find(|(_, cam)| !matches!(cam.model, CameraModel::Ocam(_)))
+    {
+        return Err(CameraError::field(
+            dir.join(format!("ocam{}.txt", i + 1)),
+            "model",
+            format!(
+                "the released layout holds OCamCalib models only; camera {} is {}",
+                i + 1,
+                cam.model.name()
+            ),
+        ));
+    }
     let mut poses = String::from("# rx ry rz tx ty tz (camera to rig; rad, cm)\n");
     for (i, cam) in rig.cameras.iter().enumerate() {
-        let CameraModel::Ocam(m) = &cam.model;
+        let CameraModel::Ocam(m) = &cam.model else {
+            continue; // refused above
+        };
         let text = format!(
             "#polynomial coefficients for the DIRECT mapping function\n\n{} {}\n\n\
              #polynomial coefficients for the inverse mapping function\n\n{} {}\n\n\

@@ -33,6 +33,8 @@ pub struct RadialProjection {
 enum Radius {
     /// OCamCalib's `world2cam` polynomial in `theta = alpha - pi/2`.
     OcamWorld2Cam(Vec<f64>),
+    /// A closed-form model's image-plane radius times `fx`.
+    Central(Box<crate::CentralCamera>),
 }
 
 impl RadialProjection {
@@ -48,6 +50,20 @@ impl RadialProjection {
         }
     }
 
+    /// The projection of a closed-form model with a radial lens: `r = fx m(alpha)`, rows
+    /// scaled by `fy / fx`, no shear.
+    pub(crate) fn central(camera: &crate::CentralCamera) -> Self {
+        let f = camera.lens.focal();
+        Self {
+            half_fov_rad: camera.half_fov_rad(),
+            c: f.fy() / f.fx(),
+            d: 0.0,
+            e: 0.0,
+            center: Pixel::new(f.cx(), f.cy()),
+            radius: Radius::Central(Box::new(camera.clone())),
+        }
+    }
+
     /// `r(alpha)`: the distance from the centre on the image plane, in pixels
     /// (before the affine map), of a point at `alpha_rad` from the optical axis.
     pub fn radius_px(&self, alpha_rad: f64) -> f64 {
@@ -55,6 +71,7 @@ impl RadialProjection {
             Radius::OcamWorld2Cam(inv_poly) => {
                 crate::ocam::polyval(inv_poly, alpha_rad - std::f64::consts::FRAC_PI_2)
             }
+            Radius::Central(camera) => camera.lens.focal().fx() * camera.plane_radius(alpha_rad),
         }
     }
 }
@@ -72,7 +89,7 @@ mod tests {
         let mut cam = sunny_cam1();
         (cam.c, cam.d, cam.e) = (1.01, 0.002, -0.003);
         let model = CameraModel::Ocam(cam);
-        let radial = model.radial_projection();
+        let radial = model.radial_projection().unwrap();
         for alpha_deg in (1..=109).step_by(6) {
             for azimuth_deg in (0..360).step_by(30) {
                 let (alpha, azimuth) = (

@@ -100,7 +100,17 @@ impl Rig {
     pub fn content_key(&self) -> String {
         let mut s = String::new();
         for cam in &self.cameras {
-            let CameraModel::Ocam(m) = &cam.model;
+            let CameraModel::Ocam(m) = &cam.model else {
+                // The closed-form models: every parameter at full precision (`{:?}`).
+                let _ = write!(
+                    s,
+                    "{:?};fov={:?};pose={:?}|",
+                    cam.model,
+                    cam.model.max_fov_deg(),
+                    cam.pose.to_array()
+                );
+                continue;
+            };
             let _ = write!(
                 s,
                 "ocam;poly={:?};inv={:?};center={:?},{:?};affine={:?},{:?},{:?};size={}x{};fov={:?};pose={:?}|",

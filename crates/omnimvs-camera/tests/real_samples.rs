@@ -92,7 +92,9 @@ fn sunny_rig_is_the_published_one() {
 #[test]
 fn itbt_counts_written_as_floats_are_accepted() {
     let r = rig("itbt_sample");
-    let CameraModel::Ocam(m) = &r.cameras[0].model;
+    let CameraModel::Ocam(m) = &r.cameras[0].model else {
+        panic!("the sample is an OCamCalib rig")
+    };
     assert_eq!(m.inv_poly.len(), 13);
     assert_eq!((m.width, m.height), (1600, 1532));
     assert!((m.d + 2.91382e-4).abs() < 1e-12);

@@ -44,13 +44,24 @@ impl SphereProjector {
     ///
     /// # Errors
     /// [`SweepError::Camera`] for a field of view of 360 degrees or more
-    /// (no half-angle table) or a degenerate affine matrix.
+    /// (no half-angle table), a degenerate affine matrix, or a lens with tangential
+    /// distortion.
     pub fn new(
         camera: &Camera,
         camera_number: usize,
         grid: &EquirectGrid,
     ) -> Result<Self, SweepError> {
-        let radial = camera.model.radial_projection();
+        let radial = camera
+            .model
+            .radial_projection()
+            .ok_or_else(|| SweepError::Camera {
+                camera: camera_number,
+                reason: format!(
+                    "model {}: tangential distortion makes the projection not radial, which the \
+                 tabulated projector needs; use the lookup-table path",
+                    camera.model.name()
+                ),
+            })?;
         let half_fov = radial.half_fov_rad;
         if !(half_fov > 0.0 && half_fov < std::f64::consts::PI) {
             return Err(SweepError::Camera {
@@ -437,7 +448,48 @@ mod tests {
     #[test]
     fn matches_the_lookup_table() {
         let preset = preset_rig();
-        let rig = resize_rig(&preset, 192, 200);
+        check_matches_the_lookup_table(&resize_rig(&preset, 192, 200));
+    }
+
+    /// The published rig's poses with closed-form lenses of about 220 degrees on 200x192
+    /// images: Kannala-Brandt, double sphere, extended unified, unified.
+    fn closed_form_rig() -> Rig {
+        use omnimvs_camera::{
+            CameraModel, CentralCamera, DoubleSphere, ExtendedUnified, KannalaBrandt4, Lens,
+            Unified,
+        };
+        let (cx, cy) = (99.5, 95.5);
+        let lenses = [
+            Lens::KannalaBrandt4(
+                KannalaBrandt4::new(50.0, 50.5, cx, cy, 0.01, -0.002, 0.0, 0.0).unwrap(),
+            ),
+            Lens::DoubleSphere(DoubleSphere::new(45.0, 45.0, cx, cy, -0.2, 0.6).unwrap()),
+            Lens::ExtendedUnified(ExtendedUnified::new(48.0, 47.0, cx, cy, 0.6, 1.1).unwrap()),
+            Lens::Unified(Unified::new(80.0, 80.0, cx, cy, 1.0).unwrap()),
+        ];
+        let preset = preset_rig();
+        let cameras = preset
+            .cameras
+            .iter()
+            .zip(lenses)
+            .map(|(c, lens)| {
+                let fov = lens.max_fov_deg().min(220.0);
+                let model =
+                    CameraModel::Central(CentralCamera::new(lens, 200, 192, Some(fov)).unwrap());
+                Camera::new(c.id, c.img_dir.clone(), model, c.pose, None)
+            })
+            .collect();
+        Rig::new(cameras)
+    }
+
+    #[test]
+    fn matches_the_lookup_table_for_closed_form_lenses() {
+        check_matches_the_lookup_table(&closed_form_rig());
+    }
+
+    /// The projector agrees with the lookup table built by the cameras' own projection.
+    fn check_matches_the_lookup_table(rig: &Rig) {
+        let rig = rig.clone();
         let grid = EquirectGrid::new(20, 80, 45.0).unwrap();
         let hyps = InvDepthHypotheses::new(16, 0.8).unwrap();
         let lut = LookupTable::build(&rig, &grid, &hyps, SphereSet::All).unwrap();

@@ -58,6 +58,13 @@ impl DoubleSphere {
         self.focal
     }
 
+    /// The same model with other focal lengths and principal point.
+    pub(crate) fn with_focal(&self, focal: Focal) -> Self {
+        let mut model = *self;
+        model.focal = focal;
+        model
+    }
+
     /// Shift between the two spheres, in units of their radius.
     pub fn xi(&self) -> f64 {
         self.xi

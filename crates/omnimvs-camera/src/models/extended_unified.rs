@@ -65,6 +65,13 @@ impl ExtendedUnified {
         self.focal
     }
 
+    /// The same model with other focal lengths and principal point.
+    pub(crate) fn with_focal(&self, focal: Focal) -> Self {
+        let mut model = *self;
+        model.focal = focal;
+        model
+    }
+
     /// Weight of the ellipsoid projection against the pinhole.
     pub fn alpha(&self) -> f64 {
         self.alpha

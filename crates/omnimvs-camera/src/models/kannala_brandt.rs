@@ -109,6 +109,13 @@ impl KannalaBrandt4 {
         self.focal
     }
 
+    /// The same model with other focal lengths and principal point.
+    pub(crate) fn with_focal(&self, focal: Focal) -> Self {
+        let mut model = *self;
+        model.focal = focal;
+        model
+    }
+
     /// The distortion coefficients `[k1, k2, k3, k4]`.
     pub fn k(&self) -> [f64; 4] {
         [self.k1, self.k2, self.k3, self.k4]

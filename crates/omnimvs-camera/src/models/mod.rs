@@ -89,6 +89,17 @@ impl Focal {
         Pixel::new(self.fx * mx + self.cx, self.fy * my + self.cy)
     }
 
+    /// The same pinhole step for images scaled by `sc` along columns and `sr` along rows
+    /// (pixel centres map as `(p + 0.5) s - 0.5`).
+    pub(crate) fn scaled(&self, sc: f64, sr: f64) -> Self {
+        Self {
+            fx: self.fx * sc,
+            fy: self.fy * sr,
+            cx: (self.cx + 0.5) * sc - 0.5,
+            cy: (self.cy + 0.5) * sr - 0.5,
+        }
+    }
+
     /// The image-plane point of a pixel, the inverse of [`Self::pixel`].
     pub(crate) fn plane(&self, px: Pixel) -> (f64, f64) {
         ((px.col - self.cx) / self.fx, (px.row - self.cy) / self.fy)

@@ -64,6 +64,13 @@ impl PinholeRadtan {
         self.focal
     }
 
+    /// The same model with other focal lengths and principal point.
+    pub(crate) fn with_focal(&self, focal: Focal) -> Self {
+        let mut model = *self;
+        model.focal = focal;
+        model
+    }
+
     /// The distortion coefficients `[k1, k2, p1, p2]`.
     pub fn radtan(&self) -> [f64; 4] {
         let d = self.distortion;

@@ -83,6 +83,13 @@ impl Unified {
         self.focal
     }
 
+    /// The same model with other focal lengths and principal point.
+    pub(crate) fn with_focal(&self, focal: Focal) -> Self {
+        let mut model = *self;
+        model.focal = focal;
+        model
+    }
+
     /// Distance of the projection centre behind the unit sphere's centre.
     pub fn xi(&self) -> f64 {
         self.xi
