@@ -395,19 +395,19 @@ fn central_from_entry(
 ) -> Result<CentralCamera, CameraError> {
     let field =
         |name: &str, message: String| CameraError::field(path, format!("{prefix}{name}"), message);
-    const KNOWN: [&str; 5] = ["ds", "eucm", "ucm", "kb4", "pinhole-radtan"];
-    if !KNOWN.contains(&model_name) {
-        return Err(field(
+    // A missing list reads as empty: the model's name is checked first, then the count.
+    let intrinsics = entry
+        .intrinsics
+        .as_ref()
+        .map_or(&[][..], |i| i.0.as_slice());
+    let distortion = entry.distortion.as_ref().map(|d| d.0.as_slice());
+    let lens = lens_from_parameters(model_name, intrinsics, distortion).map_err(|e| match e {
+        LensError::Model => field(
             "model",
             format!(
                 "unknown camera model {model_name:?}, expected \"ocam\", \"ds\", \"eucm\", \"ucm\", \"kb4\" or \"pinhole-radtan\""
             ),
-        ));
-    }
-    let intrinsics = &required(path, prefix, "intrinsics", &entry.intrinsics)?.0;
-    let distortion = entry.distortion.as_ref().map(|d| d.0.as_slice());
-    let lens = lens_from_parameters(model_name, intrinsics, distortion).map_err(|e| match e {
-        LensError::Model => field("model", format!("unknown camera model {model_name:?}")),
+        ),
         LensError::Count { field: name, want } => field(
             name,
             format!("expected {want} numbers for model {model_name:?}"),

@@ -6,11 +6,9 @@
 //!   evaluation of methods side by side.
 //! * [`ply`]: point clouds.
 //!
-//! Errors are [`EvalError`]: a file, a field or a size that is not what was expected.
+//! Errors are the dataset crate's [`omnimvs_data::DataError`]: a file, a field or a size that is
+//! not what was expected.
 
-mod error;
 pub mod metrics;
 pub mod output;
 pub mod ply;
-
-pub use error::EvalError;

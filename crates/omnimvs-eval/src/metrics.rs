@@ -17,7 +17,7 @@ use omnimvs_data::gt::{EvalTruth, GroundTruth};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, resample_map};
 use serde::{Deserialize, Serialize};
 
-use crate::EvalError;
+use omnimvs_data::DataError;
 
 /// Which ground-truth pixels a score counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
@@ -111,7 +111,7 @@ pub fn frame_metrics(
     pred_index: &[f32],
     gt: &GroundTruth,
     ndepth: usize,
-) -> Result<Metrics, EvalError> {
+) -> Result<Metrics, DataError> {
     metrics_where(pred_index, gt, ndepth, "valid ground-truth pixels", |i| {
         gt.valid[i]
     })
@@ -127,9 +127,9 @@ pub fn protocol_metrics(
     truth: &EvalTruth,
     ndepth: usize,
     protocol: Protocol,
-) -> Result<Metrics, EvalError> {
+) -> Result<Metrics, DataError> {
     if truth.sky.len() != truth.gt.valid.len() {
-        return Err(EvalError::mismatch(
+        return Err(DataError::mismatch(
             "sky mask size",
             truth.gt.valid.len(),
             truth.sky.len(),
@@ -149,7 +149,7 @@ pub fn eval_metrics(
     pred_index: &[f32],
     truth: &EvalTruth,
     ndepth: usize,
-) -> Result<ProtocolMetrics, EvalError> {
+) -> Result<ProtocolMetrics, DataError> {
     Ok(ProtocolMetrics {
         reference: protocol_metrics(pred_index, truth, ndepth, Protocol::Reference)?,
         with_sky: protocol_metrics(pred_index, truth, ndepth, Protocol::WithSky)?,
@@ -167,9 +167,9 @@ fn metrics_where(
     ndepth: usize,
     what: &str,
     scored: impl Fn(usize) -> bool,
-) -> Result<Metrics, EvalError> {
+) -> Result<Metrics, DataError> {
     if pred_index.len() != gt.index.len() {
-        return Err(EvalError::mismatch(
+        return Err(DataError::mismatch(
             "prediction size",
             format!("{} x {} = {}", gt.height, gt.width, gt.index.len()),
             pred_index.len(),
@@ -195,7 +195,7 @@ fn metrics_where(
         sum_sq += e * e;
     }
     if n == 0 {
-        return Err(EvalError::mismatch(what, "at least one", 0));
+        return Err(DataError::mismatch(what, "at least one", 0));
     }
     let pct = |k: usize| k as f64 / n as f64 * 100.0;
     Ok(Metrics {
@@ -253,16 +253,16 @@ pub fn index_on_eval_grid(
     native_hyps: &InvDepthHypotheses,
     eval: &EquirectGrid,
     eval_hyps: &InvDepthHypotheses,
-) -> Result<Vec<f32>, EvalError> {
+) -> Result<Vec<f32>, DataError> {
     if index.len() != native.len() {
-        return Err(EvalError::mismatch(
+        return Err(DataError::mismatch(
             "prediction size",
             format!("{} x {} = {}", native.height, native.width, native.len()),
             index.len(),
         ));
     }
     if (native.phi_deg - eval.phi_deg).abs() > 1e-9 {
-        return Err(EvalError::mismatch(
+        return Err(DataError::mismatch(
             format!(
                 "latitude range of a {}x{} prediction",
                 native.height, native.width
@@ -275,7 +275,7 @@ pub fn index_on_eval_grid(
         ));
     }
     if (native_hyps.min_depth_m - eval_hyps.min_depth_m).abs() > 1e-12 {
-        return Err(EvalError::mismatch(
+        return Err(DataError::mismatch(
             "minimum depth of the prediction's hypotheses",
             format!("{} m (the evaluation's)", eval_hyps.min_depth_m),
             format!("{} m", native_hyps.min_depth_m),

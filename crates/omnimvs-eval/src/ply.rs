@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use crate::EvalError;
+use omnimvs_data::DataError;
 
 /// A coloured point.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -14,8 +14,8 @@ pub struct ColoredPoint {
 /// Writes a binary little-endian PLY file atomically.
 ///
 /// # Errors
-/// [`EvalError`] naming the file.
-pub fn write_ply(path: &Path, points: &[ColoredPoint]) -> Result<(), EvalError> {
+/// [`DataError`] naming the file.
+pub fn write_ply(path: &Path, points: &[ColoredPoint]) -> Result<(), DataError> {
     omnimvs_core::fs::write_atomic_with(path, |w| {
         write!(
             w,
@@ -32,7 +32,7 @@ pub fn write_ply(path: &Path, points: &[ColoredPoint]) -> Result<(), EvalError> 
         }
         Ok(())
     })
-    .map_err(|e| EvalError::io(path, e))
+    .map_err(|e| DataError::io(path, e))
 }
 
 #[cfg(test)]

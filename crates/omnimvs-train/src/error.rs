@@ -56,9 +56,6 @@ pub enum TrainError {
     /// Reading the dataset (images, masks, ground truth) failed.
     #[error(transparent)]
     Data(#[from] omnimvs_data::DataError),
-    /// Scoring a validation frame.
-    #[error(transparent)]
-    Eval(#[from] omnimvs_eval::EvalError),
     /// Building or reading the lookup table failed.
     #[error(transparent)]
     Sweep(#[from] omnimvs_sweep::SweepError),

@@ -13,8 +13,8 @@ use omnimvs_sweep::SweepSpec;
 use serde::Serialize;
 
 use super::report::{protocol_tables, write_json, write_text};
-use crate::EvalError;
 use crate::metrics::{Metrics, Protocol, ProtocolMetrics, eval_metrics, index_on_eval_grid};
+use omnimvs_data::DataError;
 
 /// The ground truth of some frames on the evaluation sweep.
 pub struct Evaluation {
@@ -32,12 +32,12 @@ impl Evaluation {
     /// Reads the ground truth of `frames` on `spec`.
     ///
     /// # Errors
-    /// [`EvalError`] for a frame without ground truth or an unreadable one.
-    pub fn new(ds: &Dataset, frames: &[u32], spec: SweepSpec) -> Result<Self, EvalError> {
+    /// [`DataError`] for a frame without ground truth or an unreadable one.
+    pub fn new(ds: &Dataset, frames: &[u32], spec: SweepSpec) -> Result<Self, DataError> {
         let mut truths = Vec::with_capacity(frames.len());
         for &f in frames {
             truths.push(ds.eval_truth(f, &spec)?.ok_or_else(|| {
-                EvalError::format(&ds.root, format!("frame {f} has no ground truth"))
+                DataError::format(&ds.root, format!("frame {f} has no ground truth"))
             })?);
         }
         Ok(Self {
@@ -52,12 +52,12 @@ impl Evaluation {
     /// under both protocols.
     ///
     /// # Errors
-    /// [`EvalError`] for an estimate that cannot be brought to the evaluation grid.
+    /// [`DataError`] for an estimate that cannot be brought to the evaluation grid.
     pub fn score(
         &self,
         k: usize,
         est: &DepthEstimate,
-    ) -> Result<(Vec<f32>, ProtocolMetrics), EvalError> {
+    ) -> Result<(Vec<f32>, ProtocolMetrics), DataError> {
         let (from, to) = (&est.spec, &self.spec);
         let index = index_on_eval_grid(
             &est.index,
@@ -153,7 +153,7 @@ impl MethodScores {
         self,
         eval: &SweepSpec,
         seconds_per_frame: f64,
-    ) -> Result<MethodResult, EvalError> {
+    ) -> Result<MethodResult, DataError> {
         let all: Vec<ProtocolMetrics> = self
             .per_frame
             .iter()
@@ -163,7 +163,7 @@ impl MethodScores {
             })
             .collect();
         let mean = ProtocolMetrics::mean(&all)
-            .ok_or_else(|| EvalError::mismatch(format!("frames of {}", self.name), "1", "0"))?;
+            .ok_or_else(|| DataError::mismatch(format!("frames of {}", self.name), "1", "0"))?;
         Ok(MethodResult {
             method: self.name,
             native: NativeGrid::of(&self.native),
@@ -259,8 +259,8 @@ impl EvalReport {
     /// Writes `out/eval.json` and `out/eval.md`.
     ///
     /// # Errors
-    /// [`EvalError`] naming a file that cannot be written.
-    pub fn write(&self, out: &Path) -> Result<(), EvalError> {
+    /// [`DataError`] naming a file that cannot be written.
+    pub fn write(&self, out: &Path) -> Result<(), DataError> {
         write_json(&out.join("eval.json"), self, true)?;
         write_text(&out.join("eval.md"), &self.table())
     }
@@ -270,15 +270,15 @@ impl EvalReport {
 /// black where the ground truth is invalid when `mask`.
 ///
 /// # Errors
-/// [`EvalError`] naming a file that cannot be written.
+/// [`DataError`] naming a file that cannot be written.
 pub fn write_index_png(
     path: &Path,
     index: &[f32],
     gt: &GroundTruth,
     ndepth: usize,
     mask: bool,
-) -> Result<(), EvalError> {
+) -> Result<(), DataError> {
     let valid = mask.then_some(gt.valid.as_slice());
     let rgb = colorize(index, 0.0, (ndepth - 1) as f64, Colormap::Turbo, valid);
-    Ok(write_png_u8(path, gt.width, gt.height, 3, &rgb)?)
+    write_png_u8(path, gt.width, gt.height, 3, &rgb)
 }

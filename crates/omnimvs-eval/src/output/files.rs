@@ -12,8 +12,8 @@ use omnimvs_data::image_io::write_png_u8;
 use omnimvs_sweep::{InvDepthSource, Panorama, compose_panorama};
 
 use super::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
-use crate::EvalError;
 use crate::ply::write_ply;
+use omnimvs_data::DataError;
 
 /// `dir/%05d<suffix>`, the path of one of a frame's files.
 pub fn frame_path(dir: &Path, frame: u32, suffix: &str) -> PathBuf {
@@ -26,8 +26,8 @@ pub fn frame_path(dir: &Path, frame: u32, suffix: &str) -> PathBuf {
 /// when it has a spread.
 ///
 /// # Errors
-/// [`EvalError`] naming a file that cannot be written.
-pub fn write_maps(dir: &Path, frame: u32, est: &DepthEstimate) -> Result<(), EvalError> {
+/// [`DataError`] naming a file that cannot be written.
+pub fn write_maps(dir: &Path, frame: u32, est: &DepthEstimate) -> Result<(), DataError> {
     let (w, h) = (est.spec.width(), est.spec.height());
     let path = |suffix| frame_path(dir, frame, suffix);
     write_f32_tiff(&path(".tiff"), w, h, &est.inv_depth)?;
@@ -63,12 +63,12 @@ pub fn quantile(values: &[f32], q: f64) -> f32 {
 /// frame's 1st and 99th percentiles; returns those two inverse depths (1/m).
 ///
 /// # Errors
-/// [`EvalError`] naming a file that cannot be written.
+/// [`DataError`] naming a file that cannot be written.
 pub fn write_percentile_png(
     dir: &Path,
     frame: u32,
     est: &DepthEstimate,
-) -> Result<[f32; 2], EvalError> {
+) -> Result<[f32; 2], DataError> {
     let lo = quantile(&est.inv_depth, 0.01);
     let hi = quantile(&est.inv_depth, 0.99);
     let rgb = colorize(
@@ -98,8 +98,8 @@ impl FrameScene<'_> {
     /// The gray panorama seen at the estimate's inverse depth, on its grid.
     ///
     /// # Errors
-    /// [`EvalError`] for images that do not fit the rig.
-    pub fn panorama(&self, est: &DepthEstimate) -> Result<Panorama, EvalError> {
+    /// [`DataError`] for images that do not fit the rig.
+    pub fn panorama(&self, est: &DepthEstimate) -> Result<Panorama, DataError> {
         Ok(compose_panorama(
             self.rig,
             &est.spec.grid,
@@ -115,7 +115,7 @@ impl FrameScene<'_> {
 /// given) and with `ply` a point cloud `.ply` coloured by the panorama.
 ///
 /// # Errors
-/// [`EvalError`] for images that do not fit the rig or a file that cannot be written.
+/// [`DataError`] for images that do not fit the rig or a file that cannot be written.
 pub fn write_depth_pictures(
     dir: &Path,
     frame: u32,
@@ -123,7 +123,7 @@ pub fn write_depth_pictures(
     scene: FrameScene<'_>,
     truth: Option<&GroundTruth>,
     ply: bool,
-) -> Result<(), EvalError> {
+) -> Result<(), DataError> {
     let (w, h) = (est.spec.width(), est.spec.height());
     let ndepth = est.spec.ndepth();
     let max_inv = est.spec.hypotheses.max_inv_depth();

@@ -7,24 +7,24 @@ use omnimvs_core::fs::write_atomic;
 use omnimvs_data::estimate::StageTimes;
 use serde::Serialize;
 
-use crate::EvalError;
 use crate::metrics::{Metrics, Protocol, ProtocolMetrics};
+use omnimvs_data::DataError;
 
 /// Writes `text` to `path` atomically.
 ///
 /// # Errors
-/// [`EvalError`] naming the file.
-pub fn write_text(path: &Path, text: &str) -> Result<(), EvalError> {
-    write_atomic(path, text.as_bytes()).map_err(|e| EvalError::io(path, e))
+/// [`DataError`] naming the file.
+pub fn write_text(path: &Path, text: &str) -> Result<(), DataError> {
+    write_atomic(path, text.as_bytes()).map_err(|e| DataError::io(path, e))
 }
 
 /// Writes `value` as pretty JSON to `path` atomically, with a final newline when `newline`.
 ///
 /// # Errors
-/// [`EvalError`] naming the file.
-pub fn write_json(path: &Path, value: &impl Serialize, newline: bool) -> Result<(), EvalError> {
+/// [`DataError`] naming the file.
+pub fn write_json(path: &Path, value: &impl Serialize, newline: bool) -> Result<(), DataError> {
     let mut text = serde_json::to_string_pretty(value)
-        .map_err(|e| EvalError::format(path, format!("cannot serialise: {e}")))?;
+        .map_err(|e| DataError::format(path, format!("cannot serialise: {e}")))?;
     if newline {
         text.push('\n');
     }

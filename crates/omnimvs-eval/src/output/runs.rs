@@ -13,18 +13,18 @@ use super::files::{FrameScene, write_depth_pictures, write_maps, write_percentil
 use super::report::{
     ConfidenceFrame, ConfidenceSummary, frames_table, metrics_json, write_json, write_text,
 };
-use crate::EvalError;
 use crate::metrics::{Protocol, ProtocolMetrics, eval_metrics};
+use omnimvs_data::DataError;
 
-fn create_dir(dir: &Path) -> Result<(), EvalError> {
-    std::fs::create_dir_all(dir).map_err(|e| EvalError::io(dir, e))
+fn create_dir(dir: &Path) -> Result<(), DataError> {
+    std::fs::create_dir_all(dir).map_err(|e| DataError::io(dir, e))
 }
 
 /// The metrics of an estimate against `truth` (on its grid), when there is a truth.
 fn metrics_of(
     est: &DepthEstimate,
     truth: Option<&EvalTruth>,
-) -> Result<Option<ProtocolMetrics>, EvalError> {
+) -> Result<Option<ProtocolMetrics>, DataError> {
     truth
         .map(|t| eval_metrics(&est.index, t, est.spec.ndepth()))
         .transpose()
@@ -43,8 +43,8 @@ impl ConfidenceRun {
     /// A run writing into `dir` (created) on `spec`.
     ///
     /// # Errors
-    /// [`EvalError`] when the folder cannot be created.
-    pub fn new(dir: &Path, spec: SweepSpec) -> Result<Self, EvalError> {
+    /// [`DataError`] when the folder cannot be created.
+    pub fn new(dir: &Path, spec: SweepSpec) -> Result<Self, DataError> {
         create_dir(dir)?;
         Ok(Self {
             dir: dir.to_path_buf(),
@@ -56,14 +56,14 @@ impl ConfidenceRun {
     /// Writes a frame's files and scores it against `truth` (on the estimate's grid).
     ///
     /// # Errors
-    /// [`EvalError`] for a file that cannot be written or a truth of another size.
+    /// [`DataError`] for a file that cannot be written or a truth of another size.
     pub fn add(
         &mut self,
         frame: u32,
         est: &DepthEstimate,
         timings: StageTimes,
         truth: Option<&EvalTruth>,
-    ) -> Result<&ConfidenceFrame, EvalError> {
+    ) -> Result<&ConfidenceFrame, DataError> {
         write_maps(&self.dir, frame, est)?;
         let color_range = write_percentile_png(&self.dir, frame, est)?;
         let metrics = metrics_of(est, truth)?;
@@ -93,14 +93,14 @@ impl ConfidenceRun {
     /// truth, and `json_name` summarising the run of `method` with `params` on `ds`.
     ///
     /// # Errors
-    /// [`EvalError`] naming a file that cannot be written.
+    /// [`DataError`] naming a file that cannot be written.
     pub fn finish<P: Serialize>(
         self,
         ds: &Dataset,
         method: &str,
         params: P,
         json_name: &str,
-    ) -> Result<Option<String>, EvalError> {
+    ) -> Result<Option<String>, DataError> {
         let per_frame: Vec<(u32, ProtocolMetrics)> = self
             .frames
             .iter()
@@ -151,13 +151,13 @@ impl DepthRun {
     /// when `ply`.
     ///
     /// # Errors
-    /// [`EvalError`] when the folder or the settings cannot be written.
+    /// [`DataError`] when the folder or the settings cannot be written.
     pub fn new(
         dir: &Path,
         settings_name: &str,
         settings: &impl Serialize,
         ply: bool,
-    ) -> Result<Self, EvalError> {
+    ) -> Result<Self, DataError> {
         create_dir(dir)?;
         write_json(&dir.join(settings_name), settings, true)?;
         Ok(Self {
@@ -170,14 +170,14 @@ impl DepthRun {
     /// Writes a frame's files; returns its metrics against `truth` (on the estimate's grid).
     ///
     /// # Errors
-    /// [`EvalError`] for a file that cannot be written or images that do not fit the rig.
+    /// [`DataError`] for a file that cannot be written or images that do not fit the rig.
     pub fn add(
         &mut self,
         frame: u32,
         est: &DepthEstimate,
         scene: FrameScene<'_>,
         truth: Option<&EvalTruth>,
-    ) -> Result<Option<ProtocolMetrics>, EvalError> {
+    ) -> Result<Option<ProtocolMetrics>, DataError> {
         write_maps(&self.dir, frame, est)?;
         let metrics = metrics_of(est, truth)?;
         write_depth_pictures(&self.dir, frame, est, scene, truth.map(|t| &t.gt), self.ply)?;
@@ -190,8 +190,8 @@ impl DepthRun {
     /// Writes `metrics.json` when frames had ground truth; returns the mean metrics.
     ///
     /// # Errors
-    /// [`EvalError`] naming a file that cannot be written.
-    pub fn finish(self) -> Result<Option<ProtocolMetrics>, EvalError> {
+    /// [`DataError`] naming a file that cannot be written.
+    pub fn finish(self) -> Result<Option<ProtocolMetrics>, DataError> {
         if self.metrics.is_empty() {
             return Ok(None);
         }
