@@ -5,6 +5,9 @@
 //! * [`Rig`]: any number of cameras, each with its `rig_from_cam` pose.
 //! * Readers for the reference `config.yaml` ([`read_config_rig`]) and for the
 //!   released datasets' `ocamN.txt` + `poses.txt` ([`read_ocam_txt_rig`]).
+//! * Reader and writer of Basalt's `calibration.json`
+//!   ([`read_basalt_calibration`], [`basalt_calibration_json`]; poses in
+//!   Basalt's IMU frame).
 //! * [`ValidityMask`]: the pixels of a fisheye image that carry scene content.
 //! * [`models`]: the double sphere, extended unified, unified, Kannala-Brandt
 //!   and pinhole radial-tangential models, with exact projection and
@@ -15,9 +18,11 @@
 //! 0-based, in pixel units; OCamCalib's `(row, col)` order is converted where
 //! files are read.
 
+mod basalt;
 mod central;
 mod config_yaml;
 mod error;
+mod interchange;
 mod mask;
 mod model;
 pub mod models;
@@ -33,6 +38,7 @@ mod rig;
 #[path = "../tests/support/sunny_cam1.rs"]
 mod sunny_cam1;
 
+pub use basalt::{basalt_calibration_json, parse_basalt_calibration, read_basalt_calibration};
 pub use central::{CentralCamera, Lens};
 pub use config_yaml::{
     ConfigCamera, ConfigFile, DatasetSection, SweepSection, config_cameras_yaml, parse_config_rig,
