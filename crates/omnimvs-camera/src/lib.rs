@@ -5,9 +5,11 @@
 //! * [`Rig`]: any number of cameras, each with its `rig_from_cam` pose.
 //! * Readers for the reference `config.yaml` ([`read_config_rig`]) and for the
 //!   released datasets' `ocamN.txt` + `poses.txt` ([`read_ocam_txt_rig`]).
-//! * Reader and writer of Basalt's `calibration.json`
-//!   ([`read_basalt_calibration`], [`basalt_calibration_json`]; poses in
-//!   Basalt's IMU frame).
+//! * Readers and writers of other tools' calibration files: Basalt's
+//!   `calibration.json` ([`read_basalt_calibration`], [`basalt_calibration_json`];
+//!   poses in Basalt's IMU frame) and Kalibr's `camchain.yaml`
+//!   ([`read_kalibr_camchain`], [`kalibr_camchain_yaml`]; poses in the first
+//!   camera's frame).
 //! * [`ValidityMask`]: the pixels of a fisheye image that carry scene content.
 //! * [`models`]: the double sphere, extended unified, unified, Kannala-Brandt
 //!   and pinhole radial-tangential models, with exact projection and
@@ -23,6 +25,7 @@ mod central;
 mod config_yaml;
 mod error;
 mod interchange;
+mod kalibr;
 mod mask;
 mod model;
 pub mod models;
@@ -45,6 +48,7 @@ pub use config_yaml::{
     read_config_rig,
 };
 pub use error::CameraError;
+pub use kalibr::{kalibr_camchain_yaml, parse_kalibr_camchain, read_kalibr_camchain};
 pub use mask::ValidityMask;
 pub use model::CameraModel;
 pub use models::{DoubleSphere, ExtendedUnified, KannalaBrandt4, PinholeRadtan, Unified};
