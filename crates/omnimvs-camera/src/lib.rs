@@ -10,6 +10,8 @@
 //!   poses in Basalt's IMU frame) and Kalibr's `camchain.yaml`
 //!   ([`read_kalibr_camchain`], [`kalibr_camchain_yaml`]; poses in the first
 //!   camera's frame).
+//! * [`read_rig_file`] and [`write_rig_file`]: any of these formats, told apart
+//!   by the path ([`RigFormat::detect`]).
 //! * [`ValidityMask`]: the pixels of a fisheye image that carry scene content.
 //! * [`models`]: the double sphere, extended unified, unified, Kannala-Brandt
 //!   and pinhole radial-tangential models, with exact projection and
@@ -35,6 +37,7 @@ mod pixel;
 mod pose;
 mod radial;
 mod rig;
+mod rig_file;
 
 // The unit tests' camera, shared with the property tests.
 #[cfg(test)]
@@ -60,6 +63,7 @@ pub use pixel::Pixel;
 pub use pose::{Pose, isometry_from_pose};
 pub use radial::RadialProjection;
 pub use rig::{Camera, Rig};
+pub use rig_file::{RigFormat, read_rig_file, write_rig_file};
 
 /// Re-exported so that callers use the same nalgebra version.
 pub use nalgebra;
