@@ -23,6 +23,15 @@ impl Pose {
     pub fn rig_from_cam(&self) -> Isometry3<f64> {
         isometry_from_pose(self)
     }
+
+    /// The pose of an isometry `X_rig = rig_from_cam X_cam` (rotation vector of its rotation).
+    pub fn from_isometry(rig_from_cam: &Isometry3<f64>) -> Self {
+        let t = rig_from_cam.translation.vector;
+        Self {
+            rvec: rig_from_cam.rotation.scaled_axis().into(),
+            t_m: [t.x, t.y, t.z],
+        }
+    }
 }
 
 /// The isometry `X_rig = R(r) X_cam + t` of a [`Pose`].
