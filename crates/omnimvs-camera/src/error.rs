@@ -28,6 +28,9 @@ pub enum CameraError {
         param: &'static str,
         message: String,
     },
+    /// The rig frame asked for cannot be built from the rig.
+    #[error("rig frame: {0}")]
+    Frame(String),
     #[error("{path}: line {line}: {message}")]
     Line {
         path: PathBuf,

@@ -26,6 +26,7 @@ mod basalt;
 mod central;
 mod config_yaml;
 mod error;
+mod frame;
 mod interchange;
 mod kalibr;
 mod mask;
@@ -51,6 +52,7 @@ pub use config_yaml::{
     read_config_rig,
 };
 pub use error::CameraError;
+pub use frame::FrameChoice;
 pub use kalibr::{kalibr_camchain_yaml, parse_kalibr_camchain, read_kalibr_camchain};
 pub use mask::ValidityMask;
 pub use model::CameraModel;

@@ -33,41 +33,50 @@ impl ValidityMask {
         }
     }
 
-    /// The camera's mask: the field of view, combined with the `invalid_mask`
-    /// PNG (non-zero = invalid) when the configuration names one and the file
-    /// exists in `dataset_dir`. A missing file is not an error (the reference
-    /// datasets often ship without them); nothing is ever written.
+    /// The camera's mask: the field of view, combined with the `invalid_mask` image
+    /// (non-zero = invalid) when the configuration names one and the file exists in
+    /// `dataset_dir` (the reference datasets often ship without them), and with the
+    /// `valid_mask` image (non-zero = valid) when the camera has one; nothing is ever written.
     ///
     /// # Errors
-    /// The PNG cannot be decoded, or its size differs from the camera's.
+    /// A mask image that cannot be decoded, a `valid_mask` that is missing, or a mask whose
+    /// size differs from the camera's.
     pub fn for_camera(camera: &Camera, dataset_dir: &Path) -> Result<Self, CameraError> {
         let mut mask = Self::from_fov(&camera.model);
-        let Some(name) = &camera.invalid_mask else {
-            return Ok(mask);
-        };
-        let path = dataset_dir.join(name);
-        if !path.is_file() {
-            return Ok(mask);
+        if let Some(name) = &camera.invalid_mask {
+            let path = dataset_dir.join(name);
+            if path.is_file() {
+                mask.combine(&path, false)?;
+            }
         }
-        let img = image::open(&path)
+        if let Some(name) = &camera.valid_mask {
+            mask.combine(&dataset_dir.join(name), true)?;
+        }
+        Ok(mask)
+    }
+
+    /// Keeps the pixels that the image at `path` marks valid: non-zero ones when
+    /// `nonzero_valid`, zero ones otherwise.
+    fn combine(&mut self, path: &Path, nonzero_valid: bool) -> Result<(), CameraError> {
+        let img = image::open(path)
             .map_err(|source| CameraError::MaskImage {
-                path: path.clone(),
+                path: path.to_path_buf(),
                 source,
             })?
             .into_luma8();
-        if img.width() != mask.width || img.height() != mask.height {
+        if img.width() != self.width || img.height() != self.height {
             return Err(CameraError::MaskSize {
-                path,
+                path: path.to_path_buf(),
                 found_w: img.width(),
                 found_h: img.height(),
-                want_w: mask.width,
-                want_h: mask.height,
+                want_w: self.width,
+                want_h: self.height,
             });
         }
-        for (v, p) in mask.valid.iter_mut().zip(img.as_raw()) {
-            *v &= *p == 0;
+        for (v, p) in self.valid.iter_mut().zip(img.as_raw()) {
+            *v &= (*p != 0) == nonzero_valid;
         }
-        Ok(mask)
+        Ok(())
     }
 
     /// Whether the pixel at integer `(col, row)` is valid; `false` outside.

@@ -20,6 +20,9 @@ pub struct Camera {
     /// File name (relative to the dataset folder) of the PNG marking pixels to
     /// ignore (non-zero = invalid), if the configuration names one.
     pub invalid_mask: Option<String>,
+    /// File name (relative to the dataset folder) of an image marking the pixels that carry
+    /// scene content (non-zero = valid), such as `cam0/mask.png` beside the camera's images.
+    pub valid_mask: Option<String>,
 }
 
 impl Camera {
@@ -38,7 +41,14 @@ impl Camera {
             pose,
             rig_from_cam: pose.rig_from_cam(),
             invalid_mask,
+            valid_mask: None,
         }
+    }
+
+    /// The same camera with a validity mask image (non-zero = valid), relative to the dataset
+    /// folder.
+    pub fn with_valid_mask(self, valid_mask: Option<String>) -> Self {
+        Self { valid_mask, ..self }
     }
 
     /// Projects a point in the rig frame (metres) to a pixel of this camera;

@@ -2,10 +2,11 @@
 
 use std::path::PathBuf;
 
+use omnimvs_camera::FrameChoice;
 use omnimvs_net::NetConfig;
 use omnimvs_synth::SceneKind;
 use omnimvs_synth::SynthError;
-use omnimvs_synth::rig::{PRESET_NAME, RigSource, preset_rig, rig_from_config};
+use omnimvs_synth::rig::{PRESET_NAME, RigSource, load_rig_with};
 
 /// The spherical sweep of a command: output grid and hypotheses (`sgm`, `eval`, `lut`), the
 /// paper's by default: 160x640 over +-45 degrees, N = 192.
@@ -145,7 +146,8 @@ impl From<Kind> for SceneKind {
 pub enum RigArg {
     /// The published 4-camera rig (`sunny`).
     Published,
-    /// A reference `config.yaml` (its `config.omnimvs_sweep_min_depth` is the minimum depth).
+    /// A rig file: a reference `config.yaml` (its `config.omnimvs_sweep_min_depth` is the
+    /// minimum depth), a Basalt `calibration.json`, a Kalibr `camchain.yaml`.
     Config(PathBuf),
 }
 
@@ -158,14 +160,18 @@ impl RigArg {
         })
     }
 
-    /// Loads the rig and its minimum depth.
+    /// Loads the rig and its minimum depth (`min_depth_m` instead of the file's) in `frame`.
     ///
     /// # Errors
-    /// The published rig cannot fail; a file that cannot be read or lacks a field.
-    pub fn load(&self) -> Result<RigSource, SynthError> {
+    /// A file that cannot be read or lacks a field; a fitted frame the rig cannot have.
+    pub fn load(
+        &self,
+        min_depth_m: Option<f64>,
+        frame: FrameChoice,
+    ) -> Result<RigSource, SynthError> {
         match self {
-            Self::Published => preset_rig(),
-            Self::Config(path) => rig_from_config(path),
+            Self::Published => load_rig_with(PRESET_NAME, min_depth_m, frame),
+            Self::Config(path) => load_rig_with(&path.to_string_lossy(), min_depth_m, frame),
         }
     }
 }

@@ -36,9 +36,10 @@ mod weights;
 ///
 /// A DATASET is a folder with a reference-layout `config.yaml` (the rig and
 /// the image file pattern) and the camera images, e.g.
-/// `../shared/data/omnimvs-samples/itbt_sample`, or a folder in the released
-/// datasets' layout (`ocam1.txt`.. and `poses.txt`, see `--pose-unit`). Dataset folders are only
-/// read, never written. Lookup tables are cached in `$OMNIMVS_CACHE_DIR`
+/// `../shared/data/omnimvs-samples/itbt_sample`; a folder in the released
+/// datasets' layout (`ocam1.txt`.. and `poses.txt`, see `--pose-unit`); or a folder with a
+/// Basalt `calibration.json` or a Kalibr `camchain.yaml` and one image folder per camera
+/// (`cam0/`.. or `cam1/`..). Dataset folders are only read, never written. Lookup tables are cached in `$OMNIMVS_CACHE_DIR`
 /// (default `~/.cache/omnimvs`).
 #[derive(Debug, Parser)]
 #[command(name = "omnimvs", version = env!("OMNIMVS_VERSION"), propagate_version = true)]
@@ -52,6 +53,17 @@ struct Cli {
     /// always metres. Taken by info, lut, pano, parity, sgm, infer and eval.
     #[arg(long, global = true, value_enum)]
     pose_unit: Option<dataset::PoseUnit>,
+    /// The frame panoramas and point clouds are expressed in: `calibration` (the default: the
+    /// calibration file's own frame, the rig frame of config.yaml, Basalt's IMU frame,
+    /// Kalibr's cam0) or `fitted` (centred at the cameras' mean, vertical axis normal to the
+    /// plane they span: for a calibration frame that is not level with the rig). `omnimvs
+    /// info` prints the frame used; infer.json and sgm.json record it.
+    #[arg(long, global = true, value_enum)]
+    rig_frame: Option<dataset::RigFrameArg>,
+    /// The sweep's minimum depth in metres, instead of the dataset's (config.yaml's
+    /// omnimvs_sweep_min_depth; 0.55 for a released-layout or calibration-file folder).
+    #[arg(long, global = true)]
+    min_depth: Option<f64>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -62,6 +74,8 @@ enum Command {
     Info(cmd::info::Args),
     Lut(cmd::lut::Args),
     Pano(cmd::pano::Args),
+    #[command(subcommand)]
+    Rig(cmd::rig::Command),
     Parity(cmd::parity::Args),
     Sgm(cmd::sgm::Args),
     Synth(cmd::synth::Args),
@@ -70,14 +84,20 @@ enum Command {
 }
 
 /// The commands that do not open their dataset through [`dataset::DatasetOpener`], so a
-/// stated pose unit would be silently ignored there: `train` (its datasets are opened by the
-/// trainer), `demo` and `synth` (they write their own `config.yaml`), `bench`.
-fn ignores_pose_unit(command: &Command) -> Option<&'static str> {
+/// stated pose unit, rig frame or minimum depth would be silently ignored there: `train` (its
+/// datasets are opened by the trainer), `demo` (it writes its own `config.yaml`), `bench`.
+/// `synth` takes the rig frame and the minimum depth for its `--rig`, `rig` the rig frame.
+fn ignores_dataset_options(
+    command: &Command,
+    pose_unit_stated: bool,
+    min_depth_stated: bool,
+) -> Option<&'static str> {
     match command {
         Command::Train(_) => Some("train"),
         Command::Demo(_) => Some("demo"),
-        Command::Synth(_) => Some("synth"),
+        Command::Synth(_) if pose_unit_stated => Some("synth"),
         Command::Bench(_) => Some("bench"),
+        Command::Rig(_) if pose_unit_stated || min_depth_stated => Some("rig"),
         _ => None,
     }
 }
@@ -85,18 +105,23 @@ fn ignores_pose_unit(command: &Command) -> Option<&'static str> {
 fn main() -> ExitCode {
     malloc::keep_freed_memory();
     let cli = Cli::parse();
-    if let Some(unit) = cli.pose_unit
-        && let Some(name) = ignores_pose_unit(&cli.command)
+    let stated = [
+        cli.pose_unit.map(|_| "--pose-unit"),
+        cli.rig_frame.map(|_| "--rig-frame"),
+        cli.min_depth.map(|_| "--min-depth"),
+    ];
+    if let Some(name) = ignores_dataset_options(
+        &cli.command,
+        cli.pose_unit.is_some(),
+        cli.min_depth.is_some(),
+    ) && let Some(flag) = stated.into_iter().flatten().next()
     {
         eprintln!(
-            "error: --pose-unit {}: `omnimvs {name}` does not take it (info, lut, pano, parity, sgm, infer and eval do); a released-layout folder is read in centimetres there",
-            clap::ValueEnum::to_possible_value(&unit)
-                .map(|v| v.get_name().to_string())
-                .unwrap_or_default()
+            "error: {flag}: `omnimvs {name}` does not take it (info, lut, pano, parity, sgm, infer and eval do)"
         );
         return ExitCode::from(2);
     }
-    let datasets = dataset::DatasetOpener::new(cli.pose_unit);
+    let datasets = dataset::DatasetOpener::new(cli.pose_unit, cli.rig_frame, cli.min_depth);
     let result = match cli.command {
         Command::Bench(a) => cmd::bench::run(&a),
         Command::Demo(a) => cmd::demo::run(&a),
@@ -104,9 +129,10 @@ fn main() -> ExitCode {
         Command::Info(a) => cmd::info::run(&a, &datasets),
         Command::Lut(a) => cmd::lut::run(&a, &datasets),
         Command::Pano(a) => cmd::pano::run(&a, &datasets),
+        Command::Rig(a) => cmd::rig::run(&a, datasets.options().frame),
         Command::Parity(a) => cmd::parity::run(&a, &datasets),
         Command::Sgm(a) => cmd::sgm::run(&a, &datasets),
-        Command::Synth(a) => cmd::synth::run(&a),
+        Command::Synth(a) => cmd::synth::run(&a, &datasets),
         Command::Train(a) => cmd::train::run(&a),
         Command::Eval(a) => cmd::eval::run(&a, &datasets),
     };

@@ -53,8 +53,8 @@ fn info_shows_the_rig_in_metres_for_the_stated_unit() {
     // Stated: the published rig, 0.849 and 1.200 m baselines, nothing flagged.
     let mm = run_ok(&["info", path, "--pose-unit", "mm"], &cache);
     assert!(mm.contains("translations read in mm"), "{mm}");
-    assert!(mm.contains("cam1-cam2: 0.849 m"), "{mm}");
-    assert!(mm.contains("cam1-cam3: 1.200 m"), "{mm}");
+    assert!(mm.contains("camera 1-2: 0.849 m"), "{mm}");
+    assert!(mm.contains("camera 1-3: 1.200 m"), "{mm}");
     assert!(!mm.contains("note:"), "{mm}");
     // The global option may come before the command too.
     assert_eq!(run_ok(&["--pose-unit", "mm", "info", path], &cache), mm);

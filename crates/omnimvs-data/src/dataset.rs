@@ -1,22 +1,31 @@
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use omnimvs_camera::{ConfigFile, Rig, ValidityMask};
+use omnimvs_camera::{Rig, ValidityMask};
 use omnimvs_core::GrayImage;
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, SweepSpec};
 use rayon::prelude::*;
 
 use crate::gt::{EvalTruth, GroundTruth, InvDepthMap, eval_truth_on_grid, read_inv_depth};
 use crate::image_io::read_gray_sized;
+use crate::open::{Found, RigFrame};
 use crate::{DataError, DatasetConfig, format_printf};
 
-/// A dataset folder in the reference layout. Opening it reads only
-/// `config.yaml`; nothing is ever written into the folder.
+/// A dataset folder: its rig, the sweep's minimum depth, where its images and ground truth
+/// are. Opening it ([`crate::OpenOptions`]) reads the rig file and lists the first camera's
+/// folder; nothing is ever written into the folder.
 #[derive(Debug, Clone)]
 pub struct Dataset {
     pub root: PathBuf,
     pub config_path: PathBuf,
     pub config: DatasetConfig,
     pub rig: Rig,
+    /// The number in the first camera's folder name and in `img_fmt` (1 in `config.yaml`
+    /// and the released layout, 0 or 1 in a calibration-file folder).
+    pub first_camera_number: u32,
+    /// The frame the rig, and so every panorama and point cloud, is expressed in.
+    pub frame: RigFrame,
+    /// How the rig, the images and the masks were found.
+    pub found: Found,
 }
 
 /// Folders and extensions searched for ground truth when `dataset.gt_fmt`
@@ -24,148 +33,7 @@ pub struct Dataset {
 const GT_DIRS: [&str; 2] = ["omnidepth_gt_640", "depth_train_640"];
 const GT_EXTS: [&str; 5] = ["tiff", "tif", "png", "bin", "raw"];
 
-/// Minimum depth of the released datasets (OmniThings, OmniHouse, the urban sets), metres: their
-/// 16-bit ground truth encodes inverse depth relative to `1 / 0.55`.
-pub const RELEASED_MIN_DEPTH_M: f64 = 0.55;
-
-/// Field of view of the released rigs' cameras, degrees (their text files do not carry it).
-pub const RELEASED_MAX_FOV_DEG: f64 = 220.0;
-
 impl Dataset {
-    /// Opens a dataset from its folder or its `config.yaml`. A folder without `config.yaml`
-    /// but with `ocam1.txt` is read in the released datasets' layout (see
-    /// [`Dataset::open_released`]).
-    ///
-    /// # Errors
-    /// [`DataError`] naming `config.yaml` and the field that is wrong.
-    pub fn open(path: &Path) -> Result<Self, DataError> {
-        Self::open_with(path, None)
-    }
-
-    /// Whether `path` is a folder in the released datasets' layout (no `config.yaml`, an
-    /// `ocam1.txt`): what [`Dataset::open`] reads with [`Dataset::open_released`].
-    pub fn is_released_layout(path: &Path) -> bool {
-        path.is_dir() && !path.join("config.yaml").exists() && path.join("ocam1.txt").is_file()
-    }
-
-    /// [`Dataset::open`], the translations of a released-layout folder's `poses.txt` read in
-    /// `pose_unit` (default centimetres, the released sets' unit). A `config.yaml`'s poses are
-    /// metres, as the reference implementation reads them: another unit stated for one is an
-    /// error rather than a silent rescaling.
-    ///
-    /// # Errors
-    /// As [`Dataset::open`]; [`DataError::Field`] naming `config.yaml` when `pose_unit` is not
-    /// metres for a `config.yaml` dataset.
-    pub fn open_with(
-        path: &Path,
-        pose_unit: Option<omnimvs_camera::LengthUnit>,
-    ) -> Result<Self, DataError> {
-        if Self::is_released_layout(path) {
-            return Self::open_released_in(path, pose_unit.unwrap_or_default());
-        }
-        let (root, config_path) = if path.is_dir() {
-            (path.to_path_buf(), path.join("config.yaml"))
-        } else {
-            let root = path.parent().map(Path::to_path_buf).unwrap_or_default();
-            (root, path.to_path_buf())
-        };
-        let text =
-            std::fs::read_to_string(&config_path).map_err(|e| DataError::io(&config_path, e))?;
-        if let Some(unit) = pose_unit
-            && unit != omnimvs_camera::LengthUnit::Metre
-        {
-            return Err(DataError::Field {
-                path: config_path,
-                field: "cameras[].pose".into(),
-                message: format!(
-                    "a config.yaml's translations are metres (as the reference reads them), not {unit}: a pose unit applies to a released-layout folder's poses.txt"
-                ),
-            });
-        }
-        let file = ConfigFile::parse(&config_path, &text)?;
-        let rig = file.rig(&config_path)?;
-        let config = DatasetConfig::of_file(&config_path, &file)?;
-        Ok(Self {
-            root,
-            config_path,
-            config,
-            rig,
-        })
-    }
-
-    /// Opens a folder in the layout the released datasets were published in: `ocam1.txt` ...
-    /// `ocamN.txt` (OCamCalib's text form) and `poses.txt` (translation in centimetres) for the
-    /// rig, the cameras' fields of view [`RELEASED_MAX_FOV_DEG`], the images in `cam1/` ...
-    /// (`00001.png` or `0001.png`, any image extension; the frames are those found in
-    /// `cam1/`), ground truth in `omnidepth_gt_640/` or `depth_train_640/` when present, and
-    /// the minimum depth [`RELEASED_MIN_DEPTH_M`]. Nothing is written into the folder.
-    ///
-    /// # Errors
-    /// [`DataError`] naming the file: a missing or malformed `ocamK.txt` or `poses.txt`, or a
-    /// `cam1/` folder without numbered images.
-    pub fn open_released(dir: &Path) -> Result<Self, DataError> {
-        Self::open_released_in(dir, omnimvs_camera::LengthUnit::Centimetre)
-    }
-
-    /// [`Dataset::open_released`] with the translations of `poses.txt` in `pose_unit`
-    /// (millimetres in SweepNet's `real_indoor_sample`, for one).
-    ///
-    /// # Errors
-    /// As [`Dataset::open_released`].
-    pub fn open_released_in(
-        dir: &Path,
-        pose_unit: omnimvs_camera::LengthUnit,
-    ) -> Result<Self, DataError> {
-        let rig = omnimvs_camera::read_ocam_txt_rig_in(dir, RELEASED_MAX_FOV_DEG, pose_unit)?;
-        let cam_dir = dir.join("cam1");
-        let entries = std::fs::read_dir(&cam_dir).map_err(|e| DataError::io(&cam_dir, e))?;
-        // (digits, extension) -> frames found with that naming.
-        let mut namings: std::collections::BTreeMap<(usize, String), Vec<u32>> =
-            std::collections::BTreeMap::new();
-        for entry in entries {
-            let path = entry.map_err(|e| DataError::io(&cam_dir, e))?.path();
-            let (Some(stem), Some(ext)) = (
-                path.file_stem().and_then(|s| s.to_str()),
-                path.extension().and_then(|s| s.to_str()),
-            ) else {
-                continue;
-            };
-            let image = ["png", "jpg", "jpeg", "bmp", "tif", "tiff"]
-                .contains(&ext.to_ascii_lowercase().as_str());
-            if let (true, true, Ok(frame)) = (
-                image,
-                stem.bytes().all(|b| b.is_ascii_digit()),
-                stem.parse::<u32>(),
-            ) {
-                namings
-                    .entry((stem.len(), ext.to_string()))
-                    .or_default()
-                    .push(frame);
-            }
-        }
-        let Some(((digits, ext), frames)) = namings.into_iter().max_by_key(|(_, f)| f.len()) else {
-            return Err(DataError::format(
-                &cam_dir,
-                "no numbered images (such as 00001.png) in the first camera's folder",
-            ));
-        };
-        let (first, last) = frames
-            .iter()
-            .fold((u32::MAX, 0), |(a, b), &f| (a.min(f), b.max(f)));
-        Ok(Self {
-            root: dir.to_path_buf(),
-            config_path: dir.join("poses.txt"),
-            config: DatasetConfig {
-                min_depth_m: RELEASED_MIN_DEPTH_M,
-                img_fmt: format!("cam%d/%0{digits}d.{ext}"),
-                frames: crate::FrameRange::inclusive(first, last),
-                gt_fmt: None,
-                split: None,
-            },
-            rig,
-        })
-    }
-
     /// The hypotheses of this dataset for `ndepth` spheres.
     ///
     /// # Errors
@@ -201,7 +69,10 @@ impl Dataset {
     fn image_candidates(&self, camera: usize, frame: u32) -> Vec<PathBuf> {
         let fmt = &self.config.img_fmt;
         let mut out = Vec::new();
-        let args = [camera as i64 + 1, i64::from(frame)];
+        let args = [
+            i64::from(self.first_camera_number) + camera as i64,
+            i64::from(frame),
+        ];
         if let Some(p) = format_printf(fmt, &args) {
             out.push(self.root.join(p));
         }

@@ -22,12 +22,15 @@ pub mod estimate;
 mod format;
 pub mod gt;
 pub mod image_io;
+pub mod layout;
+mod open;
 
 pub use config::{DatasetConfig, FrameRange, Split, write_config_yaml};
-pub use dataset::{Dataset, RELEASED_MAX_FOV_DEG, RELEASED_MIN_DEPTH_M};
+pub use dataset::Dataset;
 pub use error::DataError;
 pub use estimate::{
     DepthEstimate, DepthEstimator, EstimateError, Finishing, FinishingError, NoTimings,
     StageObserver, StageTimes, Uncertainty,
 };
 pub use format::format_printf;
+pub use open::{Found, OpenOptions, RELEASED_MAX_FOV_DEG, RELEASED_MIN_DEPTH_M, RigFrame};

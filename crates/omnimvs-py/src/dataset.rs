@@ -21,16 +21,20 @@ pub fn frame_number(frame: i64) -> PyResult<u32> {
     })
 }
 
-/// A dataset folder in the reference layout (`config.yaml` with the rig, the minimum depth,
-/// `img_fmt` and the frame range, plus the images), read exactly as the `omnimvs` command
-/// reads it. Nothing is ever written into the folder.
+/// A dataset folder (a reference `config.yaml` with the rig, the minimum depth, `img_fmt` and
+/// the frame range, plus the images; or a calibration file and one image folder per camera),
+/// read exactly as the `omnimvs` command reads it. Nothing is ever written into the folder.
 ///
 /// Args:
-///     path: the dataset folder or its `config.yaml` (`str` or `pathlib.Path`), or a folder in
-///         the released datasets' layout (`ocam1.txt`.. and `poses.txt`).
+///     path: the dataset folder or its `config.yaml` (`str` or `pathlib.Path`), a folder in
+///         the released datasets' layout (`ocam1.txt`.. and `poses.txt`), or a folder with a
+///         Basalt `calibration.json` or Kalibr `camchain.yaml` and `cam0/`.. (or `cam1/`..).
 ///     pose_unit: unit of a released-layout folder's `poses.txt` translations, `"m"`, `"cm"`
 ///         (the released sets' unit, the default) or `"mm"` (SweepNet's real_indoor_sample);
 ///         a `config.yaml`'s poses are metres and take no other unit.
+///     rig_frame: `"calibration"` (the default: the calibration file's own frame) or
+///         `"fitted"` (centred at the cameras' mean, vertical axis normal to their plane).
+///     min_depth: the sweep's minimum depth in metres, instead of the dataset's.
 ///
 /// Raises:
 ///     FileNotFoundError: no `config.yaml` there.
@@ -44,14 +48,27 @@ pub struct PyDataset {
 #[pymethods]
 impl PyDataset {
     #[new]
-    #[pyo3(signature = (path, pose_unit = None))]
-    fn new(py: Python<'_>, path: PathBuf, pose_unit: Option<&str>) -> PyResult<Self> {
-        let unit = pose_unit
+    #[pyo3(signature = (path, pose_unit = None, rig_frame = None, min_depth = None))]
+    fn new(
+        py: Python<'_>,
+        path: PathBuf,
+        pose_unit: Option<&str>,
+        rig_frame: Option<&str>,
+        min_depth: Option<f64>,
+    ) -> PyResult<Self> {
+        let mut options = open_options(rig_frame, min_depth)?;
+        options.pose_unit = pose_unit
             .map(str::parse::<omnimvs_camera::LengthUnit>)
             .transpose()
             .map_err(pyo3::exceptions::PyValueError::new_err)?;
-        let inner = detached(py, || Dataset::open_with(&path, unit).py_err())?;
+        let inner = detached(py, || Dataset::open_with(&path, &options).py_err())?;
         Ok(Self { inner })
+    }
+
+    /// The frame the rig and the outputs are expressed in, in words.
+    #[getter]
+    fn rig_frame(&self) -> String {
+        self.inner.frame.describe()
     }
 
     /// The dataset folder.
@@ -155,8 +172,58 @@ impl PyRig {
     ///     ValueError: a field is missing or wrong (the message names it).
     #[staticmethod]
     fn from_config(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        let inner = detached(py, || Dataset::open(&path).py_err())?;
+        Self::from_file(py, path, None, None)
+    }
+
+    /// Reads the rig of any calibration file omnimvs reads (a reference `config.yaml`, a
+    /// Basalt `calibration.json`, a Kalibr `camchain.yaml`, or a folder holding one or the
+    /// released layout's `ocamN.txt` + `poses.txt`), in `rig_frame` (`"calibration"`, the
+    /// default, or `"fitted"`), with the sweep's minimum depth `min_depth` in metres
+    /// (default: the file's, else 0.55). Images need not exist.
+    ///
+    /// Raises:
+    ///     FileNotFoundError: no such file.
+    ///     ValueError: a field is missing or wrong (the message names the file and the field).
+    #[staticmethod]
+    #[pyo3(signature = (path, rig_frame = None, min_depth = None))]
+    fn from_file(
+        py: Python<'_>,
+        path: PathBuf,
+        rig_frame: Option<&str>,
+        min_depth: Option<f64>,
+    ) -> PyResult<Self> {
+        let options = omnimvs_data::OpenOptions {
+            rig_only: true,
+            ..open_options(rig_frame, min_depth)?
+        };
+        let inner = detached(py, || Dataset::open_with(&path, &options).py_err())?;
         Ok(Self { inner })
+    }
+
+    /// The model name of each camera (`"ocam"`, `"ds"`, `"eucm"`, `"ucm"`, `"kb4"`,
+    /// `"pinhole-radtan"`), in the rig's order.
+    #[getter]
+    fn models(&self) -> Vec<&'static str> {
+        self.inner
+            .rig
+            .cameras
+            .iter()
+            .map(|c| c.model.name())
+            .collect()
+    }
+
+    /// Each camera's `rig_from_cam` as a 4x4 nested list (metres), in the rig's order.
+    #[getter]
+    fn rig_from_cam(&self) -> Vec<[[f64; 4]; 4]> {
+        self.inner
+            .rig
+            .cameras
+            .iter()
+            .map(|c| {
+                let m = c.rig_from_cam.to_homogeneous();
+                std::array::from_fn(|r| std::array::from_fn(|k| m[(r, k)]))
+            })
+            .collect()
     }
 
     /// Number of cameras.
@@ -185,6 +252,27 @@ impl PyRig {
     fn __repr__(&self) -> String {
         repr("Rig", &self.inner.config_path, &self.inner)
     }
+}
+
+/// The options of `rig_frame` and `min_depth` as the Python functions take them.
+fn open_options(
+    rig_frame: Option<&str>,
+    min_depth: Option<f64>,
+) -> PyResult<omnimvs_data::OpenOptions> {
+    let frame = match rig_frame {
+        None | Some("calibration") => omnimvs_camera::FrameChoice::Calibration,
+        Some("fitted") => omnimvs_camera::FrameChoice::Fitted,
+        Some(other) => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "rig_frame {other:?}: expected \"calibration\" or \"fitted\""
+            )));
+        }
+    };
+    Ok(omnimvs_data::OpenOptions {
+        frame,
+        min_depth_m: min_depth,
+        ..Default::default()
+    })
 }
 
 /// `omnimvs.KIND("PATH": N cameras, min depth D m)`, the `repr` of a dataset or a rig.

@@ -1,9 +1,11 @@
 //! Rigs for the generator: the published rig preset, reading a rig with its
-//! minimum depth from a `config.yaml`, and resizing a rig's images.
+//! minimum depth from a rig file, and resizing a rig's images.
 
 use std::path::Path;
 
-use omnimvs_camera::{Camera, ConfigFile, Rig, parse_config_rig};
+use omnimvs_camera::{
+    Camera, ConfigFile, FrameChoice, Rig, RigFormat, parse_config_rig, read_rig_file,
+};
 
 use crate::SynthError;
 
@@ -40,37 +42,91 @@ pub fn preset_rig() -> Result<RigSource, SynthError> {
     })
 }
 
-/// The rig of `--rig`: the preset name, or a `config.yaml` path (whose
-/// `config.omnimvs_sweep_min_depth` gives the minimum depth).
+/// The rig of `--rig`: the preset name, or a rig file in any format omnimvs reads (a
+/// `config.yaml`, whose `config.omnimvs_sweep_min_depth` gives the minimum depth; a Basalt
+/// `calibration.json`; a Kalibr `camchain.yaml`; a released-layout folder), in its calibration
+/// frame.
 ///
 /// # Errors
 /// [`SynthError`] naming the file and field: unreadable file, invalid YAML
 /// or camera fields, a missing or non-positive minimum depth.
 pub fn load_rig(arg: &str) -> Result<RigSource, SynthError> {
-    if arg == PRESET_NAME || arg == "preset" {
-        return preset_rig();
-    }
-    rig_from_config(Path::new(arg))
+    load_rig_with(arg, None, FrameChoice::Calibration)
 }
 
-/// The rig of a reference `config.yaml` and its minimum depth
-/// (`config.omnimvs_sweep_min_depth`).
+/// [`load_rig`] with the minimum depth `min_depth_m` (for files that state none, else
+/// [`DEFAULT_MIN_DEPTH_M`]; it replaces a `config.yaml`'s) in the frame `frame`.
 ///
 /// # Errors
-/// [`SynthError`] naming the file and field: unreadable file, invalid YAML
-/// or camera fields, a missing or non-positive minimum depth.
-pub fn rig_from_config(path: &Path) -> Result<RigSource, SynthError> {
+/// As [`load_rig`]; a non-positive `min_depth_m`; a fitted frame for cameras that do not span
+/// a plane.
+pub fn load_rig_with(
+    arg: &str,
+    min_depth_m: Option<f64>,
+    frame: FrameChoice,
+) -> Result<RigSource, SynthError> {
+    let mut source = if arg == PRESET_NAME || arg == "preset" {
+        preset_rig()?
+    } else {
+        rig_from_file(Path::new(arg), min_depth_m)?
+    };
+    if let Some(d) = min_depth_m {
+        if !(d.is_finite() && d > 0.0) {
+            return Err(SynthError::invalid(
+                "minimum depth",
+                format!("expected a positive number of metres, found {d}"),
+            ));
+        }
+        source.min_depth_m = d;
+    }
+    if frame == FrameChoice::Fitted {
+        let fitted_from_rig = source.rig.fitted_frame()?;
+        source.rig = source.rig.re_expressed(&fitted_from_rig);
+    }
+    Ok(source)
+}
+
+/// Minimum depth of a generated dataset whose rig file states none, metres.
+pub const DEFAULT_MIN_DEPTH_M: f64 = 0.55;
+
+/// The rig of a rig file and its minimum depth. A `config.yaml` must state its minimum depth
+/// unless `min_depth_m` does; other formats take `min_depth_m` or [`DEFAULT_MIN_DEPTH_M`], and
+/// their cameras are renumbered from 1 (`cam1/`..), as the written `config.yaml` names them.
+///
+/// # Errors
+/// [`SynthError`] naming the file and field.
+pub fn rig_from_file(path: &Path, min_depth_m: Option<f64>) -> Result<RigSource, SynthError> {
+    if RigFormat::detect(path)? != RigFormat::ConfigYaml {
+        let (rig, _, _) = read_rig_file(path)?;
+        let cameras = rig
+            .cameras
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let number = i as u32 + 1;
+                Camera::new(
+                    number,
+                    format!("cam{number}"),
+                    c.model.clone(),
+                    c.pose,
+                    None,
+                )
+            })
+            .collect();
+        return Ok(RigSource {
+            rig: Rig::new(cameras),
+            min_depth_m: min_depth_m.unwrap_or(DEFAULT_MIN_DEPTH_M),
+        });
+    }
     let file = ConfigFile::read(path)?;
     let rig = file.rig(path)?;
-    let min_depth = file
-        .config
-        .map(|c| c.omnimvs_sweep_min_depth)
-        .ok_or_else(|| {
-            SynthError::invalid(
-                format!("{}: field `config.omnimvs_sweep_min_depth`", path.display()),
-                "expected the minimum depth in metres",
-            )
-        })?;
+    let stated = file.config.map(|c| c.omnimvs_sweep_min_depth);
+    let Some(min_depth) = stated.or(min_depth_m) else {
+        return Err(SynthError::invalid(
+            format!("{}: field `config.omnimvs_sweep_min_depth`", path.display()),
+            "expected the minimum depth in metres",
+        ));
+    };
     if !(min_depth.is_finite() && min_depth > 0.0) {
         return Err(SynthError::invalid(
             format!("{}: field `config.omnimvs_sweep_min_depth`", path.display()),

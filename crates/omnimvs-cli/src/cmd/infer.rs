@@ -309,6 +309,7 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         max_spread: args.max_spread,
     };
     let mut settings = settings(&args.dataset, &args.weights, &inference, &args.backend);
+    settings["rig_frame"] = serde_json::json!(ds.frame);
     settings["snap_edges_pct"] = serde_json::json!(finishing.snap_edges_pct);
     settings["max_entropy"] = serde_json::json!(finishing.max_entropy);
     settings["max_spread"] = serde_json::json!(finishing.max_spread);

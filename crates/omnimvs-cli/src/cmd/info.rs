@@ -3,13 +3,14 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use omnimvs_camera::Pixel;
 use omnimvs_data::Dataset;
 
 /// Show a dataset's rig, frames and ground truth.
 ///
-/// Prints each camera (image size, FOV, position, optical axis), the baselines
-/// between cameras in metres, the frames found and whether ground truth exists.
+/// Prints the rig file and its format, the frame the rig is expressed in (`--rig-frame`), each
+/// camera (model, image size, FOV, position, optical axis), the baselines between cameras in
+/// metres, how the images and masks were found, the frames found and whether ground truth
+/// exists.
 /// For a released-layout folder it says in which unit poses.txt was read
 /// (`--pose-unit`), and flags baselines no camera rig has (a wrong unit).
 #[derive(Debug, clap::Args)]
@@ -22,7 +23,8 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     let ds = datasets.open(&args.dataset)?;
     let cfg = &ds.config;
     outln!("dataset      {}", ds.root.display());
-    outln!("config       {}", ds.config_path.display());
+    outln!("rig file     {}", ds.found.rig);
+    outln!("frame        {}", ds.frame.describe());
     if Dataset::is_released_layout(&args.dataset) {
         let unit = datasets.pose_unit().unwrap_or_default();
         outln!(
@@ -34,35 +36,13 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         cfg.min_depth_m,
         1.0 / cfg.min_depth_m
     );
-    outln!("images       {}", cfg.img_fmt);
-    outln!("cameras      {}", ds.rig.len());
-    for (i, cam) in ds.rig.cameras.iter().enumerate() {
-        let m = &cam.model;
-        let c = cam.center_in_rig();
-        let center_px = Pixel::new(f64::from(m.width()) / 2.0, f64::from(m.height()) / 2.0);
-        let axis = cam.ray_in_rig(center_px).unwrap_or_default();
-        outln!(
-            "  cam{} (id {}, {}): {}x{} px, FOV {} deg, centre ({:+.3}, {:+.3}, {:+.3}) m, axis ({:+.2}, {:+.2}, {:+.2}), dir {}",
-            i + 1,
-            cam.id,
-            m.name(),
-            m.width(),
-            m.height(),
-            m.max_fov_deg(),
-            c.x,
-            c.y,
-            c.z,
-            axis.x,
-            axis.y,
-            axis.z,
-            cam.img_dir
-        );
+    outln!("images       {}", ds.found.images);
+    outln!("masks");
+    for (i, m) in ds.found.masks.iter().enumerate() {
+        outln!("  camera {}: {m}", i + 1);
     }
-    outln!("baselines");
+    crate::cmd::rig::print_rig(&ds.rig);
     let baselines = ds.rig.baselines_m();
-    for &(i, j, b) in &baselines {
-        outln!("  cam{}-cam{}: {b:.3} m", i + 1, j + 1);
-    }
     if let Some(note) = implausible_baselines(baselines.iter().map(|&(_, _, b)| b)) {
         outln!("  note: {note}");
     }

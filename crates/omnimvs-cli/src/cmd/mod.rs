@@ -8,6 +8,7 @@ pub mod info;
 pub mod lut;
 pub mod pano;
 pub mod parity;
+pub mod rig;
 pub mod sgm;
 pub mod synth;
 pub mod train;

@@ -25,8 +25,10 @@ pub struct Args {
     /// the `standard` difficulty).
     #[command(flatten)]
     pub kind: SceneArgs,
-    /// The rig: `sunny` (the published rig) or a reference config.yaml
-    /// (its `config.omnimvs_sweep_min_depth` is the minimum depth).
+    /// The rig: `sunny` (the published rig) or a rig file: a reference config.yaml (its
+    /// `config.omnimvs_sweep_min_depth` is the minimum depth), a Basalt calibration.json or a
+    /// Kalibr camchain.yaml (minimum depth 0.55 m); `--min-depth` replaces the minimum depth,
+    /// `--rig-frame fitted` re-expresses the rig in the frame fitted to its cameras.
     #[arg(long, default_value = "sunny", value_parser = RigArg::parse)]
     pub rig: RigArg,
     /// Frames, A..B (inclusive) or a single frame.
@@ -96,10 +98,11 @@ impl From<DifficultyArg> for Difficulty {
     }
 }
 
-pub fn run(args: &Args) -> Result<()> {
+pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
+    let options = datasets.options();
     let mut source = args
         .rig
-        .load()
+        .load(options.min_depth_m, options.frame)
         .with_context(|| format!("--rig {}", args.rig))?;
     if let Some(size) = args.size {
         let (h, w) = (u32::try_from(size.height)?, u32::try_from(size.width)?);

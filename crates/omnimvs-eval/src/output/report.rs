@@ -95,6 +95,8 @@ pub struct ConfidenceSummary<'a, P: Serialize> {
     pub phi_deg: f64,
     pub ndepth: usize,
     pub min_depth_m: f64,
+    /// The frame the rig, and so the outputs, are expressed in.
+    pub rig_frame: &'a omnimvs_data::RigFrame,
     pub params: P,
     /// The protocol of the `metrics` fields; `metrics_with_sky` scores sky too.
     pub protocol: Protocol,

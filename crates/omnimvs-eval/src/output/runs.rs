@@ -126,6 +126,7 @@ impl ConfidenceRun {
             phi_deg: self.spec.grid.phi_deg,
             ndepth: n,
             min_depth_m: ds.config.min_depth_m,
+            rig_frame: &ds.frame,
             params,
             protocol: Protocol::Reference,
             frames: &self.frames,
