@@ -1,0 +1,264 @@
+//! Rigs of any calibration tool: `omnimvs rig show` and `rig convert` between the formats,
+//! `info` on a recording laid out as a calibration tool leaves it, and a generated dataset of a
+//! three-camera Kalibr rig in the fitted frame through `synth`, `info` and `sgm`.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)]
+
+mod support;
+
+use std::path::{Path, PathBuf};
+
+use omnimvs_camera::{Rig, read_rig_file};
+use support::{omnimvs, run_ok, text};
+
+fn example(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/rigs")
+        .join(name)
+}
+
+/// Same intrinsics and the same pose of every camera relative to the first, to 1e-9.
+fn assert_same_relative_rig(a: &Rig, b: &Rig) {
+    assert_eq!(a.len(), b.len());
+    let a0 = a.cameras[0].rig_from_cam.inverse();
+    let b0 = b.cameras[0].rig_from_cam.inverse();
+    for (x, y) in a.cameras.iter().zip(&b.cameras) {
+        assert_eq!(x.model, y.model);
+        let rel_x = (a0 * x.rig_from_cam).to_homogeneous();
+        let rel_y = (b0 * y.rig_from_cam).to_homogeneous();
+        assert!((rel_x - rel_y).abs().max() < 1e-9, "{rel_x} {rel_y}");
+    }
+}
+
+#[test]
+fn rig_convert_round_trips_through_every_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let kalibr = example("eucm-3cam/camchain.yaml");
+    let (original, _, _) = read_rig_file(&kalibr).unwrap();
+    let basalt = dir.path().join("calibration.json");
+    let config = dir.path().join("rig.yaml");
+    let back = dir.path().join("back-camchain.yaml");
+    for (from, to) in [(&kalibr, &basalt), (&basalt, &config), (&config, &back)] {
+        let out = run_ok(
+            &[
+                "rig",
+                "convert",
+                from.to_str().unwrap(),
+                to.to_str().unwrap(),
+            ],
+            &cache,
+        );
+        assert!(out.contains("wrote"), "{out}");
+        let (rig, _, _) = read_rig_file(to).unwrap();
+        assert_same_relative_rig(&rig, &original);
+    }
+    // The Kalibr file written back reads as the original, in cam0's frame.
+    let (back_rig, _, _) = read_rig_file(&back).unwrap();
+    for (x, y) in back_rig.cameras.iter().zip(&original.cameras) {
+        let d = (x.rig_from_cam.to_homogeneous() - y.rig_from_cam.to_homogeneous()).abs();
+        assert!(d.max() < 1e-9);
+    }
+    // In the fitted frame: the cameras centred.
+    let fitted = dir.path().join("fitted.yaml");
+    run_ok(
+        &[
+            "--rig-frame",
+            "fitted",
+            "rig",
+            "convert",
+            kalibr.to_str().unwrap(),
+            fitted.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    let (rig, _, _) = read_rig_file(&fitted).unwrap();
+    let mean: f64 = rig
+        .cameras
+        .iter()
+        .map(|c| c.center_in_rig().coords)
+        .sum::<omnimvs_camera::nalgebra::Vector3<f64>>()
+        .norm();
+    assert!(mean < 1e-9, "{mean}");
+    assert_same_relative_rig(&rig, &original);
+}
+
+#[test]
+fn rig_convert_refuses_a_model_the_format_lacks_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sunny.json");
+    let sunny = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/omnimvs-samples/sunny_single/config.yaml");
+    let o = omnimvs(
+        &[
+            "rig",
+            "convert",
+            sunny.to_str().unwrap(),
+            out.to_str().unwrap(),
+        ],
+        &dir.path().join("cache"),
+    );
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("sunny.json") && err.contains("cameras[0].model") && err.contains("ocam"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    // An unknown output name asks for --to.
+    let o = omnimvs(
+        &["rig", "convert", sunny.to_str().unwrap(), "rig.txt"],
+        &dir.path().join("cache"),
+    );
+    assert!(!o.status.success());
+    assert!(text(&o.stderr).contains("--to"), "{}", text(&o.stderr));
+}
+
+#[test]
+fn rig_show_prints_models_fields_of_view_frame_and_baselines() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run_ok(
+        &["rig", "show", example("kb4-6cam-240").to_str().unwrap()],
+        &dir.path().join("cache"),
+    );
+    assert!(out.contains("cameras      6"), "{out}");
+    assert!(
+        out.contains("(id 6, kb4): 800x800 px, FOV 240.0 deg"),
+        "{out}"
+    );
+    assert!(
+        out.contains("frame        the rig frame of config.yaml"),
+        "{out}"
+    );
+    assert!(out.contains("camera 1-2: 0.300 m"), "{out}");
+    let out = run_ok(
+        &["rig", "show", example("ds-4cam-compact").to_str().unwrap()],
+        &dir.path().join("cache"),
+    );
+    assert!(out.contains("(basalt)") && out.contains("IMU"), "{out}");
+    assert!(out.contains("camera 1-3: 0.070 m"), "{out}");
+}
+
+#[test]
+fn a_generated_three_camera_kalibr_rig_runs_through_synth_info_and_sgm() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let data = dir.path().join("eucm3");
+    run_ok(
+        &[
+            "--rig-frame",
+            "fitted",
+            "synth",
+            "--kind",
+            "things",
+            "--rig",
+            example("eucm-3cam/camchain.yaml").to_str().unwrap(),
+            "--size",
+            "320x320",
+            "--frames",
+            "1",
+            "--seed",
+            "5",
+            "--out",
+            data.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    let info = run_ok(&["info", data.to_str().unwrap()], &cache);
+    assert!(info.contains("cameras      3"), "{info}");
+    assert!(info.contains("(id 3, eucm): 320x320 px"), "{info}");
+    assert!(info.contains("ground truth 1 of 1 frames"), "{info}");
+    let out = dir.path().join("sgm");
+    let table = run_ok(
+        &[
+            "sgm",
+            data.to_str().unwrap(),
+            "--frames",
+            "1",
+            "--size",
+            "80x320",
+            "--ndepth",
+            "48",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    assert!(table.contains("ZNCC+SGM"), "{table}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sgm.json")).unwrap()).unwrap();
+    assert_eq!(summary["rig_frame"]["choice"], "calibration");
+    // The matcher finds the depth: under the error of the best constant answer (measured:
+    // 12.2 against 17.2, % of N; a broken matcher is at the constant's error or worse).
+    let ds = omnimvs_data::Dataset::open(&data).unwrap();
+    let spec = ds.sweep_spec(80, 320, 45.0, 48).unwrap();
+    let truth = ds.eval_truth(1, &spec).unwrap().unwrap();
+    let constant = support::constant_guess_mae(&truth, 48);
+    let mae = summary["mean_metrics"]["mae"].as_f64().unwrap();
+    println!("three-camera rig: SGM MAE {mae:.2}, best constant {constant:.2}");
+    assert!(mae < 0.8 * constant, "MAE {mae}, constant {constant}");
+}
+
+#[test]
+fn info_on_a_basalt_recording_says_how_it_was_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let rec = dir.path().join("recording");
+    std::fs::create_dir_all(&rec).unwrap();
+    // The compact double-sphere rig's calibration, at a tenth of its image size.
+    let (rig, _, _) = read_rig_file(&example("ds-4cam-compact")).unwrap();
+    let small = Rig::new(
+        rig.cameras
+            .iter()
+            .map(|c| {
+                omnimvs_camera::Camera::new(
+                    c.id,
+                    c.img_dir.clone(),
+                    c.model.resized(120, 120),
+                    c.pose,
+                    None,
+                )
+            })
+            .collect(),
+    );
+    omnimvs_camera::write_rig_file(
+        &small,
+        omnimvs_camera::RigFormat::Basalt,
+        &rec.join("calibration.json"),
+    )
+    .unwrap();
+    for c in 0..4 {
+        let cam = rec.join(format!("cam{c}"));
+        std::fs::create_dir_all(&cam).unwrap();
+        for f in [0, 1, 2] {
+            image::GrayImage::new(120, 120)
+                .save(cam.join(format!("{f}.jpg")))
+                .unwrap();
+        }
+    }
+    image::GrayImage::from_pixel(120, 120, image::Luma([255]))
+        .save(rec.join("cam3/mask.png"))
+        .unwrap();
+    let info = run_ok(&["info", rec.to_str().unwrap()], &cache);
+    assert!(
+        info.contains("rig file     calibration.json (basalt)"),
+        "{info}"
+    );
+    assert!(info.contains("frame        Basalt's IMU frame"), "{info}");
+    assert!(
+        info.contains("cam%d/%d.jpg with cameras numbered from 0, 3 frames found in cam0/"),
+        "{info}"
+    );
+    assert!(
+        info.contains("camera 4: cam3/mask.png (beside the images: nonzero = valid)"),
+        "{info}"
+    );
+    assert!(info.contains("camera 1: field of view only"), "{info}");
+    let fitted = run_ok(
+        &["--rig-frame", "fitted", "info", rec.to_str().unwrap()],
+        &cache,
+    );
+    assert!(
+        fitted.contains("frame        fitted to the cameras"),
+        "{fitted}"
+    );
+}
