@@ -15,6 +15,7 @@
 //! 0-based, in pixel units; OCamCalib's `(row, col)` order is converted where
 //! files are read.
 
+mod batch;
 mod central;
 mod config_yaml;
 mod error;

@@ -27,11 +27,7 @@ impl CameraModel {
         debug_assert_eq!(points.len(), pixels.len());
         match self {
             Self::Ocam(m) => m.project_many(points, pixels),
-            Self::Central(c) => {
-                for (p, out) in points.iter().zip(pixels.iter_mut()) {
-                    *out = c.project(p);
-                }
-            }
+            Self::Central(c) => c.project_many(points, pixels),
         }
     }
 

@@ -1,6 +1,7 @@
 use nalgebra::Vector3;
 
 use crate::Pixel;
+use crate::batch::{BATCH_LANES, FovCone};
 
 /// Scaramuzza's OCamCalib fisheye model, evaluated exactly as the public OmniMVS
 /// reference code does (`FORMATS.md`, "OCamCalib").
@@ -33,9 +34,6 @@ pub struct OcamModel {
     pub max_fov_deg: f64,
 }
 
-/// Points per step of the batched projections (`project_many`).
-pub(crate) const BATCH_LANES: usize = 8;
-
 /// Horner evaluation of `sum coeffs[i] x^i`.
 pub(crate) fn polyval(coeffs: &[f64], x: f64) -> f64 {
     coeffs.iter().rev().fold(0.0, |acc, &a| acc * x + a)
@@ -65,9 +63,12 @@ impl OcamModel {
     /// [`Self::project`] of every point of `points` into `pixels` (same length), with the
     /// same result to the bit. Faster: the `world2cam` polynomial runs over
     /// [`BATCH_LANES`] points at a time, whose Horner chains overlap instead of waiting on
-    /// one another.
+    /// one another, and points clearly outside the field of view need no `atan2`.
     pub fn project_many(&self, points: &[Vector3<f64>], pixels: &mut [Option<Pixel>]) {
         debug_assert_eq!(points.len(), pixels.len());
+        // The angle from the axis is atan2(norm, z): the cone skips it where the point is
+        // clearly outside (the lane's rho is then computed and not used).
+        let cone = FovCone::new(self.half_fov_rad());
         let mut chunks = points.chunks_exact(BATCH_LANES);
         let mut outs = pixels.chunks_exact_mut(BATCH_LANES);
         for (p, out) in (&mut chunks).zip(&mut outs) {
@@ -75,7 +76,10 @@ impl OcamModel {
             let mut theta = [0.0; BATCH_LANES];
             for l in 0..BATCH_LANES {
                 norm[l] = (p[l].x * p[l].x + p[l].y * p[l].y).sqrt() + f64::EPSILON;
-                theta[l] = (-p[l].z).atan2(norm[l]);
+                theta[l] = match cone.side(norm[l], p[l].z) {
+                    Some(false) => f64::INFINITY,
+                    _ => (-p[l].z).atan2(norm[l]),
+                };
             }
             // polyval's fold, lane by lane.
             let mut rho = [0.0; BATCH_LANES];
