@@ -3,6 +3,7 @@
 
 use nalgebra::Vector3;
 
+use crate::batch::FovCone;
 use crate::models::{DoubleSphere, ExtendedUnified, Focal, KannalaBrandt4, PinholeRadtan, Unified};
 use crate::{CameraError, Pixel};
 
@@ -42,6 +43,21 @@ impl Lens {
             Self::Unified(m) => m.project(p_cam),
             Self::KannalaBrandt4(m) => m.project(p_cam),
             Self::PinholeRadtan(m) => m.project(p_cam),
+        }
+    }
+
+    /// [`Self::project`] of every point of `points` into `pixels` (same length), with the
+    /// same result to the bit; faster for the Kannala-Brandt model, whose polynomial and
+    /// division run over several points at a time.
+    pub fn project_many(&self, points: &[Vector3<f64>], pixels: &mut [Option<Pixel>]) {
+        debug_assert_eq!(points.len(), pixels.len());
+        match self {
+            Self::KannalaBrandt4(m) => m.project_many(points, pixels),
+            _ => {
+                for (p_cam, out) in points.iter().zip(pixels.iter_mut()) {
+                    *out = self.project(p_cam);
+                }
+            }
         }
     }
 
@@ -169,6 +185,38 @@ impl CentralCamera {
             return None;
         }
         self.lens.project(p_cam)
+    }
+
+    /// [`Self::project`] of every point of `points` into `pixels` (same length), with the
+    /// same result to the bit; points clearly inside or outside the field of view need no
+    /// `atan2` to tell.
+    pub fn project_many(&self, points: &[Vector3<f64>], pixels: &mut [Option<Pixel>]) {
+        debug_assert_eq!(points.len(), pixels.len());
+        const RUN: usize = 64;
+        let half_fov = self.half_fov_rad();
+        let cone = FovCone::new(half_fov);
+        let mut seen = [Vector3::zeros(); RUN];
+        let mut seen_at = [0usize; RUN];
+        let mut projected = [None; RUN];
+        for (points, pixels) in points.chunks(RUN).zip(pixels.chunks_mut(RUN)) {
+            // The points the camera sees (`sees`, with the cone first), projected together.
+            let mut n = 0;
+            for (i, (p_cam, out)) in points.iter().zip(pixels.iter_mut()).enumerate() {
+                let rho = (p_cam.x * p_cam.x + p_cam.y * p_cam.y).sqrt();
+                let sees = cone
+                    .side(rho, p_cam.z)
+                    .unwrap_or_else(|| rho.atan2(p_cam.z) <= half_fov);
+                *out = None;
+                if sees {
+                    (seen[n], seen_at[n]) = (*p_cam, i);
+                    n += 1;
+                }
+            }
+            self.lens.project_many(&seen[..n], &mut projected[..n]);
+            for (&i, &px) in seen_at[..n].iter().zip(&projected[..n]) {
+                pixels[i] = px;
+            }
+        }
     }
 
     /// The unit ray of a pixel; `None` outside the field of view.

@@ -23,6 +23,7 @@
 //! files are read.
 
 mod basalt;
+mod batch;
 mod central;
 mod config_yaml;
 mod error;

@@ -21,6 +21,16 @@ impl CameraModel {
         }
     }
 
+    /// [`Self::project`] of every point of `points` into `pixels` (same length), with the
+    /// same result to the bit, faster for many points (tables of projections).
+    pub fn project_many(&self, points: &[Vector3<f64>], pixels: &mut [Option<Pixel>]) {
+        debug_assert_eq!(points.len(), pixels.len());
+        match self {
+            Self::Ocam(m) => m.project_many(points, pixels),
+            Self::Central(c) => c.project_many(points, pixels),
+        }
+    }
+
     /// The unit ray (camera frame) of a pixel; `None` outside the FOV.
     pub fn unproject(&self, px: Pixel) -> Option<Vector3<f64>> {
         match self {

@@ -1,6 +1,7 @@
 use nalgebra::Vector3;
 
 use crate::Pixel;
+use crate::batch::{BATCH_LANES, FovCone};
 
 /// Scaramuzza's OCamCalib fisheye model, evaluated exactly as the public OmniMVS
 /// reference code does (`FORMATS.md`, "OCamCalib").
@@ -53,15 +54,65 @@ impl OcamModel {
     pub fn project(&self, p_cam: &Vector3<f64>) -> Option<Pixel> {
         let norm = (p_cam.x * p_cam.x + p_cam.y * p_cam.y).sqrt() + f64::EPSILON;
         let theta = (-p_cam.z).atan2(norm);
-        if theta + std::f64::consts::FRAC_PI_2 > self.half_fov_rad() {
+        if self.beyond_fov(theta) {
             return None;
         }
-        let rho = polyval(&self.inv_poly, theta);
+        Some(self.pixel_of(p_cam, norm, polyval(&self.inv_poly, theta)))
+    }
+
+    /// [`Self::project`] of every point of `points` into `pixels` (same length), with the
+    /// same result to the bit. Faster: the `world2cam` polynomial runs over
+    /// [`BATCH_LANES`] points at a time, whose Horner chains overlap instead of waiting on
+    /// one another, and points clearly outside the field of view need no `atan2`.
+    pub fn project_many(&self, points: &[Vector3<f64>], pixels: &mut [Option<Pixel>]) {
+        debug_assert_eq!(points.len(), pixels.len());
+        // The angle from the axis is atan2(norm, z): the cone skips it where the point is
+        // clearly outside (the lane's rho is then computed and not used).
+        let cone = FovCone::new(self.half_fov_rad());
+        let mut chunks = points.chunks_exact(BATCH_LANES);
+        let mut outs = pixels.chunks_exact_mut(BATCH_LANES);
+        for (p, out) in (&mut chunks).zip(&mut outs) {
+            let mut norm = [0.0; BATCH_LANES];
+            let mut theta = [0.0; BATCH_LANES];
+            for l in 0..BATCH_LANES {
+                norm[l] = (p[l].x * p[l].x + p[l].y * p[l].y).sqrt() + f64::EPSILON;
+                theta[l] = match cone.side(norm[l], p[l].z) {
+                    Some(false) => f64::INFINITY,
+                    _ => (-p[l].z).atan2(norm[l]),
+                };
+            }
+            // polyval's fold, lane by lane.
+            let mut rho = [0.0; BATCH_LANES];
+            for &a in self.inv_poly.iter().rev() {
+                for l in 0..BATCH_LANES {
+                    rho[l] = rho[l] * theta[l] + a;
+                }
+            }
+            for l in 0..BATCH_LANES {
+                out[l] =
+                    (!self.beyond_fov(theta[l])).then(|| self.pixel_of(&p[l], norm[l], rho[l]));
+            }
+        }
+        for (p, out) in chunks.remainder().iter().zip(outs.into_remainder()) {
+            *out = self.project(p);
+        }
+    }
+
+    /// Whether a point at `theta` (radians from the image plane, towards `-z`) is outside
+    /// the field of view (not for NaN: `project` has always let it through).
+    #[inline(always)]
+    fn beyond_fov(&self, theta: f64) -> bool {
+        theta + std::f64::consts::FRAC_PI_2 > self.half_fov_rad()
+    }
+
+    /// The end of [`Self::project`] once `norm` and `rho` are known.
+    #[inline(always)]
+    fn pixel_of(&self, p_cam: &Vector3<f64>, norm: f64, rho: f64) -> Pixel {
         let x = p_cam.y / norm * rho;
         let y = p_cam.x / norm * rho;
         let row = self.c * x + self.d * y + self.center_row;
         let col = self.e * x + y + self.center_col;
-        Some(Pixel::new(col, row))
+        Pixel::new(col, row)
     }
 
     /// The unit ray (camera frame) of a pixel (`cam2world`).

@@ -11,6 +11,9 @@ use crate::{EquirectGrid, InvDepthHypotheses, SweepError};
 /// sample (outside the FOV, or a negative coordinate), before normalising.
 pub const INVALID_PIXEL: f64 = -1e5;
 
+/// Grid pixels projected together when a table is built.
+const RUN_PIXELS: usize = 256;
+
 /// Which of the `N` hypotheses get a sphere in the table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SphereSet {
@@ -144,12 +147,24 @@ impl LookupTable {
             let cam_idx = k / num_spheres;
             let sphere = k % num_spheres;
             let camera = &rig.cameras[cam_idx];
-            let (w, h) = (camera.model.width(), camera.model.height());
+            let size = (camera.model.width(), camera.model.height());
             let depth_m = 1.0 / hypotheses.inv_depth(sphere_indices[sphere] as f64);
             let t_cam = cams_from_rig[cam_idx].translation.vector;
-            for (ray_cam, dst) in rays_in_cam[cam_idx].iter().zip(out.chunks_exact_mut(2)) {
-                let p_cam = ray_cam * depth_m + t_cam;
-                dst.copy_from_slice(&normalized_position(camera, (w, h), &p_cam));
+            // The plane in runs of pixels, projected together (the same positions as
+            // `normalized_position` one by one, to the bit).
+            let mut points = Vec::with_capacity(RUN_PIXELS);
+            let mut pixels = vec![None; RUN_PIXELS];
+            for (rays, dst) in rays_in_cam[cam_idx]
+                .chunks(RUN_PIXELS)
+                .zip(out.chunks_mut(2 * RUN_PIXELS))
+            {
+                points.clear();
+                points.extend(rays.iter().map(|ray_cam| ray_cam * depth_m + t_cam));
+                let pixels = &mut pixels[..rays.len()];
+                camera.model.project_many(&points, pixels);
+                for (px, dst) in pixels.iter().zip(dst.chunks_exact_mut(2)) {
+                    dst.copy_from_slice(&normalized_pixel(px.map(|px| (px.col, px.row)), size));
+                }
             }
         });
         Ok(Self::new(grid, hypotheses, sphere_indices, rig, data))

@@ -26,6 +26,8 @@ pub struct DoubleSphere {
     focal: Focal,
     xi: f64,
     alpha: f64,
+    /// `w2` of the validity condition, from `xi` and `alpha` (`Self::w2`).
+    w2: f64,
 }
 
 impl DoubleSphere {
@@ -46,10 +48,16 @@ impl DoubleSphere {
         xi: f64,
         alpha: f64,
     ) -> Result<Self, CameraError> {
+        let focal = Focal::new(MODEL, fx, fy, cx, cy)?;
+        let (xi, alpha) = (
+            check_range(MODEL, "xi", xi, -1.0, 1.0)?,
+            check_range(MODEL, "alpha", alpha, 0.0, 1.0)?,
+        );
         Ok(Self {
-            focal: Focal::new(MODEL, fx, fy, cx, cy)?,
-            xi: check_range(MODEL, "xi", xi, -1.0, 1.0)?,
-            alpha: check_range(MODEL, "alpha", alpha, 0.0, 1.0)?,
+            focal,
+            xi,
+            alpha,
+            w2: Self::w2(xi, alpha),
         })
     }
 
@@ -77,35 +85,37 @@ impl DoubleSphere {
 
     /// `w2` of the validity condition `z > -w2 |p|`: minus the cosine of the
     /// largest angle from the optical axis that the model projects.
-    fn w2(&self) -> f64 {
-        let w1 = if self.alpha <= 0.5 {
-            self.alpha / (1.0 - self.alpha)
+    fn w2(xi: f64, alpha: f64) -> f64 {
+        let w1 = if alpha <= 0.5 {
+            alpha / (1.0 - alpha)
         } else {
-            (1.0 - self.alpha) / self.alpha
+            (1.0 - alpha) / alpha
         };
-        (w1 + self.xi) / (2.0 * w1 * self.xi + self.xi * self.xi + 1.0).sqrt()
+        (w1 + xi) / (2.0 * w1 * xi + xi * xi + 1.0).sqrt()
     }
 
     /// Whether a point of the camera frame lies in the valid domain
     /// `z > -w2 |p|` (see the type's documentation); the origin does not.
     pub fn is_valid_point(&self, p_cam: &Vector3<f64>) -> bool {
         let d1 = p_cam.norm();
-        d1 > 0.0 && p_cam.z > -self.w2() * d1
+        d1 > 0.0 && p_cam.z > -self.w2 * d1
     }
 
     /// The full field of view, degrees: twice `acos(-w2)`.
     pub fn max_fov_deg(&self) -> f64 {
-        2.0 * (-self.w2()).clamp(-1.0, 1.0).acos().to_degrees()
+        2.0 * (-self.w2).clamp(-1.0, 1.0).acos().to_degrees()
     }
 
     /// Projects a point of the camera frame to a pixel; `None` outside the
     /// valid domain ([`Self::is_valid_point`]).
     pub fn project(&self, p_cam: &Vector3<f64>) -> Option<Pixel> {
-        if !self.is_valid_point(p_cam) {
+        // is_valid_point, sharing |p| with the projection.
+        let d1 = p_cam.norm();
+        if !(d1 > 0.0 && p_cam.z > -self.w2 * d1) {
             return None;
         }
         let (x, y, z) = (p_cam.x, p_cam.y, p_cam.z);
-        let k = self.xi * p_cam.norm() + z;
+        let k = self.xi * d1 + z;
         let d2 = (x * x + y * y + k * k).sqrt();
         let denom = self.alpha * d2 + (1.0 - self.alpha) * k;
         if denom <= 0.0 {
