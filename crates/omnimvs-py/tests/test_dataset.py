@@ -117,3 +117,33 @@ def test_released_layout_pose_unit(sunny_path, tmp_path):
         omnimvs.Dataset(in_mm, pose_unit="inch")
     with pytest.raises(ValueError, match="metres"):
         omnimvs.Dataset(sunny_path, pose_unit="cm")
+
+
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples" / "rigs"
+
+
+def test_rig_from_basalt_and_kalibr_files():
+    basalt = omnimvs.Rig.from_file(EXAMPLES / "ds-4cam-compact" / "calibration.json")
+    assert basalt.num_cameras == 4
+    assert basalt.models == ["ds"] * 4
+    assert basalt.image_sizes == [(1216, 1216)] * 4
+    assert basalt.min_depth == 0.55
+    kalibr = omnimvs.Rig.from_file(EXAMPLES / "eucm-3cam", rig_frame="fitted", min_depth=0.4)
+    assert kalibr.models == ["eucm"] * 3
+    assert kalibr.min_depth == 0.4
+    # Fitted: the optical centres around the origin, level (y = 0).
+    centres = np.array([[m[0][3], m[1][3], m[2][3]] for m in kalibr.rig_from_cam])
+    assert np.abs(centres.mean(axis=0)).max() < 1e-9
+    assert np.abs(centres[:, 1]).max() < 1e-9
+    # In Kalibr's own frame camera 1 is at the origin.
+    own = omnimvs.Rig.from_file(EXAMPLES / "eucm-3cam")
+    assert np.abs(np.array(own.rig_from_cam[0]) - np.eye(4)).max() < 1e-12
+
+
+def test_bad_rig_frame_and_calibration_name_the_problem(tmp_path):
+    with pytest.raises(ValueError, match="rig_frame"):
+        omnimvs.Rig.from_file(EXAMPLES / "eucm-3cam", rig_frame="level")
+    bad = tmp_path / "calibration.json"
+    bad.write_text('{"value0": {"T_imu_cam": [], "intrinsics": [{"camera_type": "fov"}], "resolution": []}}')
+    with pytest.raises(ValueError, match="calibration.json"):
+        omnimvs.Rig.from_file(bad)

@@ -37,12 +37,33 @@ class Rig:
 
     @staticmethod
     def from_config(path: PathLike) -> "Rig":
-        """Reads the rig of a reference ``config.yaml`` (or of the folder holding it).
+        """Reads the rig of a reference ``config.yaml`` (or of the folder holding it); the
+        same as ``from_file(path)``.
 
         Raises FileNotFoundError for a missing file, ValueError for a wrong field."""
+    @staticmethod
+    def from_file(
+        path: PathLike,
+        rig_frame: Optional[Literal["calibration", "fitted"]] = None,
+        min_depth: Optional[float] = None,
+    ) -> "Rig":
+        """Reads the rig of any calibration file omnimvs reads (``config.yaml``, Basalt's
+        ``calibration.json``, Kalibr's ``camchain.yaml``, or a folder holding one or the
+        released ``ocamN.txt`` + ``poses.txt``), in ``rig_frame``, with the sweep's minimum depth
+        ``min_depth`` in metres (default: the file's, else 0.55). Images need not exist.
+
+        Raises FileNotFoundError for a missing file, ValueError for a wrong field (the message
+        names the file and the field)."""
     @property
     def num_cameras(self) -> int:
         """Number of cameras."""
+    @property
+    def models(self) -> list[str]:
+        """Each camera's model: ``"ocam"``, ``"ds"``, ``"eucm"``, ``"ucm"``, ``"kb4"`` or
+        ``"pinhole-radtan"``."""
+    @property
+    def rig_from_cam(self) -> list[list[list[float]]]:
+        """Each camera's pose, camera to rig, as a 4x4 nested list (metres)."""
     @property
     def min_depth(self) -> float:
         """Minimum depth of the sweep, metres."""
@@ -56,12 +77,24 @@ class Dataset:
 
     A folder in the released datasets' layout (``ocam1.txt``.. and ``poses.txt``) opens too;
     ``pose_unit`` (``"m"``, ``"cm"``, the default, or ``"mm"``) is the unit of its
-    ``poses.txt`` translations.
+    ``poses.txt`` translations. So does a folder with a Basalt ``calibration.json`` or a
+    Kalibr ``camchain.yaml`` and one image folder per camera (``cam0/``.. or ``cam1/``..).
+    ``rig_frame`` is ``"calibration"`` (the default) or ``"fitted"`` (origin at the cameras'
+    mean, vertical axis normal to their plane); ``min_depth`` replaces the minimum depth.
 
     Raises FileNotFoundError when there is no ``config.yaml``, ValueError for a wrong field or
     an unknown or inapplicable ``pose_unit``."""
 
-    def __init__(self, path: PathLike, pose_unit: Optional[str] = None) -> None: ...
+    def __init__(
+        self,
+        path: PathLike,
+        pose_unit: Optional[str] = None,
+        rig_frame: Optional[Literal["calibration", "fitted"]] = None,
+        min_depth: Optional[float] = None,
+    ) -> None: ...
+    @property
+    def rig_frame(self) -> str:
+        """The frame the rig and the outputs are expressed in, in words."""
     @property
     def root(self) -> Path:
         """The dataset folder."""
