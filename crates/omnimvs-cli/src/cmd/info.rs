@@ -25,6 +25,9 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     outln!("dataset      {}", ds.root.display());
     outln!("rig file     {}", ds.found.rig);
     outln!("frame        {}", ds.frame.describe());
+    if let Some(note) = off_centre_note(&ds) {
+        outln!("  note: {note}");
+    }
     if Dataset::is_released_layout(&args.dataset) {
         let unit = datasets.pose_unit().unwrap_or_default();
         outln!(
@@ -78,6 +81,33 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         None => outln!("ground truth none"),
     }
     Ok(())
+}
+
+/// Says when the calibration frame is far from the frame fitted to the cameras (its origin
+/// away from their centre by more than a quarter of their spread, or tilted by more than 5
+/// degrees), where `--rig-frame fitted` gives a centred, level panorama; `None` otherwise.
+fn off_centre_note(ds: &Dataset) -> Option<String> {
+    if ds.frame.choice != "calibration" {
+        return None;
+    }
+    let fitted_from_rig = ds.rig.fitted_frame().ok()?;
+    let offset_m = fitted_from_rig.inverse().translation.vector.norm();
+    let tilt_deg = fitted_from_rig.rotation.angle().to_degrees();
+    let spread_m = ds
+        .rig
+        .cameras
+        .iter()
+        .map(|c| {
+            (c.center_in_rig() - fitted_from_rig.inverse().translation.vector)
+                .coords
+                .norm()
+        })
+        .fold(0.0, f64::max);
+    (offset_m > 0.25 * spread_m || tilt_deg > 5.0).then(|| {
+        format!(
+            "the cameras' centre is {offset_m:.3} m from this frame's origin and their plane is tilted {tilt_deg:.1} degrees from its x-z plane: --rig-frame fitted centres and levels the panorama"
+        )
+    })
 }
 
 /// Baselines of a multi-camera rig lie between a centimetre and a few metres; outside that the
