@@ -178,5 +178,5 @@ fn a_three_camera_extended_unified_rig_is_consistent_across_cameras() {
     // Three cameras (Kalibr camchain.yaml, in the fitted frame).
     let source = example_rig("eucm-3cam/camchain.yaml");
     assert_eq!(source.rig.len(), 3);
-    check_rig(SceneKind::Things, true, source, (256, 256), 2.0);
+    check_rig(SceneKind::Things, true, source, (400, 400), 2.0);
 }
