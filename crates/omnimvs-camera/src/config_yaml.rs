@@ -194,7 +194,9 @@ impl ConfigFile {
             .enumerate()
             .map(|(i, entry)| camera_from_entry(path, i, entry))
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Rig::new(cameras))
+        let rig = Rig::new(cameras);
+        rig.check_cameras_see(path, |i| format!("cameras[{i}]"))?;
+        Ok(rig)
     }
 
     /// The text of the file: block-style YAML with the reference's layout, numbers at full
@@ -412,7 +414,7 @@ fn central_from_entry(
             name,
             format!("expected {want} numbers for model {model_name:?}"),
         ),
-        LensError::Param(e) => e,
+        LensError::Param(e) => field("intrinsics", e.to_string()),
     })?;
     let [height, width] = entry.image_size.0;
     CentralCamera::new(lens, width, height, entry.max_fov)

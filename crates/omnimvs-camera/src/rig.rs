@@ -2,7 +2,7 @@ use std::fmt::Write as _;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use crate::{CameraModel, Pixel, Pose};
+use crate::{CameraError, CameraModel, Pixel, Pose};
 
 /// One camera of a rig: intrinsics, pose and where its images live.
 #[derive(Debug, Clone, PartialEq)]
@@ -102,6 +102,49 @@ impl Rig {
             }
         }
         out
+    }
+
+    /// Checks that every camera sees part of the scene: some pixel of its image (on a 33x33 grid
+    /// and the centre) unprojects inside its field of view. A principal point far outside the
+    /// image, or a field of view that no pixel reaches, leaves a camera blind.
+    ///
+    /// # Errors
+    /// [`CameraError::Field`] naming `path` and the camera's field (`field_of(index)`).
+    pub fn check_cameras_see(
+        &self,
+        path: &std::path::Path,
+        field_of: impl Fn(usize) -> String,
+    ) -> Result<(), CameraError> {
+        const STEPS: u32 = 32;
+        for (i, cam) in self.cameras.iter().enumerate() {
+            let m = &cam.model;
+            let (w, h) = (f64::from(m.width()), f64::from(m.height()));
+            let centre = Pixel::new((w - 1.0) / 2.0, (h - 1.0) / 2.0);
+            let sees = m.unproject(centre).is_some()
+                || (0..=STEPS).any(|r| {
+                    (0..=STEPS).any(|c| {
+                        let px = Pixel::new(
+                            (w - 1.0) * f64::from(c) / f64::from(STEPS),
+                            (h - 1.0) * f64::from(r) / f64::from(STEPS),
+                        );
+                        m.unproject(px).is_some()
+                    })
+                });
+            if !sees {
+                return Err(CameraError::field(
+                    path,
+                    field_of(i),
+                    format!(
+                        "no pixel of the {}x{} image lies in the {} model's field of view ({:.1} degrees): is the principal point inside the image, and are the intrinsics those of this resolution?",
+                        m.width(),
+                        m.height(),
+                        m.name(),
+                        m.max_fov_deg()
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// A canonical text of every geometric parameter of the rig (intrinsics,

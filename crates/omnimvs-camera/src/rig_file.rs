@@ -169,6 +169,13 @@ pub fn read_rig_file(path: &Path) -> Result<(Rig, RigFormat, PathBuf), CameraErr
         RigFormat::Basalt => read_basalt_calibration(&file)?,
         RigFormat::Kalibr => read_kalibr_camchain(&file)?,
     };
+    match format {
+        RigFormat::Basalt => rig.check_cameras_see(&file, |i| format!("value0.intrinsics[{i}]"))?,
+        RigFormat::Kalibr => rig.check_cameras_see(&file, |i| format!("cam{i}"))?,
+        // config.yaml is checked by its reader; the released files' cameras by their number.
+        RigFormat::ConfigYaml => {}
+        RigFormat::OcamTxt => rig.check_cameras_see(&file, |i| format!("ocam{}.txt", i + 1))?,
+    }
     Ok((rig, format, file))
 }
 

@@ -122,3 +122,28 @@ fn ocam_txt_errors_name_file_and_line() {
         .to_string();
     assert!(e.contains("poses.txt") && e.contains("found 2"), "{e}");
 }
+
+#[test]
+fn a_model_parameter_out_of_range_names_the_file_and_the_camera() {
+    let e = err_of(
+        "cameras:\n  - model: ds\n    intrinsics: [100, 100, 50, 50, -0.2, 1.5]\n    image_size: [100, 100]\n    pose: [0, 0, 0, 0, 0, 0]\n",
+    );
+    assert!(
+        e.contains("/data/set/config.yaml")
+            && e.contains("cameras[0].intrinsics")
+            && e.contains("alpha"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_camera_that_sees_nothing_is_refused() {
+    // The principal point 5000 pixels outside a 100x100 image: no pixel in the field of view.
+    let e = err_of(
+        "cameras:\n  - model: kb4\n    intrinsics: [100, 100, 50, 50]\n    distortion: [0, 0, 0, 0]\n    image_size: [100, 100]\n    pose: [0, 0, 0, 0, 0, 0]\n  - model: kb4\n    intrinsics: [100, 100, 5000, 5000]\n    distortion: [0, 0, 0, 0]\n    image_size: [100, 100]\n    pose: [0, 0, 0, 0, 0, 0]\n",
+    );
+    assert!(
+        e.contains("/data/set/config.yaml") && e.contains("cameras[1]") && e.contains("no pixel"),
+        "{e}"
+    );
+}
