@@ -139,17 +139,12 @@ impl Dataset {
             .unwrap_or_default();
         let text =
             std::fs::read_to_string(&config_path).map_err(|e| DataError::io(&config_path, e))?;
-        if let Some(unit) = options.pose_unit
-            && unit != LengthUnit::Metre
-        {
-            return Err(DataError::Field {
-                path: config_path,
-                field: "cameras[].pose".into(),
-                message: format!(
-                    "a config.yaml's translations are metres (as the reference reads them), not {unit}: a pose unit applies to a released-layout folder's poses.txt"
-                ),
-            });
-        }
+        metres_only(
+            options,
+            &config_path,
+            "cameras[].pose",
+            RigFormat::ConfigYaml,
+        )?;
         let file = ConfigFile::parse(&config_path, &text)?;
         let rig = file.rig(&config_path)?;
         if file.dataset.is_none() {
@@ -231,18 +226,7 @@ impl Dataset {
     /// images; a pose unit stated for a file whose translations are metres.
     fn open_calibration(path: &Path, options: &OpenOptions) -> Result<Self, DataError> {
         let (rig, format, file) = omnimvs_camera::read_rig_file(path)?;
-        if let Some(unit) = options.pose_unit
-            && unit != LengthUnit::Metre
-        {
-            return Err(DataError::Field {
-                path: file,
-                field: "poses".into(),
-                message: format!(
-                    "a {} file's translations are metres, not {unit}: a pose unit applies to a released-layout folder's poses.txt",
-                    format.name()
-                ),
-            });
-        }
+        metres_only(options, &file, "poses", format)?;
         let root = file.parent().map(Path::to_path_buf).unwrap_or_default();
         let layout = discover(&root, rig.len(), options)?;
         Ok(Self::from_layout(&root, file, rig, format, &layout))
@@ -370,5 +354,26 @@ fn discover(
             frames: Vec::new(),
         }),
         found => found,
+    }
+}
+
+/// Refuses a pose unit other than metres for a rig file whose translations are metres (every
+/// format but the released layout's `poses.txt`); `path` and `field` name them in the error.
+fn metres_only(
+    options: &OpenOptions,
+    path: &Path,
+    field: &str,
+    format: RigFormat,
+) -> Result<(), DataError> {
+    match options.pose_unit {
+        Some(unit) if unit != LengthUnit::Metre => Err(DataError::Field {
+            path: path.to_path_buf(),
+            field: field.into(),
+            message: format!(
+                "a {} file's translations are metres (as the reference reads them), not {unit}: a pose unit applies to a released-layout folder's poses.txt",
+                format.name()
+            ),
+        }),
+        _ => Ok(()),
     }
 }
