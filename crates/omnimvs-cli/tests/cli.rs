@@ -65,7 +65,7 @@ fn info_describes_the_rig_and_frames() {
     let s = stdout(&o);
     assert!(s.contains("cameras      4"), "{s}");
     assert!(s.contains("3 listed, 3 found"), "{s}");
-    assert!(s.contains("cam1-cam3: 0.420 m"), "{s}");
+    assert!(s.contains("camera 1-3: 0.420 m"), "{s}");
     assert!(s.contains("ground truth none"), "{s}");
 }
 

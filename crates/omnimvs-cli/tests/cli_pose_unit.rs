@@ -62,7 +62,7 @@ fn info_shows_the_rig_in_metres_for_the_stated_unit() {
     // Not stated: read as centimetres, ten times too far apart, and flagged.
     let cm = run_ok(&["info", path], &cache);
     assert!(cm.contains("translations read in cm"), "{cm}");
-    assert!(cm.contains("cam1-cam3: 12.000 m"), "{cm}");
+    assert!(cm.contains("camera 1-3: 12.000 m"), "{cm}");
     assert!(cm.contains("note:") && cm.contains("--pose-unit"), "{cm}");
 
     // The same unit reaches the other commands: the lookup table of the mm folder read in mm
