@@ -2,7 +2,7 @@
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
 
 /// `println!` for the commands' results: a closed stdout (`omnimvs info DATASET | head -5`)
 /// ends the program quietly instead of panicking (see [`out`]).
@@ -105,10 +105,15 @@ fn ignores_dataset_options(
 fn main() -> ExitCode {
     malloc::keep_freed_memory();
     let cli = Cli::parse();
+    let value = |v: Option<clap::builder::PossibleValue>| {
+        v.map(|v| v.get_name().to_string()).unwrap_or_default()
+    };
     let stated = [
-        cli.pose_unit.map(|_| "--pose-unit"),
-        cli.rig_frame.map(|_| "--rig-frame"),
-        cli.min_depth.map(|_| "--min-depth"),
+        cli.pose_unit
+            .map(|u| format!("--pose-unit {}", value(u.to_possible_value()))),
+        cli.rig_frame
+            .map(|f| format!("--rig-frame {}", value(f.to_possible_value()))),
+        cli.min_depth.map(|d| format!("--min-depth {d}")),
     ];
     if let Some(name) = ignores_dataset_options(
         &cli.command,

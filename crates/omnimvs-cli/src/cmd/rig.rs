@@ -5,8 +5,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use omnimvs_camera::{FrameChoice, Pixel, Rig, RigFormat, read_rig_file, write_rig_file};
 
-/// Show or convert a rig's calibration: a reference config.yaml, a Basalt calibration.json,
-/// a Kalibr camchain.yaml or the released datasets' ocamN.txt + poses.txt.
+/// Show a rig's calibration, or convert it to another calibration format.
+///
+/// The formats: a reference config.yaml, a Basalt calibration.json, a Kalibr camchain.yaml,
+/// the released datasets' ocamN.txt + poses.txt.
 #[derive(Debug, clap::Subcommand)]
 pub enum Command {
     Show(ShowArgs),
