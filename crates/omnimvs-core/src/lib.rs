@@ -5,10 +5,12 @@
 //! * [`rng`]: the one seeded generator (SplitMix64).
 //! * [`yaml`]: parse once, deserialise with the path of the failing field, write in the
 //!   reference's layout.
-//! * [`GrayImage`]: the single-channel f32 image every stage passes along.
+//! * [`GrayImage`]: the single-channel f32 image every stage passes along; [`ColourPlanes`]:
+//!   three of them, the colour of images, panoramas and point clouds.
 //! * [`interp`]: bilinear sampling, the one home of every bilinear read and resize.
 //! * [`safetensors`]: the one safetensors reader for weights read outside burn's records.
 
+mod colour;
 pub mod fs;
 mod image;
 pub mod interp;
@@ -16,4 +18,5 @@ pub mod rng;
 pub mod safetensors;
 pub mod yaml;
 
+pub use colour::ColourPlanes;
 pub use image::GrayImage;

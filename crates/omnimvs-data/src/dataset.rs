@@ -1,12 +1,12 @@
 use std::path::PathBuf;
 
 use omnimvs_camera::{Rig, ValidityMask};
-use omnimvs_core::GrayImage;
+use omnimvs_core::{ColourPlanes, GrayImage};
 use omnimvs_sweep::{EquirectGrid, InvDepthHypotheses, SweepSpec};
 use rayon::prelude::*;
 
 use crate::gt::{EvalTruth, GroundTruth, InvDepthMap, eval_truth_on_grid, read_inv_depth};
-use crate::image_io::read_gray_sized;
+use crate::image_io::{DecodedImage, colour_of_frame, read_decoded_sized};
 use crate::open::{Found, RigFrame};
 use crate::{DataError, DatasetConfig, format_printf};
 
@@ -135,10 +135,25 @@ impl Dataset {
     /// # Errors
     /// Missing or corrupt file, or a size that differs from the camera's.
     pub fn read_image(&self, camera: usize, frame: u32) -> Result<GrayImage, DataError> {
+        Ok(self.read_decoded_image(camera, frame, false)?.gray)
+    }
+
+    /// The image of `camera` (0-based) at `frame` decoded once, size-checked: gray and, when
+    /// `colour` is asked and the file has colour channels, its colour planes.
+    ///
+    /// # Errors
+    /// As [`Self::read_image`].
+    pub fn read_decoded_image(
+        &self,
+        camera: usize,
+        frame: u32,
+        colour: bool,
+    ) -> Result<DecodedImage, DataError> {
         let path = self.image_path(camera, frame)?;
         let model = &self.rig.cameras[camera].model;
-        read_gray_sized(
+        read_decoded_sized(
             &path,
+            colour,
             model.width() as usize,
             model.height() as usize,
             &format!(
@@ -157,6 +172,40 @@ impl Dataset {
         (0..self.rig.len())
             .map(|c| self.read_image(c, frame))
             .collect()
+    }
+
+    /// The images of every camera at `frame`, each decoded once as gray and, when the file
+    /// has colour channels, as colour.
+    ///
+    /// # Errors
+    /// As [`Self::read_image`].
+    pub fn read_decoded_frame(&self, frame: u32) -> Result<Vec<DecodedImage>, DataError> {
+        (0..self.rig.len())
+            .map(|c| self.read_decoded_image(c, frame, true))
+            .collect()
+    }
+
+    /// The gray images of every camera at `frame` and, when any of them is in colour, the
+    /// colour images of every camera ([`colour_of_frame`]); each file decoded once.
+    ///
+    /// # Errors
+    /// As [`Self::read_image`].
+    pub fn read_frame_and_colour(
+        &self,
+        frame: u32,
+    ) -> Result<(Vec<GrayImage>, Option<Vec<ColourPlanes>>), DataError> {
+        let decoded = self.read_decoded_frame(frame)?;
+        let colour = colour_of_frame(&decoded);
+        Ok((decoded.into_iter().map(|d| d.gray).collect(), colour))
+    }
+
+    /// The colour images of every camera at `frame`, `None` when every image of the frame is
+    /// single-channel ([`colour_of_frame`]).
+    ///
+    /// # Errors
+    /// As [`Self::read_image`].
+    pub fn read_colour_frame(&self, frame: u32) -> Result<Option<Vec<ColourPlanes>>, DataError> {
+        Ok(colour_of_frame(&self.read_decoded_frame(frame)?))
     }
 
     /// The validity mask of every camera (the cameras in parallel: each unprojects every

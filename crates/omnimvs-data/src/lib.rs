@@ -3,8 +3,8 @@
 //!
 //! * [`Dataset`]: `config.yaml` (rig, min depth, `img_fmt`, frame range),
 //!   frame files by index, validity masks.
-//! * [`image_io`]: gray images (RGB -> channel mean), the network's input
-//!   normalisation, PNG writing.
+//! * [`image_io`]: gray images (RGB -> channel mean) and, for panoramas and point clouds,
+//!   colour ones; the network's input normalisation, PNG writing.
 //! * [`gt`]: ground-truth inverse depth in its three encodings, cropping and
 //!   the invalid-pixel rule; the f32 TIFF writer.
 //! * [`colormap`]: colour maps of inverse depth (the ground truth's picture page and every

@@ -117,6 +117,28 @@ fn a_basalt_recording_with_unpadded_jpegs_from_cam0_opens() {
 }
 
 #[test]
+fn a_rig_mixing_gray_and_colour_cameras_reads_gray_ones_as_r_g_b() {
+    let rig = tilted_rig();
+    let dir = recording(&rig, RigFormat::Kalibr, 0, &["1.png"]);
+    let ds = Dataset::open(dir.path()).unwrap();
+    let colour = ds
+        .read_colour_frame(1)
+        .unwrap()
+        .expect("camera 2 is colour");
+    let gray = ds.read_frame(1).unwrap();
+    assert_eq!(colour.len(), 3);
+    for (c, image) in colour.iter().enumerate() {
+        let [r, g, b] = &image.planes;
+        if c == 1 {
+            // The file's channels: x * 3, 60, 200.
+            assert_eq!((r.data[5], g.data[5], b.data[5]), (15.0, 60.0, 200.0));
+        } else {
+            assert_eq!((r, g, b), (&gray[c], &gray[c], &gray[c]), "camera {c}");
+        }
+    }
+}
+
+#[test]
 fn a_kalibr_recording_from_cam1_in_the_fitted_frame() {
     let rig = tilted_rig();
     let dir = recording(&rig, RigFormat::Kalibr, 1, &["00001.png", "00002.png"]);

@@ -1,7 +1,7 @@
 //! numpy arrays from Rust values, and how Python things are named in messages.
 
-use numpy::{PyArray1, PyArray2, PyArrayMethods};
-use omnimvs_core::GrayImage;
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
+use omnimvs_core::{ColourPlanes, GrayImage};
 use pyo3::prelude::*;
 use pyo3::types::PyTypeMethods;
 
@@ -20,6 +20,17 @@ pub fn gray_to_array<'py>(
         .collect();
     PyArray1::from_vec(py, pixels)
         .reshape([image.height, image.width])
+        .map_err(|e| bad_argument("image", e))
+}
+
+/// A colour image as a `numpy.uint8` array `(height, width, 3)`, RGB (values rounded; 16-bit
+/// images were scaled to 0..255 when read).
+pub fn colour_to_array<'py>(
+    py: Python<'py>,
+    image: &ColourPlanes,
+) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    PyArray1::from_vec(py, image.to_rgb8())
+        .reshape([image.height(), image.width(), 3])
         .map_err(|e| bad_argument("image", e))
 }
 

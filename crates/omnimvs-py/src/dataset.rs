@@ -8,7 +8,7 @@ use omnimvs_data::Dataset;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 
-use crate::arrays::{gray_to_array, type_name};
+use crate::arrays::{colour_to_array, gray_to_array, type_name};
 use crate::error::{IntoPyResult, bad_argument, bad_type, detached};
 
 /// A frame number from Python: a non-negative int.
@@ -103,18 +103,37 @@ impl PyDataset {
         }
     }
 
-    /// The gray images of every camera at `frame`: a list of `numpy.uint8` arrays
-    /// `(height, width)`, in the rig's camera order.
+    /// The images of every camera at `frame`, in the rig's camera order: by default gray, a
+    /// list of `numpy.uint8` arrays `(height, width)` (a colour image as the mean of its
+    /// channels, what the methods match on); with `colour=True` as decoded, a colour image as
+    /// `numpy.uint8` `(height, width, 3)` (RGB) and a gray one as `(height, width)`.
     ///
     /// Raises:
     ///     FileNotFoundError: an image of the frame is missing (the message lists the paths tried).
     ///     ValueError: an image has another size than its camera's.
-    fn images<'py>(&self, py: Python<'py>, frame: i64) -> PyResult<Bound<'py, PyList>> {
+    #[pyo3(signature = (frame, colour = false))]
+    fn images<'py>(
+        &self,
+        py: Python<'py>,
+        frame: i64,
+        colour: bool,
+    ) -> PyResult<Bound<'py, PyList>> {
         let frame = frame_number(frame)?;
-        let images = detached(py, || self.inner.read_frame(frame).py_err())?;
+        if !colour {
+            let images = detached(py, || self.inner.read_frame(frame).py_err())?;
+            let arrays = images
+                .iter()
+                .map(|image| gray_to_array(py, image))
+                .collect::<PyResult<Vec<_>>>()?;
+            return PyList::new(py, arrays);
+        }
+        let images = detached(py, || self.inner.read_decoded_frame(frame).py_err())?;
         let arrays = images
             .iter()
-            .map(|image| gray_to_array(py, image))
+            .map(|image| match &image.colour {
+                Some(rgb) => colour_to_array(py, rgb).map(Bound::into_any),
+                None => gray_to_array(py, &image.gray).map(Bound::into_any),
+            })
             .collect::<PyResult<Vec<_>>>()?;
         PyList::new(py, arrays)
     }

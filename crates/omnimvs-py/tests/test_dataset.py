@@ -42,6 +42,26 @@ def test_rgb_images_are_the_channel_mean(sunny_path):
     assert np.abs(image.astype(np.float64) - rgb.mean(axis=2)).max() <= 0.5 + 1e-9
 
 
+def test_colour_images_are_the_png_channels(sunny_path, itbt_path):
+    # colour=True: a colour image as decoded, (H, W, 3) RGB; the default stays gray.
+    ds = omnimvs.Dataset(sunny_path)
+    colour = ds.images(1, colour=True)
+    gray = ds.images(1)
+    assert len(colour) == len(gray) == 4
+    for cam, (image, flat) in enumerate(zip(colour, gray), start=1):
+        expected = np.asarray(Image.open(sunny_path / f"cam{cam}" / "0001.png").convert("RGB"))
+        assert image.dtype == np.uint8
+        assert image.shape == expected.shape
+        np.testing.assert_array_equal(image, expected)
+        assert flat.shape == expected.shape[:2]
+    assert (colour[0][..., 0] != colour[0][..., 2]).any()
+    # Gray images stay (H, W) and the same pixels.
+    itbt = omnimvs.Dataset(itbt_path)
+    for image, flat in zip(itbt.images(1, colour=True), itbt.images(1)):
+        assert image.shape == flat.shape
+        np.testing.assert_array_equal(image, flat)
+
+
 def test_samples_have_no_ground_truth(itbt_path):
     assert omnimvs.Dataset(itbt_path).ground_truth(1) is None
 

@@ -9,7 +9,7 @@
 //!   parallel and cached per rig ([`LutCache`]).
 //! * [`warp`]: bilinear warping of `C x H x W` maps onto the spheres with
 //!   `grid_sample(align_corners=True)` semantics and zeros outside.
-//! * [`panorama`]: the gray panorama composed from all cameras at a given
+//! * [`panorama`]: the gray or colour panorama composed from all cameras at a given
 //!   inverse depth.
 //! * [`SweepSpec`]: a grid and its hypotheses, what every depth estimate answers on.
 //! * [`resample_map`]: a map carried from one grid to another of the same
@@ -33,7 +33,10 @@ pub use hypotheses::InvDepthHypotheses;
 pub use lut::{
     INVALID_PIXEL, LookupTable, SphereSet, hwd_file_name, normalized_pixel, normalized_position,
 };
-pub use panorama::{InvDepthSource, Panorama, compose_panorama, warp_camera_to_panorama};
+pub use panorama::{
+    ColourPanorama, InvDepthSource, Panorama, compose_colour_panorama, compose_panorama,
+    warp_camera_to_panorama,
+};
 pub use projector::SphereProjector;
 pub use resample::resample_map;
 pub use spec::SweepSpec;

@@ -4,16 +4,14 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use omnimvs_core::GrayImage;
+use omnimvs_core::{ColourPlanes, GrayImage};
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::gt::GroundTruth;
 use omnimvs_data::image_io::write_png_u8;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange};
 use omnimvs_eval::metrics::ProtocolMetrics;
 use omnimvs_eval::output::evaluation::write_index_png;
-use omnimvs_eval::output::pictures::{
-    error_map, fisheye_strip, gray_to_rgb, label_rows, point_cloud,
-};
+use omnimvs_eval::output::pictures::{error_map, fisheye_strip, gray_to_rgb, label_rows};
 use omnimvs_eval::output::{
     ConfidenceRun, DepthRun, EvalReport, Evaluation, FrameScene, MethodScores, protocol_tables,
     write_text,
@@ -112,10 +110,17 @@ fn render(dir: &Path, frames: u32, seed: u64) -> Result<()> {
     Ok(())
 }
 
+/// One frame's images and every method's estimate (the classical method's first).
+struct FrameEstimates {
+    images: Vec<GrayImage>,
+    /// The colour images, when the frame's images are in colour.
+    colour: Option<Vec<ColourPlanes>>,
+    estimates: Vec<DepthEstimate>,
+}
+
 /// The classical method and every network on `frames` of `ds`, each once per frame, with
 /// `omnimvs sgm`'s and `omnimvs infer`'s files in `out/<sgm>` and `out/<net_prefix>STEM`.
-/// Returns, per frame, the images and every method's estimate (the classical method's
-/// first).
+/// Returns, per frame, the images and every method's estimate.
 fn estimate_all(
     ds: &Dataset,
     stereo: &SgmEstimator,
@@ -123,7 +128,7 @@ fn estimate_all(
     frames: &[u32],
     sgm_dir: &Path,
     net_dir: impl Fn(&Weights) -> PathBuf,
-) -> Result<Vec<(Vec<GrayImage>, Vec<DepthEstimate>)>> {
+) -> Result<Vec<FrameEstimates>> {
     outln!("{}", sgm::header(ds, stereo));
     let mut sgm_run = ConfidenceRun::new(sgm_dir, *stereo.spec())?;
     let mut net_runs = networks
@@ -141,14 +146,18 @@ fn estimate_all(
         .collect::<Result<Vec<_>>>()?;
     let mut all = Vec::new();
     for &f in frames {
-        let images = ds.read_frame(f)?;
+        let (images, colour) = ds.read_frame_and_colour(f)?;
         let mut estimates = vec![sgm::frame(ds, stereo, &mut sgm_run, f, &images)?];
         for (n, run) in networks.iter().zip(&mut net_runs) {
             let est = n.estimator.estimate(&images)?;
-            infer::frame(ds, &n.estimator, run, f, &images, &est)?;
+            infer::frame(ds, &n.estimator, run, f, &images, colour.as_deref(), &est)?;
             estimates.push(est);
         }
-        all.push((images, estimates));
+        all.push(FrameEstimates {
+            images,
+            colour,
+            estimates,
+        });
     }
     sgm::finish(ds, stereo, sgm_run, sgm_dir)?;
     for ((n, run), dir) in networks
@@ -198,13 +207,14 @@ pub fn run(args: &Args) -> Result<()> {
     let eval = Evaluation::new(&ds, &frames, spec)?;
     let mut sgm_metrics = Vec::new();
     for (k, &frame) in frames.iter().enumerate() {
-        let (images, methods) = &estimates[k];
-        let sgm = &methods[0];
+        let frame_estimates = &estimates[k];
+        let sgm = &frame_estimates.estimates[0];
         sgm_metrics.push(eval.score(k, sgm)?.1);
         let scene = FrameScene {
             rig: &ds.rig,
-            images,
+            images: &frame_estimates.images,
             masks: &masks,
+            colour: frame_estimates.colour.as_deref(),
         };
         let path = args.out.join(format!("things_{frame:05}.png"));
         write_truth_comparison(&path, sgm, scene, &eval.truths[k].gt)?;
@@ -314,7 +324,7 @@ fn write_truth_comparison(
         "{}_sgm.ply",
         path.file_stem().unwrap_or_default().to_string_lossy()
     ));
-    write_ply(&ply, &point_cloud(grid, &est.inv_depth, &pano.image.data))?;
+    write_ply(&ply, &scene.point_cloud(est, &pano)?)?;
     Ok(())
 }
 
@@ -323,7 +333,7 @@ fn write_truth_comparison(
 fn score_all(
     eval: &Evaluation,
     networks: &[Network],
-    estimates: &[(Vec<GrayImage>, Vec<DepthEstimate>)],
+    estimates: &[FrameEstimates],
     dir: &Path,
 ) -> Result<EvalReport> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -353,10 +363,10 @@ fn score_all(
                 (name, format!("net_{stem}"))
             }
         };
-        let mut scores = MethodScores::new(&name, estimates[0].1[m].spec);
+        let mut scores = MethodScores::new(&name, estimates[0].estimates[m].spec);
         let mut seconds = 0.0;
         for (k, &f) in eval.frames.iter().enumerate() {
-            let est = &estimates[k].1[m];
+            let est = &estimates[k].estimates[m];
             let (index, metrics) = eval.score(k, est)?;
             if k == 0 {
                 write_index_png(

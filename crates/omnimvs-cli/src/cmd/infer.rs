@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use omnimvs_core::GrayImage;
+use omnimvs_core::{ColourPlanes, GrayImage};
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, Finishing, FinishingError, FrameRange};
 use omnimvs_eval::metrics::ProtocolMetrics;
 use omnimvs_eval::output::{DepthRun, FrameScene, protocol_tables};
@@ -23,7 +23,8 @@ use crate::weights::{BUNDLED, Weights, apply_pick, parse_pick};
 /// %05d_entropy.tiff, %05d_spread.tiff (the cascade's), %05d.png (colour-mapped inverse
 /// depth), %05d_vis.png
 /// (inputs, panorama, depth, entropy and error when ground truth exists) and
-/// optionally %05d.ply; metrics.json when ground truth exists, scored at the
+/// optionally %05d.ply (coloured by the panorama, in colour when the images are);
+/// metrics.json when ground truth exists, scored at the
 /// network's own grid under the `reference` protocol (the reference's evalError,
 /// the paper's tables: sky is not scored) with the `with-sky` protocol (sky
 /// scored as index 0) beside it (`omnimvs eval` compares methods at one grid).
@@ -50,7 +51,8 @@ pub struct Args {
     pub out: PathBuf,
     #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
     pub backend: Backend,
-    /// Also write a PLY point cloud coloured by the panorama.
+    /// Also write a PLY point cloud coloured by the panorama at the estimated depth (in
+    /// colour when the frame's images are).
     #[arg(long)]
     pub ply: bool,
     /// Camera concatenation order, e.g. 0,1,2,3 (default: the rig's order).
@@ -244,7 +246,8 @@ pub fn settings(
     })
 }
 
-/// One frame's estimate into `run` (its files, its metrics when the frame has ground truth).
+/// One frame's estimate into `run` (its files, its metrics when the frame has ground truth);
+/// `colour`: the frame's colour images, when they are (the point cloud's colours).
 ///
 /// # Errors
 /// Unreadable ground truth or a file that cannot be written.
@@ -254,6 +257,7 @@ pub fn frame(
     run: &mut DepthRun,
     frame: u32,
     images: &[GrayImage],
+    colour: Option<&[ColourPlanes]>,
     est: &DepthEstimate,
 ) -> Result<Option<ProtocolMetrics>> {
     let truth = ds.eval_truth(frame, &est.spec)?;
@@ -261,6 +265,7 @@ pub fn frame(
         rig: &ds.rig,
         images,
         masks: net.masks(),
+        colour,
     };
     Ok(run.add(frame, est, scene, truth.as_ref())?)
 }
@@ -326,18 +331,27 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     );
     // Frames read one ahead and written one behind on threads of their own (see
     // `crate::pipeline`): decoding and encoding overlap the network's work.
+    // Colour is decoded (with the gray, in one read) only for the point clouds.
     crate::pipeline::run_frames(
         &frames,
-        |f| ds.read_frame(f).with_context(|| format!("frame {f}")),
-        |f, images| {
+        |f| {
+            if args.ply {
+                ds.read_frame_and_colour(f)
+            } else {
+                ds.read_frame(f).map(|images| (images, None))
+            }
+            .with_context(|| format!("frame {f}"))
+        },
+        |f, (images, colour)| {
             let mut est = inference
                 .estimate(&images)
                 .with_context(|| format!("frame {f}"))?;
             finishing.apply(&mut est);
-            Ok((images, est))
+            Ok((images, colour, est))
         },
-        |f, (images, est)| {
-            match frame(&ds, &inference, &mut run, f, &images, &est)? {
+        |f, (images, colour, est)| {
+            let colour = colour.as_deref();
+            match frame(&ds, &inference, &mut run, f, &images, colour, &est)? {
                 Some(m) => bar.set_message(format!("frame {f}: MAE {:.3}", m.reference.mae)),
                 None => bar.set_message(format!("frame {f}: {:.2} s", est.seconds)),
             }

@@ -1,11 +1,11 @@
-//! `omnimvs pano`: the gray panorama of a frame at a given depth.
+//! `omnimvs pano`: the panorama of a frame at a given depth, in colour when its images are.
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use omnimvs_data::gt::read_inv_depth;
-use omnimvs_data::image_io::write_gray_png;
-use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_panorama};
+use omnimvs_data::image_io::{write_colour_png, write_gray_png};
+use omnimvs_sweep::{EquirectGrid, InvDepthSource, compose_colour_panorama, compose_panorama};
 
 use crate::args::Size;
 
@@ -14,7 +14,9 @@ use crate::args::Size;
 /// Compose the equirectangular panorama of one frame: every pixel is the mean
 /// of the cameras that see the point at the given depth along its ray. Use a
 /// constant depth (--depth) or an inverse-depth map (--invdepth, e.g. a
-/// result TIFF of `omnimvs sgm`/`infer`, or ground truth).
+/// result TIFF of `omnimvs sgm`/`infer`, or ground truth). The PNG is in colour (RGB,
+/// each channel composed the same way) when the frame's images are, a gray camera of a
+/// mixed rig counting as R = G = B; gray otherwise.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Dataset folder (or its config.yaml).
@@ -39,14 +41,14 @@ pub struct Args {
     /// Latitude range, +-degrees (default: 90 with --depth, from the map's shape with --invdepth).
     #[arg(long)]
     pub phi_deg: Option<f64>,
-    /// Output PNG.
+    /// Output PNG (RGB for colour images, gray for gray ones).
     #[arg(long)]
     pub out: PathBuf,
 }
 
 pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
     let ds = datasets.open(&args.dataset)?;
-    let images = ds.read_frame(args.frame)?;
+    let (images, colour) = ds.read_frame_and_colour(args.frame)?;
     let masks = ds.masks()?;
     let map;
     let (grid, source) = match (&args.invdepth, args.depth) {
@@ -75,13 +77,23 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         }
         (None, None) => bail!("give --depth or --invdepth"),
     };
-    let pano = compose_panorama(&ds.rig, &grid, &images, Some(&masks), source)?;
-    write_gray_png(&args.out, &pano.image)
-        .with_context(|| format!("writing {}", args.out.display()))?;
-    let seen = pano.count.iter().filter(|&&c| c > 0).count();
-    let multi = pano.count.iter().filter(|&&c| c > 1).count();
+    let writing = || format!("writing {}", args.out.display());
+    let (count, kind) = match colour {
+        Some(colour) => {
+            let pano = compose_colour_panorama(&ds.rig, &grid, &colour, Some(&masks), source)?;
+            write_colour_png(&args.out, &pano.image).with_context(writing)?;
+            (pano.count, "colour")
+        }
+        None => {
+            let pano = compose_panorama(&ds.rig, &grid, &images, Some(&masks), source)?;
+            write_gray_png(&args.out, &pano.image).with_context(writing)?;
+            (pano.count, "gray")
+        }
+    };
+    let seen = count.iter().filter(|&&c| c > 0).count();
+    let multi = count.iter().filter(|&&c| c > 1).count();
     outln!(
-        "wrote {} ({}x{}, +-{} deg): {:.1}% of pixels seen, {:.1}% by two or more cameras",
+        "wrote {} ({kind}, {}x{}, +-{} deg): {:.1}% of pixels seen, {:.1}% by two or more cameras",
         args.out.display(),
         grid.height,
         grid.width,

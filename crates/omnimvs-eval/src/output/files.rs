@@ -4,15 +4,17 @@ use std::path::{Path, PathBuf};
 
 use omnimvs_camera::Rig;
 use omnimvs_camera::ValidityMask;
-use omnimvs_core::GrayImage;
+use omnimvs_core::{ColourPlanes, GrayImage};
 use omnimvs_data::colormap::{Colormap, colorize};
 use omnimvs_data::estimate::DepthEstimate;
 use omnimvs_data::gt::{GroundTruth, write_f32_tiff};
 use omnimvs_data::image_io::write_png_u8;
-use omnimvs_sweep::{InvDepthSource, Panorama, compose_panorama};
+use omnimvs_sweep::{
+    ColourPanorama, InvDepthSource, Panorama, compose_colour_panorama, compose_panorama,
+};
 
 use super::pictures::{error_map, fisheye_strip, gray_to_rgb, point_cloud};
-use crate::ply::write_ply;
+use crate::ply::{ColoredPoint, write_ply};
 use omnimvs_data::DataError;
 
 /// `dir/%05d<suffix>`, the path of one of a frame's files.
@@ -92,6 +94,9 @@ pub struct FrameScene<'a> {
     pub images: &'a [GrayImage],
     /// The cameras' validity masks.
     pub masks: &'a [ValidityMask],
+    /// The frame's colour images, rig order, when they are in colour
+    /// ([`omnimvs_data::Dataset::read_frame_and_colour`]); `None` for gray ones.
+    pub colour: Option<&'a [ColourPlanes]>,
 }
 
 impl FrameScene<'_> {
@@ -108,11 +113,56 @@ impl FrameScene<'_> {
             InvDepthSource::Map(&est.inv_depth),
         )?)
     }
+
+    /// The colour panorama seen at the estimate's inverse depth, on its grid; `None` when
+    /// the scene has no colour images.
+    ///
+    /// # Errors
+    /// [`DataError`] for images that do not fit the rig.
+    pub fn colour_panorama(
+        &self,
+        est: &DepthEstimate,
+    ) -> Result<Option<ColourPanorama>, DataError> {
+        let Some(colour) = self.colour else {
+            return Ok(None);
+        };
+        Ok(Some(compose_colour_panorama(
+            self.rig,
+            &est.spec.grid,
+            colour,
+            Some(self.masks),
+            InvDepthSource::Map(&est.inv_depth),
+        )?))
+    }
+
+    /// The estimate's point cloud coloured by the panorama at its depth: the colour panorama
+    /// when the scene has colour images, else `gray` ([`Self::panorama`]).
+    ///
+    /// # Errors
+    /// [`DataError`] for images that do not fit the rig.
+    pub fn point_cloud(
+        &self,
+        est: &DepthEstimate,
+        gray: &Panorama,
+    ) -> Result<Vec<ColoredPoint>, DataError> {
+        let (grid, inv_depth) = (&est.spec.grid, &est.inv_depth);
+        Ok(match self.colour_panorama(est)? {
+            Some(pano) => {
+                let [r, g, b] = &pano.image.planes;
+                point_cloud(grid, inv_depth, [&r.data, &g.data, &b.data])
+            }
+            None => {
+                let v = &gray.image.data;
+                point_cloud(grid, inv_depth, [v, v, v])
+            }
+        })
+    }
 }
 
 /// Writes `.png` (inverse depth colour-mapped on `[0, 1/min_depth]`), `_vis.png` (rows:
 /// inputs, panorama at the estimated depth, depth, entropy, and the error when `truth` is
-/// given) and with `ply` a point cloud `.ply` coloured by the panorama.
+/// given) and with `ply` a point cloud `.ply` coloured by the panorama (in colour when the
+/// scene has colour images; [`FrameScene::point_cloud`]).
 ///
 /// # Errors
 /// [`DataError`] for images that do not fit the rig or a file that cannot be written.
@@ -151,7 +201,7 @@ pub fn write_depth_pictures(
     let vis = frame_path(dir, frame, "_vis.png");
     write_png_u8(&vis, w, composite.len() / (3 * w), 3, &composite)?;
     if ply {
-        let points = point_cloud(&est.spec.grid, &est.inv_depth, &pano.image.data);
+        let points = scene.point_cloud(est, &pano)?;
         write_ply(&frame_path(dir, frame, ".ply"), &points)?;
     }
     Ok(())

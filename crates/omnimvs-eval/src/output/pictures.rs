@@ -109,18 +109,18 @@ pub fn error_map(index: &[f32], gt: &GroundTruth, ndepth: usize) -> Vec<u8> {
     )
 }
 
-/// The points of an inverse-depth map on `grid` (rig frame, metres), gray
-/// from `gray` (the panorama); points farther than 1 km are left out.
-pub fn point_cloud(grid: &EquirectGrid, inv_depth: &[f32], gray: &[f32]) -> Vec<ColoredPoint> {
+/// The points of an inverse-depth map on `grid` (rig frame, metres), coloured by `rgb` (the
+/// red, green and blue planes of the panorama at that depth; a gray panorama three times);
+/// points farther than 1 km are left out.
+pub fn point_cloud(grid: &EquirectGrid, inv_depth: &[f32], rgb: [&[f32]; 3]) -> Vec<ColoredPoint> {
     (0..grid.len())
         .filter(|&i| inv_depth[i] > FAR_INV_DEPTH)
         .map(|i| {
             let p = grid.ray((i / grid.width) as f64, (i % grid.width) as f64)
                 / f64::from(inv_depth[i]);
-            let v = gray[i].clamp(0.0, 255.0) as u8;
             ColoredPoint {
                 xyz_m: [p.x as f32, p.y as f32, p.z as f32],
-                rgb: [v, v, v],
+                rgb: rgb.map(|plane| plane[i].clamp(0.0, 255.0) as u8),
             }
         })
         .collect()
@@ -150,5 +150,29 @@ mod tests {
         let (px, h) = label_rows(&rows, 2);
         assert_eq!(h, 1 + SEPARATOR_ROWS + 2);
         assert_eq!(px.len(), h * 2 * 3);
+    }
+
+    #[test]
+    fn points_take_each_channel_of_their_pixel() {
+        let grid = EquirectGrid::new(2, 4, 45.0).unwrap();
+        let inv_depth = [0.5, 0.0, 0.5, 0.5, 0.5, 0.5, 0.5, 2.0];
+        let ramp: Vec<f32> = (0..8).map(|i| i as f32 * 40.0).collect();
+        let flat = [7.9f32; 8];
+        let negative = [-3.0f32; 8];
+        let points = point_cloud(&grid, &inv_depth, [&ramp, &flat, &negative]);
+        // The pixel at infinity is left out.
+        assert_eq!(points.len(), 7);
+        assert_eq!(points[0].rgb, [0, 7, 0]);
+        assert_eq!(points[1].rgb, [80, 7, 0]);
+        assert_eq!(points[6].rgb, [255, 7, 0]);
+        // Two metres along the ray of the first pixel.
+        let ray = grid.ray(0.0, 0.0) * 2.0;
+        assert_eq!(points[0].xyz_m, [ray.x as f32, ray.y as f32, ray.z as f32]);
+        // A gray panorama three times: gray points.
+        let gray = point_cloud(&grid, &inv_depth, [&ramp, &ramp, &ramp]);
+        assert!(
+            gray.iter()
+                .all(|p| p.rgb[0] == p.rgb[1] && p.rgb[1] == p.rgb[2])
+        );
     }
 }

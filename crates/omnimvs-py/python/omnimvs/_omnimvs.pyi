@@ -110,8 +110,10 @@ class Dataset:
     @property
     def rig(self) -> Rig:
         """The rig of the dataset."""
-    def images(self, frame: int) -> list[Image]:
-        """The gray images of every camera at ``frame``, ``uint8`` ``(height, width)``.
+    def images(self, frame: int, colour: bool = False) -> list[Image]:
+        """The images of every camera at ``frame``: gray, ``uint8`` ``(height, width)`` (a
+        colour image as its channels' mean); with ``colour=True`` as decoded, a colour image
+        as ``uint8`` ``(height, width, 3)`` (RGB), a gray one as ``(height, width)``.
 
         Raises FileNotFoundError when an image is missing."""
     def ground_truth(self, frame: int) -> Optional[FloatMap]:
