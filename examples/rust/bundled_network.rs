@@ -88,7 +88,8 @@ fn main() -> Result<()> {
     });
     let mut run = DepthRun::new(out, "infer.json", &settings, true)?;
     for frame in frames {
-        let images = ds.read_frame(frame)?;
+        // Gray for the network, and the colour of colour images for the point cloud.
+        let (images, colour) = ds.read_frame_and_colour(frame)?;
         // Every method answers through the same trait, `DepthEstimator`, with a
         // `DepthEstimate` on its own grid: inverse depth, index, entropy, spread.
         let est = estimator.estimate(&images)?;
@@ -97,6 +98,7 @@ fn main() -> Result<()> {
             rig: &ds.rig,
             images: &images,
             masks: estimator.masks(),
+            colour: colour.as_deref(),
         };
         let truth = ds.eval_truth(frame, &est.spec)?;
         let metrics = run.add(frame, &est, scene, truth.as_ref())?;
