@@ -62,7 +62,7 @@ impl OcamModel {
 
     /// [`Self::project`] of every point of `points` into `pixels` (same length), with the
     /// same result to the bit. Faster: the `world2cam` polynomial runs over
-    /// [`BATCH_LANES`] points at a time, whose Horner chains overlap instead of waiting on
+    /// eight points at a time, whose Horner chains overlap instead of waiting on
     /// one another, and points clearly outside the field of view need no `atan2`.
     pub fn project_many(&self, points: &[Vector3<f64>], pixels: &mut [Option<Pixel>]) {
         debug_assert_eq!(points.len(), pixels.len());

@@ -179,7 +179,7 @@ impl KannalaBrandt4 {
 
     /// [`Self::project`] of every point of `points` into `pixels` (same length), with the
     /// same result to the bit: the angles first, then the polynomials and divisions of
-    /// [`BATCH_LANES`] points, which overlap instead of waiting on one another.
+    /// eight points, which overlap instead of waiting on one another.
     pub fn project_many(&self, points: &[Vector3<f64>], pixels: &mut [Option<Pixel>]) {
         debug_assert_eq!(points.len(), pixels.len());
         let mut chunks = points.chunks_exact(BATCH_LANES);
