@@ -91,6 +91,21 @@ impl Rig {
         Ok(rig_from_fitted.inverse())
     }
 
+    /// The rig expressed in the frame `choice` names, and `frame_from_rig` (the identity for
+    /// [`FrameChoice::Calibration`], [`Self::fitted_frame`] for [`FrameChoice::Fitted`]).
+    ///
+    /// # Errors
+    /// As [`Self::fitted_frame`], for the fitted frame.
+    pub fn in_frame(self, choice: FrameChoice) -> Result<(Self, Isometry3<f64>), CameraError> {
+        match choice {
+            FrameChoice::Calibration => Ok((self, Isometry3::identity())),
+            FrameChoice::Fitted => {
+                let frame_from_rig = self.fitted_frame()?;
+                Ok((self.re_expressed(&frame_from_rig), frame_from_rig))
+            }
+        }
+    }
+
     /// The same rig with its poses expressed in another frame: `new_from_rig` maps points of
     /// the current rig frame into the new one. Intrinsics, ids, folders and masks are kept.
     pub fn re_expressed(&self, new_from_rig: &Isometry3<f64>) -> Self {

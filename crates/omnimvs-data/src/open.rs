@@ -107,9 +107,9 @@ impl Dataset {
                 checked_min_depth(&ds.config_path, "minimum depth", min_depth_m)?;
         }
         if options.frame == FrameChoice::Fitted {
-            let frame_from_calibration = ds.rig.fitted_frame()?;
-            ds.rig = ds.rig.re_expressed(&frame_from_calibration);
-            ds.frame.choice = FrameChoice::Fitted.name();
+            let (rig, frame_from_calibration) = ds.rig.in_frame(options.frame)?;
+            ds.rig = rig;
+            ds.frame.choice = options.frame.name();
             ds.frame.frame_from_calibration =
                 Pose::from_isometry(&frame_from_calibration).to_array();
         }

@@ -18,6 +18,7 @@
 mod cache;
 mod error;
 mod grid;
+mod hugepages;
 mod hypotheses;
 mod lut;
 pub mod panorama;

@@ -132,6 +132,7 @@ impl LookupTable {
         let plane = grid.len() * 2;
         let num_spheres = sphere_indices.len();
         let mut data = vec![0f32; rig.len() * num_spheres * plane];
+        crate::hugepages::advise_huge_pages(&mut data);
         // Rays and per-camera rotated rays are shared by every sphere.
         let rays = grid.rays();
         let cams_from_rig: Vec<_> = rig

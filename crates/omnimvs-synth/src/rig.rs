@@ -79,10 +79,7 @@ pub fn load_rig_with(
         }
         source.min_depth_m = d;
     }
-    if frame == FrameChoice::Fitted {
-        let fitted_from_rig = source.rig.fitted_frame()?;
-        source.rig = source.rig.re_expressed(&fitted_from_rig);
-    }
+    source.rig = source.rig.in_frame(frame)?.0;
     Ok(source)
 }
 

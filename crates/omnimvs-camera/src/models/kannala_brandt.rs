@@ -166,14 +166,14 @@ impl KannalaBrandt4 {
     /// Whether a point of the camera frame lies within the field of view;
     /// the origin does not.
     pub fn is_valid_point(&self, p_cam: &Vector3<f64>) -> bool {
-        let r = p_cam.x.hypot(p_cam.y);
+        let r = (p_cam.x * p_cam.x + p_cam.y * p_cam.y).sqrt();
         (r > 0.0 || p_cam.z > 0.0) && r.atan2(p_cam.z) <= self.max_theta_rad
     }
 
     /// Projects a point of the camera frame to a pixel; `None` outside the
     /// field of view.
     pub fn project(&self, p_cam: &Vector3<f64>) -> Option<Pixel> {
-        let r = p_cam.x.hypot(p_cam.y);
+        let r = (p_cam.x * p_cam.x + p_cam.y * p_cam.y).sqrt();
         self.pixel_of(p_cam, r, r.atan2(p_cam.z))
     }
 
@@ -187,7 +187,7 @@ impl KannalaBrandt4 {
         for (p, out) in (&mut chunks).zip(&mut outs) {
             let (mut r, mut theta) = ([0.0; BATCH_LANES], [0.0; BATCH_LANES]);
             for l in 0..BATCH_LANES {
-                r[l] = p[l].x.hypot(p[l].y);
+                r[l] = (p[l].x * p[l].x + p[l].y * p[l].y).sqrt();
                 theta[l] = r[l].atan2(p[l].z);
             }
             for l in 0..BATCH_LANES {
@@ -199,7 +199,7 @@ impl KannalaBrandt4 {
         }
     }
 
-    /// The end of [`Self::project`] once `r = hypot(x, y)` and `theta = atan2(r, z)` are
+    /// The end of [`Self::project`] once `r = sqrt(x^2 + y^2)` and `theta = atan2(r, z)` are
     /// known: [`Self::is_valid_point`] and the pixel.
     #[inline(always)]
     fn pixel_of(&self, p_cam: &Vector3<f64>, r: f64, theta: f64) -> Option<Pixel> {

@@ -90,13 +90,7 @@ pub fn run(command: &Command, frame: FrameChoice) -> Result<()> {
 
 /// The rig in `frame` (`--rig-frame`).
 fn in_frame(rig: Rig, frame: FrameChoice) -> Result<Rig> {
-    Ok(match frame {
-        FrameChoice::Calibration => rig,
-        FrameChoice::Fitted => {
-            let fitted_from_rig = rig.fitted_frame().context("--rig-frame fitted")?;
-            rig.re_expressed(&fitted_from_rig)
-        }
-    })
+    Ok(rig.in_frame(frame).context("--rig-frame fitted")?.0)
 }
 
 fn convert(args: &ConvertArgs, frame: FrameChoice) -> Result<()> {
