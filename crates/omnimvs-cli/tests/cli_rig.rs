@@ -309,7 +309,7 @@ cam3:
 ";
 
 #[test]
-fn a_rig_of_lenses_with_tangential_distortion_runs_through_synth_and_sgm() {
+fn a_rig_of_lenses_with_tangential_distortion_runs_through_synth_and_sgm_with_point_clouds() {
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let camchain = dir.path().join("camchain.yaml");
@@ -346,11 +346,22 @@ fn a_rig_of_lenses_with_tangential_distortion_runs_through_synth_and_sgm() {
             "80x320",
             "--ndepth",
             "48",
+            "--ply",
             "--out",
             out.to_str().unwrap(),
         ],
         &cache,
     );
+    // The point cloud: a header, then one point per grid pixel with a depth (most of them).
+    let ply = std::fs::read(out.join("00001.ply")).unwrap();
+    let header = String::from_utf8_lossy(&ply[..200.min(ply.len())]).to_string();
+    let vertices: usize = header
+        .lines()
+        .find_map(|l| l.strip_prefix("element vertex "))
+        .expect("vertex count")
+        .parse()
+        .unwrap();
+    assert!(vertices > 80 * 320 / 2 && vertices <= 80 * 320, "{header}");
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("sgm.json")).unwrap()).unwrap();
     let ds = omnimvs_data::Dataset::open(&data).unwrap();

@@ -3,11 +3,13 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Result, bail};
-use omnimvs_core::GrayImage;
+use anyhow::{Context, Result, bail};
+use omnimvs_camera::ValidityMask;
+use omnimvs_core::{ColourPlanes, GrayImage};
 use omnimvs_data::gt::EvalTruth;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, StageTimes};
-use omnimvs_eval::output::ConfidenceRun;
+use omnimvs_eval::output::{ConfidenceRun, FrameScene, frame_path};
+use omnimvs_eval::ply::write_ply;
 use omnimvs_net::NetError;
 use omnimvs_net::learned_sgm::{MatchingCost, sgm_estimator};
 use omnimvs_stereo::{Directions, SgmEstimator, SgmParams, SweepStep};
@@ -26,8 +28,9 @@ use crate::args::{Cost, SweepArgs};
 /// Writes per frame, in OUT: %05d.tiff (f32 inverse depth, 1/m),
 /// %05d_index.tiff (f32 hypothesis index), %05d_invdepth.png (colour map,
 /// near = warm, scaled to the frame's 1st..99th percentile),
-/// %05d_confidence.png/.tiff (1 - best/second-best aggregated cost); and
-/// sgm.json (the parameters, timings and, when the dataset has ground
+/// %05d_confidence.png/.tiff (1 - best/second-best aggregated cost),
+/// optionally %05d.ply (a point cloud coloured by the panorama, in colour when the images
+/// are); and sgm.json (the parameters, timings and, when the dataset has ground
 /// truth, the per-frame metrics and their mean, also in metrics.md). Metrics
 /// follow the `reference` protocol (the reference's evalError, the paper's
 /// tables: sky is not scored), with the `with-sky` protocol (sky scored as
@@ -42,6 +45,10 @@ pub struct Args {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+    /// Also write a PLY point cloud coloured by the panorama at the estimated depth (in
+    /// colour when the frame's images are).
+    #[arg(long)]
+    pub ply: bool,
     /// Output grid and hypotheses.
     #[command(flatten)]
     pub sweep: SweepArgs,
@@ -236,8 +243,46 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     let stereo = estimator(&ds, spec, args.cost, &args.cost_weights, |d| args.params(d))?;
     let run = ConfidenceRun::new(&args.out, spec)?;
     outln!("{}", header(&ds, &stereo));
-    let run = pipelined(&ds, &stereo, run, &frames)?;
+    let clouds = if args.ply {
+        Some(PointClouds {
+            dir: &args.out,
+            masks: ds.masks()?,
+        })
+    } else {
+        None
+    };
+    let run = pipelined(&ds, &stereo, run, &frames, clouds.as_ref())?;
     finish(&ds, &stereo, run, &args.out)
+}
+
+/// Where `--ply` writes its point clouds, and the cameras' masks their panoramas need.
+struct PointClouds<'a> {
+    dir: &'a Path,
+    masks: Vec<ValidityMask>,
+}
+
+impl PointClouds<'_> {
+    /// Writes frame `frame`'s point cloud: the panorama at the estimated depth (in colour
+    /// with `colour`), one point per grid pixel.
+    fn write(
+        &self,
+        ds: &Dataset,
+        frame: u32,
+        est: &DepthEstimate,
+        images: &[GrayImage],
+        colour: Option<&[ColourPlanes]>,
+    ) -> Result<()> {
+        let scene = FrameScene {
+            rig: &ds.rig,
+            images,
+            masks: &self.masks,
+            colour,
+        };
+        let pano = scene.panorama(est)?;
+        let points = scene.point_cloud(est, &pano)?;
+        write_ply(&frame_path(self.dir, frame, ".ply"), &points)?;
+        Ok(())
+    }
 }
 
 /// The frames one after the other through [`crate::pipeline::run_frames`]: the same files
@@ -250,15 +295,29 @@ fn pipelined(
     stereo: &SgmEstimator,
     mut run: ConfidenceRun,
     frames: &[u32],
+    clouds: Option<&PointClouds<'_>>,
 ) -> Result<ConfidenceRun> {
     crate::pipeline::run_frames(
         frames,
         |f| {
-            let images = ds.read_frame(f)?;
-            Ok((images, frame_truth(ds, stereo, f)))
+            // Colour is decoded (with the gray, in one read) only for the point clouds.
+            let (images, colour) = if clouds.is_some() {
+                ds.read_frame_and_colour(f)?
+            } else {
+                (ds.read_frame(f)?, None)
+            };
+            Ok((images, colour, frame_truth(ds, stereo, f)))
         },
-        |_, (images, truth)| Ok((estimate(stereo, &images)?, truth)),
-        |f, ((est, timings), truth)| record(&mut run, f, &est, timings, truth.as_ref()),
+        |_, (images, colour, truth)| Ok((estimate(stereo, &images)?, images, colour, truth)),
+        |f, ((est, timings), images, colour, truth)| {
+            record(&mut run, f, &est, timings, truth.as_ref())?;
+            if let Some(clouds) = clouds {
+                clouds
+                    .write(ds, f, &est, &images, colour.as_deref())
+                    .with_context(|| format!("frame {f}: point cloud"))?;
+            }
+            Ok(())
+        },
     )?;
     Ok(run)
 }
