@@ -14,6 +14,12 @@
 #   test    the held-out test sets, frames 1..20, seeds no training or tuning used:
 #           test-things-s7001, test-house-s7002, test-things-hard-s7003, test-house-hard-s7004
 #   tiny    the `tiny` network's sets at its input size 192x200
+#   random-rigs       training sets on random rigs (`--rig random:SEED`: 2-8 cameras, 0.05-0.6 m,
+#                     ds/eucm/ucm/kb4 lenses of 180-250 degrees, tilts, calibration errors),
+#                     hard (per-camera gain, gamma, vignetting, blur, noise): RIGS rigs (default
+#                     100, rig seeds 1001..), frames 1..6 each, things and house alternately
+#   random-rigs-test  held-out random rigs (rig seeds 9101..9108, which no training set uses),
+#                     frames 1..5, standard
 # Environment: DATA (required), OMNIMVS (the binary; default `omnimvs` on PATH, else
 # target/release/omnimvs), ITBT (for the train group). Frames already written are skipped,
 # so the script can be started again after an interruption.
@@ -42,6 +48,22 @@ for group in "${groups[@]}"; do
       synth house-hard-itbtrig-s105 house hard 1..200 105 --rig "$ITBT" --size 766x800
       synth things-hard-itbtrig-s106 things hard 1..200 106 --rig "$ITBT" --size 766x800
       ;;
+    random-rigs)
+      for i in $(seq 1 "${RIGS:-100}"); do
+        kind=things
+        [ $((i % 2)) -eq 0 ] && kind=house
+        synth "random-rig-$((1000 + i))-$kind" "$kind" hard 1..6 $((20000 + i)) \
+          --rig "random:$((1000 + i))"
+      done
+      ;;
+    random-rigs-test)
+      for i in $(seq 1 8); do
+        kind=things
+        [ $((i % 2)) -eq 0 ] && kind=house
+        synth "test-random-rig-$((9100 + i))-$kind" "$kind" standard 1..5 $((29100 + i)) \
+          --rig "random:$((9100 + i))"
+      done
+      ;;
     test)
       synth test-things-s7001 things standard 1..20 7001
       synth test-house-s7002 house standard 1..20 7002
@@ -56,7 +78,7 @@ for group in "${groups[@]}"; do
       synth house-s1 house standard 1..110 1 --rig sunny --size 192x200
       ;;
     *)
-      echo "error: unknown group '$group' (train, test, tiny; the picks' sets: scripts/pick/make_data.sh)" >&2
+      echo "error: unknown group '$group' (train, test, tiny, random-rigs, random-rigs-test; the picks' sets: scripts/pick/make_data.sh)" >&2
       exit 2
       ;;
   esac

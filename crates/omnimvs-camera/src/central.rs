@@ -224,6 +224,26 @@ impl CentralCamera {
         self.lens.unproject(px).filter(|ray| self.sees(ray))
     }
 
+    /// The same camera with both focal lengths multiplied by `scale`, the principal point and
+    /// the field of view kept: a calibration whose focal length is off.
+    ///
+    /// # Errors
+    /// [`CameraError::Param`] for a scale that makes a focal length not positive or not finite.
+    pub fn with_focal_scaled(&self, scale: f64) -> Result<Self, CameraError> {
+        let f = self.lens.focal();
+        let focal = Focal::new(
+            self.lens.name(),
+            f.fx() * scale,
+            f.fy() * scale,
+            f.cx(),
+            f.cy(),
+        )?;
+        Ok(Self {
+            lens: self.lens.with_focal(focal),
+            ..self.clone()
+        })
+    }
+
     /// The same camera with `height x width` images: the same rays (pixel centres map as
     /// `(p + 0.5) s - 0.5`).
     pub fn resized(&self, height: u32, width: u32) -> Self {

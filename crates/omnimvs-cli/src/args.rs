@@ -6,6 +6,7 @@ use omnimvs_camera::FrameChoice;
 use omnimvs_net::NetConfig;
 use omnimvs_synth::SceneKind;
 use omnimvs_synth::SynthError;
+use omnimvs_synth::random_rig::{RANDOM_PREFIX, parse_random_rig};
 use omnimvs_synth::rig::{PRESET_NAME, RigSource, load_rig_with};
 
 /// The spherical sweep of a command: output grid and hypotheses (`sgm`, `eval`, `lut`), the
@@ -149,11 +150,16 @@ pub enum RigArg {
     /// A rig file: a reference `config.yaml` (its `config.omnimvs_sweep_min_depth` is the
     /// minimum depth), a Basalt `calibration.json`, a Kalibr `camchain.yaml`.
     Config(PathBuf),
+    /// A random rig drawn from a seed (`random:SEED`, [`omnimvs_synth::random_rig`]).
+    Random(u64),
 }
 
 impl RigArg {
-    /// Reads a `--rig` value: `sunny` (or its older name `preset`) or a path.
+    /// Reads a `--rig` value: `sunny` (or its older name `preset`), `random:SEED` or a path.
     pub fn parse(text: &str) -> Result<Self, String> {
+        if let Some(seed) = parse_random_rig(text).map_err(|e| e.to_string())? {
+            return Ok(Self::Random(seed));
+        }
         Ok(match text {
             PRESET_NAME | "preset" => Self::Published,
             path => Self::Config(PathBuf::from(path)),
@@ -172,6 +178,9 @@ impl RigArg {
         match self {
             Self::Published => load_rig_with(PRESET_NAME, min_depth_m, frame),
             Self::Config(path) => load_rig_with(&path.to_string_lossy(), min_depth_m, frame),
+            Self::Random(seed) => {
+                load_rig_with(&format!("{RANDOM_PREFIX}{seed}"), min_depth_m, frame)
+            }
         }
     }
 }
@@ -181,6 +190,7 @@ impl std::fmt::Display for RigArg {
         match self {
             Self::Published => f.write_str(PRESET_NAME),
             Self::Config(path) => write!(f, "{}", path.display()),
+            Self::Random(seed) => write!(f, "{RANDOM_PREFIX}{seed}"),
         }
     }
 }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use omnimvs_data::{Dataset, FrameRange};
-use omnimvs_synth::rig::{RigSource, load_rig, resize_rig};
+use omnimvs_synth::rig::{RigSource, load_rig};
 use omnimvs_synth::{DatasetWriter, SceneKind, Shard};
 use pyo3::prelude::*;
 
@@ -18,10 +18,7 @@ fn rig_source(rig: Option<&Bound<'_, PyAny>>) -> PyResult<RigSource> {
     };
     if let Ok(r) = rig.cast::<PyRig>() {
         let ds = &r.get().inner;
-        return Ok(RigSource {
-            rig: ds.rig.clone(),
-            min_depth_m: ds.config.min_depth_m,
-        });
+        return Ok(RigSource::new(ds.rig.clone(), ds.config.min_depth_m));
     }
     let path: PathBuf = rig.extract().map_err(|_| {
         bad_type(
@@ -126,7 +123,7 @@ pub fn synth(
                 format!("expected (height, width) > 0, found ({height}, {width})"),
             ));
         }
-        source.rig = resize_rig(&source.rig, height, width).py_err()?;
+        source = source.resized(height, width).py_err()?;
     }
     if spp == 0 {
         return Err(bad_argument("spp", "expected at least 1 sample per pixel"));

@@ -524,7 +524,7 @@ fn write_config_and_masks(
     // Every camera names its `invalid_mask` (the reference's reader needs the field) and
     // the mask is written: non-zero outside the field of view, what a reader derives
     // from `max_fov` alone anyway.
-    let mut rig_with_masks = rig.rig.clone();
+    let mut rig_with_masks = rig.stated_rig().clone();
     for (i, camera) in rig_with_masks.cameras.iter_mut().enumerate() {
         let name = format!("mask{}.png", i + 1);
         let mask = omnimvs_camera::ValidityMask::from_fov(&camera.model);

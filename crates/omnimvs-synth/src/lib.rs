@@ -22,6 +22,7 @@ pub mod house;
 pub mod mesh;
 pub mod mesh_file;
 pub mod primitive;
+pub mod random_rig;
 pub mod render;
 pub mod rig;
 pub mod rng;

@@ -24,9 +24,46 @@ pub const PRESET_CAMERAS_YAML: &str = include_str!("sunny_cameras.yaml");
 /// A rig and its minimum depth.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RigSource {
+    /// The rig the images are rendered with.
     pub rig: Rig,
     /// `config.omnimvs_sweep_min_depth`, metres.
     pub min_depth_m: f64,
+    /// The rig the dataset's `config.yaml` states, when it differs from [`Self::rig`] (a
+    /// calibration error, [`crate::random_rig`]); `None`: `rig` itself.
+    pub stated: Option<Rig>,
+}
+
+impl RigSource {
+    /// A rig stated as it is rendered.
+    pub fn new(rig: Rig, min_depth_m: f64) -> Self {
+        Self {
+            rig,
+            min_depth_m,
+            stated: None,
+        }
+    }
+
+    /// The rig the dataset's `config.yaml` states.
+    pub fn stated_rig(&self) -> &Rig {
+        self.stated.as_ref().unwrap_or(&self.rig)
+    }
+
+    /// The same source with every camera's images `height x width` ([`resize_rig`]), the
+    /// stated rig's too.
+    ///
+    /// # Errors
+    /// As [`resize_rig`].
+    pub fn resized(&self, height: u32, width: u32) -> Result<Self, SynthError> {
+        Ok(Self {
+            rig: resize_rig(&self.rig, height, width)?,
+            min_depth_m: self.min_depth_m,
+            stated: self
+                .stated
+                .as_ref()
+                .map(|s| resize_rig(s, height, width))
+                .transpose()?,
+        })
+    }
 }
 
 /// The published rig preset.
@@ -36,10 +73,7 @@ pub struct RigSource {
 /// embedded text were invalid.
 pub fn preset_rig() -> Result<RigSource, SynthError> {
     let rig = parse_config_rig(Path::new("<preset sunny>"), PRESET_CAMERAS_YAML)?;
-    Ok(RigSource {
-        rig,
-        min_depth_m: PRESET_MIN_DEPTH_M,
-    })
+    Ok(RigSource::new(rig, PRESET_MIN_DEPTH_M))
 }
 
 /// The rig of `--rig`: the preset name, or a rig file in any format omnimvs reads (a
@@ -67,6 +101,8 @@ pub fn load_rig_with(
 ) -> Result<RigSource, SynthError> {
     let mut source = if arg == PRESET_NAME || arg == "preset" {
         preset_rig()?
+    } else if let Some(seed) = crate::random_rig::parse_random_rig(arg)? {
+        crate::random_rig::random_rig(seed, &crate::random_rig::RandomRigSpec::default())?
     } else {
         rig_from_file(Path::new(arg), min_depth_m)?
     };
@@ -79,7 +115,9 @@ pub fn load_rig_with(
         }
         source.min_depth_m = d;
     }
-    source.rig = source.rig.in_frame(frame)?.0;
+    let (rig, frame_from_rig) = source.rig.in_frame(frame)?;
+    source.rig = rig;
+    source.stated = source.stated.map(|s| s.re_expressed(&frame_from_rig));
     Ok(source)
 }
 
@@ -110,10 +148,10 @@ pub fn rig_from_file(path: &Path, min_depth_m: Option<f64>) -> Result<RigSource,
                 )
             })
             .collect();
-        return Ok(RigSource {
-            rig: Rig::new(cameras),
-            min_depth_m: min_depth_m.unwrap_or(DEFAULT_MIN_DEPTH_M),
-        });
+        return Ok(RigSource::new(
+            Rig::new(cameras),
+            min_depth_m.unwrap_or(DEFAULT_MIN_DEPTH_M),
+        ));
     }
     let file = ConfigFile::read(path)?;
     let rig = file.rig(path)?;
@@ -130,10 +168,7 @@ pub fn rig_from_file(path: &Path, min_depth_m: Option<f64>) -> Result<RigSource,
             format!("expected a positive number of metres, found {min_depth}"),
         ));
     }
-    Ok(RigSource {
-        rig,
-        min_depth_m: min_depth,
-    })
+    Ok(RigSource::new(rig, min_depth))
 }
 
 /// Largest distance of a camera centre from the rig origin, metres.

@@ -180,3 +180,20 @@ fn a_three_camera_extended_unified_rig_is_consistent_across_cameras() {
     assert_eq!(source.rig.len(), 3);
     check_rig(SceneKind::Things, true, source, (400, 400), 2.0);
 }
+
+#[test]
+fn random_rigs_of_every_lens_model_are_consistent_across_cameras() {
+    // The first random rig of each lens model (their images rendered with the true rig).
+    let spec = omnimvs_synth::random_rig::RandomRigSpec::default();
+    let mut seen = std::collections::BTreeSet::new();
+    for seed in 0..100 {
+        let source = omnimvs_synth::random_rig::random_rig(seed, &spec).unwrap();
+        let model = source.rig.cameras[0].model.name();
+        if source.rig.len() > 5 || !seen.insert(model) {
+            continue;
+        }
+        println!("random:{seed}: {} cameras of {model}", source.rig.len());
+        check_rig(SceneKind::Things, true, source, (256, 256), 1.3);
+    }
+    assert_eq!(seen.len(), 4, "{seen:?}");
+}

@@ -11,10 +11,7 @@ use omnimvs_synth::rig::{RigSource, preset_rig, resize_rig};
 /// The published rig with its images shrunk to 48x50, for fast datasets.
 pub fn small_rig() -> RigSource {
     let p = preset_rig().unwrap();
-    RigSource {
-        rig: resize_rig(&p.rig, 48, 50).unwrap(),
-        min_depth_m: p.min_depth_m,
-    }
+    RigSource::new(resize_rig(&p.rig, 48, 50).unwrap(), p.min_depth_m)
 }
 
 /// Every file under `dir` (relative path -> bytes).
