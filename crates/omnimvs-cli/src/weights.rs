@@ -128,8 +128,19 @@ pub fn apply_pick(
         Weights::Bundled(model) => Some(*model),
         _ => None,
     };
+    let cameras = estimator.order().len();
     Ok(
         match pick.load(model).with_context(|| format!("--pick {pick}"))? {
+            // The picks read every camera's colour in its own channels: they run on rigs of
+            // the count they were trained on. `auto` answers without them elsewhere.
+            Some(refiner) if refiner.cameras() != cameras && *pick == PickChoice::Auto => {
+                eprintln!(
+                    "note: the bundled picks read {} cameras and this rig has {cameras}: \
+                     answering without them (--pick off)",
+                    refiner.cameras()
+                );
+                estimator
+            }
             Some(refiner) => estimator.with_pick(refiner).context("--pick")?,
             None => estimator,
         },

@@ -1,6 +1,6 @@
 //! Rigs of any calibration tool: `omnimvs rig show` and `rig convert` between the formats,
 //! `info` on a recording laid out as a calibration tool leaves it, and a generated dataset of a
-//! three-camera Kalibr rig in the fitted frame through `synth`, `info` and `sgm`, and one of
+//! three-camera Kalibr rig in the fitted frame through `synth`, `info`, `sgm` and `infer`, and one of
 //! lenses with tangential distortion.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)]
 
@@ -140,7 +140,7 @@ fn rig_show_prints_models_fields_of_view_frame_and_baselines() {
 }
 
 #[test]
-fn a_generated_three_camera_kalibr_rig_runs_through_synth_info_and_sgm() {
+fn a_generated_three_camera_kalibr_rig_runs_through_synth_info_sgm_and_infer() {
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let data = dir.path().join("eucm3");
@@ -197,6 +197,30 @@ fn a_generated_three_camera_kalibr_rig_runs_through_synth_info_and_sgm() {
     let mae = summary["mean_metrics"]["mae"].as_f64().unwrap();
     println!("three-camera rig: SGM MAE {mae:.2}, best constant {constant:.2}");
     assert!(mae < 0.8 * constant, "MAE {mae}, constant {constant}");
+    // The bundled network runs on three cameras too; its picks, which read four cameras'
+    // colours, stand aside and say so.
+    let net = dir.path().join("net");
+    let o = omnimvs(
+        &[
+            "infer",
+            data.to_str().unwrap(),
+            "--frames",
+            "1",
+            "--out",
+            net.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("the bundled picks read 4 cameras and this rig has 3"),
+        "{}",
+        text(&o.stderr)
+    );
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(net.join("metrics.json")).unwrap()).unwrap();
+    println!("three-camera rig, the default network: {metrics}");
+    assert!(net.join("00001.tiff").is_file());
 }
 
 #[test]

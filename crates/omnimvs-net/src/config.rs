@@ -244,7 +244,9 @@ pub struct NetConfig {
     pub out_width: usize,
     /// Latitude range of the output, `+-phi_deg` degrees (45 in the paper).
     pub phi_deg: f64,
-    /// Number of fisheye cameras of the rig (4 in the paper).
+    /// Number of fisheye cameras of the rig (4 in the paper): what the paper's network
+    /// concatenates, and the rig the cascade was trained on (which runs on any count of
+    /// [`CASCADE_CAMERAS`]).
     pub num_cameras: usize,
     /// Rows of the network input image (fisheye images are resized to it).
     pub input_height: usize,
@@ -258,6 +260,42 @@ pub struct NetConfig {
     /// experiment switches removed in 0.2 ([`REMOVED_SWITCHES`]) at their default value.
     #[serde(deserialize_with = "read_cascade_params")]
     pub cascade: CascadeParams,
+}
+
+/// How many cameras the cascade network runs on. What it computes across cameras does not
+/// depend on their number or order: the mean over camera pairs of the features' products,
+/// the share of cameras that see a sample, the mean ZNCC over pairs.
+pub const CASCADE_CAMERAS: std::ops::RangeInclusive<usize> = 2..=8;
+
+impl NetConfig {
+    /// Whether the network runs on `count` cameras (of `what`, named in the error): the
+    /// cascade on [`CASCADE_CAMERAS`], the paper's network, which concatenates its cameras'
+    /// volumes, on exactly `num_cameras`.
+    ///
+    /// # Errors
+    /// [`NetError::Cameras`] saying what the network takes.
+    pub fn check_cameras(&self, count: usize, what: impl Into<String>) -> Result<(), NetError> {
+        let supported = match self.family {
+            Family::Cascade if CASCADE_CAMERAS.contains(&count) => return Ok(()),
+            Family::Cascade => format!(
+                "the cascade network runs on {} to {} cameras",
+                CASCADE_CAMERAS.start(),
+                CASCADE_CAMERAS.end()
+            ),
+            Family::OmniMvs if count == self.num_cameras => return Ok(()),
+            Family::OmniMvs => format!(
+                "this network concatenates exactly {} cameras (the cascade takes {} to {})",
+                self.num_cameras,
+                CASCADE_CAMERAS.start(),
+                CASCADE_CAMERAS.end()
+            ),
+        };
+        Err(NetError::Cameras {
+            what: what.into(),
+            count,
+            supported,
+        })
+    }
 }
 
 /// Experiment switches of [`CascadeParams`] removed in 0.2 (no shipped network and no step of

@@ -26,6 +26,16 @@ pub enum NetError {
         /// Actual dimensions.
         actual: Vec<usize>,
     },
+    /// A rig with a number of cameras the network does not run on.
+    #[error("{what}: {count} cameras; {supported}")]
+    Cameras {
+        /// Whose cameras (a rig file, the images of a frame).
+        what: String,
+        /// How many there are.
+        count: usize,
+        /// What the network takes, in words.
+        supported: String,
+    },
     /// A camera order that is not a permutation of the cameras.
     #[error("camera order {order:?} is not a permutation of 0..{num_cameras}")]
     CameraOrder {

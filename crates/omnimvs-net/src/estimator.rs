@@ -153,7 +153,7 @@ impl NetEstimator {
     pub fn order(&self) -> Vec<usize> {
         match self {
             Self::OmniMvs(i) => i.order().to_vec(),
-            Self::Cascade(i) => (0..i.inference().net().config.num_cameras).collect(),
+            Self::Cascade(i) => (0..i.inference().full_sampler().num_cameras()).collect(),
         }
     }
 }

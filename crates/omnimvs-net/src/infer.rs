@@ -195,13 +195,10 @@ pub(crate) fn entropy_estimate(
 /// [`NetError::Shape`] for another number of cameras; [`NetError`] for an invalid grid or
 /// minimum depth.
 pub fn sweep_spec(config: &NetConfig, dataset: &Dataset) -> Result<SweepSpec, NetError> {
-    if dataset.rig.len() != config.num_cameras {
-        return Err(NetError::Shape {
-            what: format!("cameras of {}", dataset.config_path.display()),
-            expected: vec![config.num_cameras],
-            actual: vec![dataset.rig.len()],
-        });
-    }
+    config.check_cameras(
+        dataset.rig.len(),
+        format!("the rig of {}", dataset.config_path.display()),
+    )?;
     Ok(dataset.sweep_spec(
         config.out_height,
         config.out_width,
@@ -234,13 +231,7 @@ pub fn input_tensors(
     masks: &[ValidityMask],
     device: &Device,
 ) -> Result<Vec<Tensor<4>>, NetError> {
-    if images.len() != config.num_cameras {
-        return Err(NetError::Shape {
-            what: "images per frame".into(),
-            expected: vec![config.num_cameras],
-            actual: vec![images.len()],
-        });
-    }
+    config.check_cameras(images.len(), "the images of a frame")?;
     let size = [config.input_height, config.input_width];
     Ok(network_inputs(images, masks, size)?
         .into_iter()

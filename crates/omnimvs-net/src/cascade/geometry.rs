@@ -226,13 +226,7 @@ impl CascadeGeometry {
         host_correlation: bool,
     ) -> Result<Self, NetError> {
         config.validate()?;
-        if rig.len() != config.num_cameras {
-            return Err(NetError::Shape {
-                what: "cameras of the rig".into(),
-                expected: vec![config.num_cameras],
-                actual: vec![rig.len()],
-            });
-        }
+        config.check_cameras(rig.len(), "the rig")?;
         let grids = config
             .cascade_sizes()
             .map(|[h, w]| EquirectGrid::new(h, w, config.phi_deg));
@@ -738,13 +732,8 @@ impl CascadeNet {
         images: &[Tensor<4>],
         training: bool,
     ) -> Result<([Vec<Tensor<4>>; 3], Option<ImagePyramid>), NetError> {
-        if images.len() != self.config.num_cameras {
-            return Err(NetError::Shape {
-                what: "images per frame".into(),
-                expected: vec![self.config.num_cameras],
-                actual: vec![images.len()],
-            });
-        }
+        self.config
+            .check_cameras(images.len(), "the images of a frame")?;
         if let Some(image) = images.iter().find(|i| i.dims()[0] != 1) {
             return Err(NetError::Shape {
                 what: "cascade input batch (per-pixel hypotheses are built per frame)".into(),
