@@ -122,9 +122,9 @@ fn camera_counts_outside_two_to_eight_are_refused() {
     let (_, hyps) = sunny();
     let device = Device::flex();
     for count in [1, 9] {
-        let err = CascadeGeometry::new(&ring(count), &config, &hyps, &device)
-            .err()
-            .expect("refused");
+        let Err(err) = CascadeGeometry::new(&ring(count), &config, &hyps, &device) else {
+            panic!("{count} cameras accepted");
+        };
         assert!(matches!(err, NetError::Cameras { .. }), "{err}");
         let text = err.to_string();
         assert!(text.contains(&format!("{count} cameras")), "{text}");
