@@ -289,55 +289,35 @@ fn info_on_a_basalt_recording_says_how_it_was_found() {
 }
 
 /// Four cameras of Kalibr's `omni` model with `radtan` distortion (not radial: the sweep
-/// projects them through the exact model) on a square, 0.35 m apart.
-const OMNI_RADTAN_CAMCHAIN: &str = "\
-cam0:
-  camera_model: omni
-  intrinsics: [1.1, 260.0, 261.0, 319.5, 319.5]
-  distortion_model: radtan
-  distortion_coeffs: [-0.05, 0.01, 0.001, -0.002]
-  resolution: [640, 640]
-cam1:
-  camera_model: omni
-  intrinsics: [1.1, 260.0, 261.0, 319.5, 319.5]
-  distortion_model: radtan
-  distortion_coeffs: [0.02, -0.003, -0.0015, 0.001]
-  resolution: [640, 640]
-  T_cn_cnm1:
-  - [0.0, 0.0, -1.0, -0.25]
-  - [0.0, 1.0, 0.0, 0.0]
-  - [1.0, 0.0, 0.0, -0.25]
-  - [0.0, 0.0, 0.0, 1.0]
-cam2:
-  camera_model: omni
-  intrinsics: [1.1, 260.0, 261.0, 319.5, 319.5]
-  distortion_model: radtan
-  distortion_coeffs: [-0.03, 0.004, 0.0008, 0.0012]
-  resolution: [640, 640]
-  T_cn_cnm1:
-  - [0.0, 0.0, -1.0, -0.25]
-  - [0.0, 1.0, 0.0, 0.0]
-  - [1.0, 0.0, 0.0, -0.25]
-  - [0.0, 0.0, 0.0, 1.0]
-cam3:
-  camera_model: omni
-  intrinsics: [1.1, 260.0, 261.0, 319.5, 319.5]
-  distortion_model: radtan
-  distortion_coeffs: [0.01, 0.0, 0.002, -0.001]
-  resolution: [640, 640]
-  T_cn_cnm1:
-  - [0.0, 0.0, -1.0, -0.25]
-  - [0.0, 1.0, 0.0, 0.0]
-  - [1.0, 0.0, 0.0, -0.25]
-  - [0.0, 0.0, 0.0, 1.0]
-";
+/// projects them through the exact model) on a square, 0.35 m apart, as Kalibr writes them.
+fn omni_radtan_camchain() -> String {
+    let distortions = [
+        "[-0.05, 0.01, 0.001, -0.002]",
+        "[0.02, -0.003, -0.0015, 0.001]",
+        "[-0.03, 0.004, 0.0008, 0.0012]",
+        "[0.01, 0.0, 0.002, -0.001]",
+    ];
+    let mut text = String::new();
+    for (i, coeffs) in distortions.iter().enumerate() {
+        text += &format!(
+            "cam{i}:\n  camera_model: omni\n  intrinsics: [1.1, 260.0, 261.0, 319.5, 319.5]\n  \
+             distortion_model: radtan\n  distortion_coeffs: {coeffs}\n  resolution: [640, 640]\n"
+        );
+        if i > 0 {
+            // Each camera a quarter turn from the one before, 0.25 m along x and z.
+            text += "  T_cn_cnm1:\n  - [0.0, 0.0, -1.0, -0.25]\n  - [0.0, 1.0, 0.0, 0.0]\n  \
+                     - [1.0, 0.0, 0.0, -0.25]\n  - [0.0, 0.0, 0.0, 1.0]\n";
+        }
+    }
+    text
+}
 
 #[test]
 fn a_rig_of_lenses_with_tangential_distortion_runs_through_synth_and_sgm_with_point_clouds() {
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let camchain = dir.path().join("camchain.yaml");
-    std::fs::write(&camchain, OMNI_RADTAN_CAMCHAIN).unwrap();
+    std::fs::write(&camchain, omni_radtan_camchain()).unwrap();
     let data = dir.path().join("omni");
     run_ok(
         &[

@@ -5,7 +5,7 @@
 //! published rig of `sunny_single` from `../shared/data/omnimvs-samples`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::{Device, Tensor};
 use omnimvs_camera::nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use omnimvs_camera::{Camera, Pose, Rig};
 use omnimvs_data::Dataset;
@@ -19,7 +19,7 @@ mod samples;
 
 #[path = "support/micro_cascade.rs"]
 mod micro_cascade;
-use micro_cascade::{max_difference, micro_config, micro_images};
+use micro_cascade::{max_difference, micro_config, micro_image_tensors};
 
 fn sunny() -> (Rig, InvDepthHypotheses) {
     let ds = Dataset::open(&samples::sample("sunny_single")).unwrap();
@@ -55,15 +55,7 @@ fn images(config: &NetConfig, count: usize, device: &Device) -> Vec<Tensor<4>> {
         num_cameras: count,
         ..config.clone()
     };
-    micro_images(&config)
-        .into_iter()
-        .map(|img| {
-            Tensor::<4>::from_data(
-                TensorData::new(img, [1, 1, config.input_height, config.input_width]),
-                device,
-            )
-        })
-        .collect()
+    micro_image_tensors(&config, device)
 }
 
 /// The final stage's answer of the micro cascade (random weights) on `rig` and `images`.
