@@ -292,7 +292,6 @@ impl<M: Trainable> Trainer<M> {
         if let Some(max) = self.config.max_steps_per_epoch {
             items.truncate(max);
         }
-        let cams = self.config.net.num_cameras;
         items
             .into_iter()
             .map(|(source, frame)| PlanItem {
@@ -300,7 +299,8 @@ impl<M: Trainable> Trainer<M> {
                 frame,
                 rotation: rng.below(self.config.rotations),
                 shift: if self.config.permute_cameras {
-                    rng.below(cams)
+                    // Each set's own rig: the cascade trains on sets of any camera count.
+                    rng.below(self.sources[source].dataset.rig.len())
                 } else {
                     0
                 },
@@ -437,7 +437,6 @@ impl<M: Trainable> Trainer<M> {
             self.config.loader_threads,
             self.config.photometric.clone(),
         );
-        let cams = self.config.net.num_cameras;
         let (mut loss_sum, mut wait) = (0f64, 0f64);
         let start = Instant::now();
         for step in 0..steps {
@@ -451,6 +450,7 @@ impl<M: Trainable> Trainer<M> {
                 start: item.window_start,
                 width,
             });
+            let cams = self.sources[item.source].dataset.rig.len();
             let order: Vec<usize> = (0..cams).map(|j| (j + item.shift) % cams).collect();
             let geometry = self.geometry_for(item.source, item.rotation)?;
             let loss = self.learner.step(&sample, &geometry, &order, lr)?;

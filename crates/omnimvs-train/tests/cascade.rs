@@ -430,3 +430,40 @@ fn validation_on_the_host_path_predicts_as_the_device_path() {
     let d = micro_cascade::max_difference(&a, &b);
     assert!(d < 1e-3, "index maps differ by {d}");
 }
+
+/// One cascade learns from rigs of different camera counts in turn (the published rig's first
+/// two and three cameras, and all four): the loss falls on each, from the same weights.
+#[test]
+fn one_cascade_trains_on_rigs_of_two_three_and_four_cameras() {
+    let (rig, hyps) = sunny_rig();
+    let config = train_config(11);
+    let device = Device::flex();
+    let mut learner = seeded_learner(&config, &device);
+    let setups: Vec<(CascadeGeometry, Sample)> = [2, 3, 4]
+        .into_iter()
+        .map(|count| {
+            let sub = Rig::new(rig.cameras[..count].to_vec());
+            let geometry = CascadeGeometry::new(&sub, &config.net, &hyps, &device).unwrap();
+            let net = NetConfig {
+                num_cameras: count,
+                ..config.net.clone()
+            };
+            (geometry, micro_sample(&net))
+        })
+        .collect();
+    let first: Vec<f32> = setups
+        .iter()
+        .map(|(g, s)| read_values(learner.loss(s, g, &[]).unwrap(), "loss").unwrap()[0])
+        .collect();
+    for _ in 0..15 {
+        for (geometry, sample) in &setups {
+            learner.step(sample, geometry, &[], 0.01).unwrap();
+        }
+    }
+    for ((geometry, sample), first) in setups.iter().zip(first) {
+        let last = read_values(learner.loss(sample, geometry, &[]).unwrap(), "loss").unwrap()[0];
+        let count = sample.images.len();
+        println!("{count} cameras: loss {first:.3} -> {last:.3}");
+        assert!(last < 0.7 * first, "{count} cameras: {first} -> {last}");
+    }
+}
