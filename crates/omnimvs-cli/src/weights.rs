@@ -128,23 +128,14 @@ pub fn apply_pick(
         Weights::Bundled(model) => Some(*model),
         _ => None,
     };
-    let cameras = estimator.order().len();
-    Ok(
-        match pick.load(model).with_context(|| format!("--pick {pick}"))? {
-            // The picks read every camera's colour in its own channels: they run on rigs of
-            // the count they were trained on. `auto` answers without them elsewhere.
-            Some(refiner) if refiner.cameras() != cameras && *pick == PickChoice::Auto => {
-                eprintln!(
-                    "note: the bundled picks read {} cameras and this rig has {cameras}: \
-                     answering without them (--pick off)",
-                    refiner.cameras()
-                );
-                estimator
-            }
-            Some(refiner) => estimator.with_pick(refiner).context("--pick")?,
-            None => estimator,
-        },
-    )
+    let refiner = pick.load(model).with_context(|| format!("--pick {pick}"))?;
+    let (estimator, note) = estimator
+        .with_chosen_pick(pick, refiner)
+        .context("--pick")?;
+    if let Some(note) = note {
+        eprintln!("note: {note}");
+    }
+    Ok(estimator)
 }
 
 impl std::fmt::Display for Weights {

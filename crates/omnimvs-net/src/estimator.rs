@@ -16,6 +16,7 @@ use omnimvs_core::GrayImage;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, EstimateError, StageObserver};
 use omnimvs_sweep::{CacheStatus, EquirectGrid, InvDepthHypotheses, LutCache, SweepSpec};
 
+use crate::bundled::PickChoice;
 use crate::cascade::{CascadeAnswer, CascadeInference, StageOutput};
 use crate::config::NetConfig;
 use crate::error::NetError;
@@ -97,6 +98,33 @@ impl NetEstimator {
     /// Whether the learnt pick runs after the network.
     pub fn has_pick(&self) -> bool {
         matches!(self, Self::Cascade(i) if i.has_pick())
+    }
+
+    /// The network with the pick `choice` loaded (`pick`, `None` for none): the picks read
+    /// each camera's colour in a channel of their own and run on rigs of the camera count they
+    /// were trained on, so under [`PickChoice::Auto`] a pick made for another count stands
+    /// aside, and the note returned says so.
+    ///
+    /// # Errors
+    /// As [`Self::with_pick`], for a pick chosen by name or file.
+    pub fn with_chosen_pick(
+        self,
+        choice: &PickChoice,
+        pick: Option<PickRefiner>,
+    ) -> Result<(Self, Option<String>), NetError> {
+        let cameras = self.order().len();
+        match pick {
+            Some(pick) if pick.cameras() != cameras && *choice == PickChoice::Auto => {
+                let note = format!(
+                    "the bundled picks read {} cameras and this rig has {cameras}: answering \
+                     without them (--pick off)",
+                    pick.cameras()
+                );
+                Ok((self, Some(note)))
+            }
+            Some(pick) => Ok((self.with_pick(pick)?, None)),
+            None => Ok((self, None)),
+        }
     }
 
     /// The network's configuration.

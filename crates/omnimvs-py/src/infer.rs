@@ -139,10 +139,15 @@ pub fn infer<'py>(
             backend.is_gpu(),
         )
         .py_err()?;
-        let estimator = match load_pick(pick, weights.as_deref())? {
-            Some(pick) => estimator.with_pick(pick).py_err()?,
-            None => estimator,
-        };
+        let (estimator, note) = estimator
+            .with_chosen_pick(
+                &PickChoice::parse(pick),
+                load_pick(pick, weights.as_deref())?,
+            )
+            .py_err()?;
+        if let Some(note) = note {
+            eprintln!("note: {note}");
+        }
         let images = images.load(&ds)?;
         let mut estimate = estimator.estimate(&images).py_err()?;
         finishing.apply(&mut estimate);

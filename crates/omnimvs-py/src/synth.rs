@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use omnimvs_data::{Dataset, FrameRange};
+use omnimvs_synth::random_rig::RANDOM_PREFIX;
 use omnimvs_synth::rig::{RigSource, load_rig};
 use omnimvs_synth::{DatasetWriter, SceneKind, Shard};
 use pyo3::prelude::*;
@@ -32,7 +33,7 @@ fn rig_source(rig: Option<&Bound<'_, PyAny>>) -> PyResult<RigSource> {
     let text = path
         .to_str()
         .ok_or_else(|| bad_argument("rig", format!("{}: expected a UTF-8 path", path.display())))?;
-    if text == "sunny" || text == "preset" {
+    if text == "sunny" || text == "preset" || text.starts_with(RANDOM_PREFIX) {
         return load_rig(text).py_err();
     }
     if !path.is_file() {
@@ -83,8 +84,9 @@ fn frame_range(frames: &Bound<'_, PyAny>) -> PyResult<FrameRange> {
 ///     out: the output folder (`str` or `pathlib.Path`).
 ///     frames: `(first, last)`, inclusive, or one frame number.
 ///     seed: the dataset seed.
-///     rig: `None` for the published 4-camera rig, an `omnimvs.Rig`, or a reference
-///         `config.yaml` path.
+///     rig: `None` for the published 4-camera rig, an `omnimvs.Rig`, a rig file (a reference
+///         `config.yaml`, a Basalt `calibration.json`, a Kalibr `camchain.yaml`), or
+///         `"random:SEED"`: a rig drawn from the seed (2-8 cameras of four lens models).
 ///     size: `(height, width)` of every camera's images (the rig's intrinsics are rescaled),
 ///         or `None` for the rig's own.
 ///     spp: samples per pixel (anti-aliasing).

@@ -246,4 +246,5 @@ def synth(
     spp: int = 1,
 ) -> Dataset:
     """Renders a synthetic dataset (``"things"`` or ``"house"``) with exact ground truth into
-    ``out`` (frames 1..10 by default) and returns it."""
+    ``out`` (frames 1..10 by default) and returns it. ``rig``: ``None`` (the published rig), a
+    ``Rig``, a rig file, or ``"random:SEED"`` (a rig drawn from the seed)."""
