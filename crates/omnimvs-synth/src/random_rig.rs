@@ -15,7 +15,6 @@ use omnimvs_camera::{
 };
 
 use crate::SynthError;
-use crate::rig::RigSource;
 use crate::rng::Rng;
 
 /// The prefix of a random rig's name: `random:SEED`.
@@ -63,6 +62,19 @@ impl Default for RandomRigSpec {
     }
 }
 
+/// A drawn rig: the one its images are rendered with, its minimum depth, and the one its
+/// `config.yaml` states when that differs (a calibration error). `crate::rig::RigSource`
+/// takes it as it is (`From`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RandomRig {
+    /// The rig the images are rendered with.
+    pub rig: Rig,
+    /// The sweep's minimum depth, metres.
+    pub min_depth_m: f64,
+    /// The rig the dataset states, with a calibration error; `None`: `rig` itself.
+    pub stated: Option<Rig>,
+}
+
 /// The lens models a random rig draws from.
 const MODELS: [&str; 4] = ["ds", "eucm", "ucm", "kb4"];
 
@@ -95,7 +107,7 @@ pub fn parse_random_rig(arg: &str) -> Result<Option<u64>, SynthError> {
 /// # Errors
 /// [`SynthError::Invalid`] for an empty range in `spec`; [`SynthError`] from a camera model
 /// (none in practice: the draws stay inside every model's domain).
-pub fn random_rig(seed: u64, spec: &RandomRigSpec) -> Result<RigSource, SynthError> {
+pub fn random_rig(seed: u64, spec: &RandomRigSpec) -> Result<RandomRig, SynthError> {
     check_spec(spec)?;
     let mut rng = Rng::for_frame(seed, "random-rig", 0);
     let count = spec.cameras.0 + rng.below(spec.cameras.1 - spec.cameras.0 + 1);
@@ -140,7 +152,7 @@ pub fn random_rig(seed: u64, spec: &RandomRigSpec) -> Result<RigSource, SynthErr
     } else {
         None
     };
-    Ok(RigSource {
+    Ok(RandomRig {
         rig,
         min_depth_m: ((2.75 * radius_m).clamp(0.3, 1.65) * 100.0).round() / 100.0,
         stated,

@@ -29,8 +29,18 @@ pub struct RigSource {
     /// `config.omnimvs_sweep_min_depth`, metres.
     pub min_depth_m: f64,
     /// The rig the dataset's `config.yaml` states, when it differs from [`Self::rig`] (a
-    /// calibration error, [`crate::random_rig`]); `None`: `rig` itself.
+    /// calibration error, [`crate::random_rig::RandomRig`]); `None`: `rig` itself.
     pub stated: Option<Rig>,
+}
+
+impl From<crate::random_rig::RandomRig> for RigSource {
+    fn from(drawn: crate::random_rig::RandomRig) -> Self {
+        Self {
+            rig: drawn.rig,
+            min_depth_m: drawn.min_depth_m,
+            stated: drawn.stated,
+        }
+    }
 }
 
 impl RigSource {
@@ -102,7 +112,7 @@ pub fn load_rig_with(
     let mut source = if arg == PRESET_NAME || arg == "preset" {
         preset_rig()?
     } else if let Some(seed) = crate::random_rig::parse_random_rig(arg)? {
-        crate::random_rig::random_rig(seed, &crate::random_rig::RandomRigSpec::default())?
+        crate::random_rig::random_rig(seed, &crate::random_rig::RandomRigSpec::default())?.into()
     } else {
         rig_from_file(Path::new(arg), min_depth_m)?
     };

@@ -193,7 +193,7 @@ fn random_rigs_of_every_lens_model_are_consistent_across_cameras() {
             continue;
         }
         println!("random:{seed}: {} cameras of {model}", source.rig.len());
-        check_rig(SceneKind::Things, true, source, (256, 256), 1.3);
+        check_rig(SceneKind::Things, true, source.into(), (256, 256), 1.3);
     }
     assert_eq!(seen.len(), 4, "{seen:?}");
 }
