@@ -99,6 +99,23 @@ impl DatasetOpener {
         }
     }
 
+    /// [`Self::open`] for the rig alone: a calibration file or a folder without images opens
+    /// too (`OpenOptions::rig_only`).
+    ///
+    /// # Errors
+    /// As [`Self::open`].
+    pub fn open_rig_only(&self, path: &Path) -> Result<Dataset> {
+        let options = OpenOptions {
+            rig_only: true,
+            ..self.options
+        };
+        let ds = Dataset::open_with(path, &options);
+        match self.stated {
+            Some(_) => ds.with_context(|| self.describe()),
+            None => Ok(ds?),
+        }
+    }
+
     /// The stated options, as typed.
     fn describe(&self) -> String {
         let o = &self.options;

@@ -376,3 +376,32 @@ fn a_rig_of_lenses_with_tangential_distortion_runs_through_synth_and_sgm_with_po
     println!("omni + radtan rig: SGM MAE {mae:.2}, best constant {constant:.2}");
     assert!(mae < 0.8 * constant, "MAE {mae}, constant {constant}");
 }
+
+/// `omnimvs lut` needs the rig alone: a calibration file with no images beside it will do.
+#[test]
+fn lut_builds_from_a_calibration_file_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    for (file, cameras) in [
+        ("kb4-6cam-240/config.yaml", 6),
+        ("ds-4cam-compact/calibration.json", 4),
+        ("eucm-3cam/camchain.yaml", 3),
+    ] {
+        let out = dir.path().join("table.hwd");
+        run_ok(
+            &[
+                "lut",
+                example(file).to_str().unwrap(),
+                "--size",
+                "16x64",
+                "--ndepth",
+                "8",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            &cache,
+        );
+        let bytes = std::fs::metadata(&out).unwrap().len();
+        assert_eq!(bytes, (cameras * 4 * 16 * 64 * 2 * 4) as u64, "{file}");
+    }
+}

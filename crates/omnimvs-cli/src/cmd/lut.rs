@@ -15,7 +15,8 @@ use crate::args::SweepArgs;
 /// grid_sample(align_corners=True); invalid entries far outside [-1, 1].
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Dataset folder (or its config.yaml).
+    /// Dataset folder, or a rig file alone (config.yaml, Basalt calibration.json, Kalibr
+    /// camchain.yaml): the table needs no images.
     pub dataset: PathBuf,
     /// Output grid and hypotheses.
     #[command(flatten)]
@@ -29,7 +30,8 @@ pub struct Args {
 }
 
 pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
-    let ds = datasets.open(&args.dataset)?;
+    // The table needs the rig alone: a calibration file without images will do.
+    let ds = datasets.open_rig_only(&args.dataset)?;
     if args.sweep.ndepth < 2 || (!args.all_spheres && !args.sweep.ndepth.is_multiple_of(2)) {
         bail!(
             "--ndepth {}: expected an even number of at least 2 (the file holds every other sphere)",
