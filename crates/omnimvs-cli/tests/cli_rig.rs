@@ -30,6 +30,62 @@ fn assert_same_relative_rig(a: &Rig, b: &Rig) {
     }
 }
 
+/// Frame 1 of a `things` set through `rig` at 320x320 into `data` (`global`: options before
+/// the command).
+fn synth_one_frame(global: &[&str], rig: &Path, seed: &str, data: &Path, cache: &Path) {
+    let mut args = global.to_vec();
+    args.extend([
+        "synth",
+        "--kind",
+        "things",
+        "--rig",
+        rig.to_str().unwrap(),
+        "--size",
+        "320x320",
+        "--frames",
+        "1",
+        "--seed",
+        seed,
+        "--out",
+        data.to_str().unwrap(),
+    ]);
+    run_ok(&args, cache);
+}
+
+/// Runs `sgm` on frame 1 of `data` at 80x320, N = 48 (with `extra` options) into `out` and
+/// checks that it finds the depth: under 0.8 times the error of the best constant answer (a
+/// broken matcher is at the constant's error or worse). Returns `sgm.json`.
+fn sgm_finds_the_depth(data: &Path, out: &Path, extra: &[&str], cache: &Path) -> serde_json::Value {
+    let mut args = vec![
+        "sgm",
+        data.to_str().unwrap(),
+        "--frames",
+        "1",
+        "--size",
+        "80x320",
+        "--ndepth",
+        "48",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    let table = run_ok(&args, cache);
+    assert!(table.contains("ZNCC+SGM"), "{table}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sgm.json")).unwrap()).unwrap();
+    let ds = omnimvs_data::Dataset::open(data).unwrap();
+    let spec = ds.sweep_spec(80, 320, 45.0, 48).unwrap();
+    let truth = ds.eval_truth(1, &spec).unwrap().unwrap();
+    let constant = support::constant_guess_mae(&truth, 48);
+    let mae = summary["mean_metrics"]["mae"].as_f64().unwrap();
+    println!(
+        "{}: SGM MAE {mae:.2}, best constant {constant:.2}",
+        data.display()
+    );
+    assert!(mae < 0.8 * constant, "MAE {mae}, constant {constant}");
+    summary
+}
+
 #[test]
 fn rig_convert_round_trips_through_every_format() {
     let dir = tempfile::tempdir().unwrap();
@@ -144,59 +200,15 @@ fn a_generated_three_camera_kalibr_rig_runs_through_synth_info_sgm_and_infer() {
     let dir = tempfile::tempdir().unwrap();
     let cache = dir.path().join("cache");
     let data = dir.path().join("eucm3");
-    run_ok(
-        &[
-            "--rig-frame",
-            "fitted",
-            "synth",
-            "--kind",
-            "things",
-            "--rig",
-            example("eucm-3cam/camchain.yaml").to_str().unwrap(),
-            "--size",
-            "320x320",
-            "--frames",
-            "1",
-            "--seed",
-            "5",
-            "--out",
-            data.to_str().unwrap(),
-        ],
-        &cache,
-    );
+    let rig = example("eucm-3cam/camchain.yaml");
+    synth_one_frame(&["--rig-frame", "fitted"], &rig, "5", &data, &cache);
     let info = run_ok(&["info", data.to_str().unwrap()], &cache);
     assert!(info.contains("cameras      3"), "{info}");
     assert!(info.contains("(id 3, eucm): 320x320 px"), "{info}");
     assert!(info.contains("ground truth 1 of 1 frames"), "{info}");
-    let out = dir.path().join("sgm");
-    let table = run_ok(
-        &[
-            "sgm",
-            data.to_str().unwrap(),
-            "--frames",
-            "1",
-            "--size",
-            "80x320",
-            "--ndepth",
-            "48",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        &cache,
-    );
-    assert!(table.contains("ZNCC+SGM"), "{table}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("sgm.json")).unwrap()).unwrap();
+    // Measured: SGM MAE 12.2 against the best constant's 17.2.
+    let summary = sgm_finds_the_depth(&data, &dir.path().join("sgm"), &[], &cache);
     assert_eq!(summary["rig_frame"]["choice"], "calibration");
-    // The matcher finds the depth: under the error of the best constant answer (measured:
-    // 12.2 against 17.2, % of N; a broken matcher is at the constant's error or worse).
-    let ds = omnimvs_data::Dataset::open(&data).unwrap();
-    let spec = ds.sweep_spec(80, 320, 45.0, 48).unwrap();
-    let truth = ds.eval_truth(1, &spec).unwrap().unwrap();
-    let constant = support::constant_guess_mae(&truth, 48);
-    let mae = summary["mean_metrics"]["mae"].as_f64().unwrap();
-    println!("three-camera rig: SGM MAE {mae:.2}, best constant {constant:.2}");
-    assert!(mae < 0.8 * constant, "MAE {mae}, constant {constant}");
     // The bundled network runs on three cameras too; its picks, which read four cameras'
     // colours, stand aside and say so.
     let net = dir.path().join("net");
@@ -319,43 +331,12 @@ fn a_rig_of_lenses_with_tangential_distortion_runs_through_synth_and_sgm_with_po
     let camchain = dir.path().join("camchain.yaml");
     std::fs::write(&camchain, omni_radtan_camchain()).unwrap();
     let data = dir.path().join("omni");
-    run_ok(
-        &[
-            "synth",
-            "--kind",
-            "things",
-            "--rig",
-            camchain.to_str().unwrap(),
-            "--size",
-            "320x320",
-            "--frames",
-            "1",
-            "--seed",
-            "6",
-            "--out",
-            data.to_str().unwrap(),
-        ],
-        &cache,
-    );
+    synth_one_frame(&[], &camchain, "6", &data, &cache);
     let info = run_ok(&["info", data.to_str().unwrap()], &cache);
     assert!(info.contains("(id 4, ucm): 320x320 px"), "{info}");
+    // Measured: SGM MAE 8.05 against the best constant's 15.3.
     let out = dir.path().join("sgm");
-    run_ok(
-        &[
-            "sgm",
-            data.to_str().unwrap(),
-            "--frames",
-            "1",
-            "--size",
-            "80x320",
-            "--ndepth",
-            "48",
-            "--ply",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        &cache,
-    );
+    sgm_finds_the_depth(&data, &out, &["--ply"], &cache);
     // The point cloud: a header, then one point per grid pixel with a depth (most of them).
     let ply = std::fs::read(out.join("00001.ply")).unwrap();
     let header = String::from_utf8_lossy(&ply[..200.min(ply.len())]).to_string();
@@ -366,15 +347,6 @@ fn a_rig_of_lenses_with_tangential_distortion_runs_through_synth_and_sgm_with_po
         .parse()
         .unwrap();
     assert!(vertices > 80 * 320 / 2 && vertices <= 80 * 320, "{header}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("sgm.json")).unwrap()).unwrap();
-    let ds = omnimvs_data::Dataset::open(&data).unwrap();
-    let spec = ds.sweep_spec(80, 320, 45.0, 48).unwrap();
-    let truth = ds.eval_truth(1, &spec).unwrap().unwrap();
-    let constant = support::constant_guess_mae(&truth, 48);
-    let mae = summary["mean_metrics"]["mae"].as_f64().unwrap();
-    println!("omni + radtan rig: SGM MAE {mae:.2}, best constant {constant:.2}");
-    assert!(mae < 0.8 * constant, "MAE {mae}, constant {constant}");
 }
 
 /// `omnimvs lut` needs the rig alone: a calibration file with no images beside it will do.
