@@ -92,11 +92,7 @@ impl DatasetOpener {
     /// # Errors
     /// The library's error, with the options named when one was stated.
     pub fn open(&self, path: &Path) -> Result<Dataset> {
-        let ds = Dataset::open_with(path, &self.options);
-        match self.stated {
-            Some(_) => ds.with_context(|| self.describe()),
-            None => Ok(ds?),
-        }
+        self.open_with(path, &self.options)
     }
 
     /// [`Self::open`] for the rig alone: a calibration file or a folder without images opens
@@ -109,7 +105,12 @@ impl DatasetOpener {
             rig_only: true,
             ..self.options
         };
-        let ds = Dataset::open_with(path, &options);
+        self.open_with(path, &options)
+    }
+
+    /// Opens `path` with `options`, naming the stated options in an error.
+    fn open_with(&self, path: &Path, options: &OpenOptions) -> Result<Dataset> {
+        let ds = Dataset::open_with(path, options);
         match self.stated {
             Some(_) => ds.with_context(|| self.describe()),
             None => Ok(ds?),

@@ -91,17 +91,15 @@ fn off_centre_note(ds: &Dataset) -> Option<String> {
         return None;
     }
     let fitted_from_rig = ds.rig.fitted_frame().ok()?;
-    let offset_m = fitted_from_rig.inverse().translation.vector.norm();
+    // The cameras' mean position: the fitted frame's origin, in the calibration frame.
+    let centre = fitted_from_rig.inverse().translation.vector;
+    let offset_m = centre.norm();
     let tilt_deg = fitted_from_rig.rotation.angle().to_degrees();
     let spread_m = ds
         .rig
         .cameras
         .iter()
-        .map(|c| {
-            (c.center_in_rig() - fitted_from_rig.inverse().translation.vector)
-                .coords
-                .norm()
-        })
+        .map(|c| (c.center_in_rig() - centre).coords.norm())
         .fold(0.0, f64::max);
     (offset_m > 0.25 * spread_m || tilt_deg > 5.0).then(|| {
         format!(

@@ -8,8 +8,7 @@ use omnimvs_camera::ValidityMask;
 use omnimvs_core::{ColourPlanes, GrayImage};
 use omnimvs_data::gt::EvalTruth;
 use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, StageTimes};
-use omnimvs_eval::output::{ConfidenceRun, FrameScene, frame_path};
-use omnimvs_eval::ply::write_ply;
+use omnimvs_eval::output::{ConfidenceRun, FrameScene};
 use omnimvs_net::NetError;
 use omnimvs_net::learned_sgm::{MatchingCost, sgm_estimator};
 use omnimvs_stereo::{Directions, SgmEstimator, SgmParams, SweepStep};
@@ -279,8 +278,7 @@ impl PointClouds<'_> {
             colour,
         };
         let pano = scene.panorama(est)?;
-        let points = scene.point_cloud(est, &pano)?;
-        write_ply(&frame_path(self.dir, frame, ".ply"), &points)?;
+        scene.write_point_cloud(self.dir, frame, est, &pano)?;
         Ok(())
     }
 }

@@ -157,6 +157,21 @@ impl FrameScene<'_> {
             }
         })
     }
+
+    /// Writes [`Self::point_cloud`] of frame `frame` as `dir/%05d.ply`.
+    ///
+    /// # Errors
+    /// As [`Self::point_cloud`]; a file that cannot be written.
+    pub fn write_point_cloud(
+        &self,
+        dir: &Path,
+        frame: u32,
+        est: &DepthEstimate,
+        gray: &Panorama,
+    ) -> Result<(), DataError> {
+        let points = self.point_cloud(est, gray)?;
+        write_ply(&frame_path(dir, frame, ".ply"), &points)
+    }
 }
 
 /// Writes `.png` (inverse depth colour-mapped on `[0, 1/min_depth]`), `_vis.png` (rows:
@@ -201,8 +216,7 @@ pub fn write_depth_pictures(
     let vis = frame_path(dir, frame, "_vis.png");
     write_png_u8(&vis, w, composite.len() / (3 * w), 3, &composite)?;
     if ply {
-        let points = scene.point_cloud(est, &pano)?;
-        write_ply(&frame_path(dir, frame, ".ply"), &points)?;
+        scene.write_point_cloud(dir, frame, est, &pano)?;
     }
     Ok(())
 }
