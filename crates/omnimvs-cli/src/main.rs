@@ -81,6 +81,7 @@ enum Command {
     Synth(cmd::synth::Args),
     Train(Box<cmd::train::Args>),
     Eval(cmd::eval::Args),
+    Finetune(Box<cmd::finetune::Args>),
 }
 
 /// The commands that do not open their dataset through [`dataset::DatasetOpener`], so a
@@ -96,6 +97,7 @@ fn ignores_dataset_options(
         Command::Train(_) => Some("train"),
         Command::Demo(_) => Some("demo"),
         Command::Synth(_) if pose_unit_stated => Some("synth"),
+        Command::Finetune(_) if pose_unit_stated => Some("finetune"),
         Command::Bench(_) => Some("bench"),
         Command::Rig(_) if pose_unit_stated || min_depth_stated => Some("rig"),
         _ => None,
@@ -140,6 +142,7 @@ fn main() -> ExitCode {
         Command::Synth(a) => cmd::synth::run(&a, &datasets),
         Command::Train(a) => cmd::train::run(&a),
         Command::Eval(a) => cmd::eval::run(&a, &datasets),
+        Command::Finetune(a) => cmd::finetune::run(&a, &datasets),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

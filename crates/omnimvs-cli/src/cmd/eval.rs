@@ -160,22 +160,8 @@ pub fn rows(
 
 pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
     let ds = datasets.open(&args.data)?;
-    let frames: Vec<u32> = args
-        .frames
-        .indices()
-        .into_iter()
-        .filter(|&f| ds.gt_path(f).is_some())
-        .collect();
-    if frames.is_empty() {
-        bail!(
-            "no frame of {} has ground truth in {}",
-            args.frames,
-            ds.root.display()
-        );
-    }
+    let frames = frames_with_truth(&ds, args.frames)?;
     let spec = args.sweep.spec(&ds)?;
-    // The ground truth of the evaluation grid, with its sky mask for the two protocols.
-    let eval = Evaluation::new(&ds, &frames, spec)?;
     let pictures = match &args.out {
         Some(out) => {
             std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
@@ -183,11 +169,6 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         }
         None => None,
     };
-    if let Some(out) = pictures {
-        let gt = &eval.truths[0].gt;
-        let path = out.join(format!("{:05}_gt.png", frames[0]));
-        write_index_png(&path, &gt.index, gt, spec.ndepth(), true)?;
-    }
     let rows = rows(
         &ds,
         &args.method,
@@ -197,7 +178,48 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         &args.backend,
         spec,
     )?;
+    let evaluation = evaluate(&ds, &frames, spec, rows, pictures)?;
+    report(&evaluation, args.out.as_deref())
+}
 
+/// The frames of `range` that have ground truth in `ds`.
+///
+/// # Errors
+/// None of them has.
+pub fn frames_with_truth(ds: &Dataset, range: FrameRange) -> Result<Vec<u32>> {
+    let frames: Vec<u32> = range
+        .indices()
+        .into_iter()
+        .filter(|&f| ds.gt_path(f).is_some())
+        .collect();
+    if frames.is_empty() {
+        bail!(
+            "no frame of {range} has ground truth in {}",
+            ds.root.display()
+        );
+    }
+    Ok(frames)
+}
+
+/// Scores every row on `frames` of `ds` at the evaluation sweep `spec`, with a progress bar;
+/// with `pictures`, writes the first frame's colour-mapped answers and ground truth there.
+///
+/// # Errors
+/// A frame that cannot be read or estimated, a picture that cannot be written.
+pub fn evaluate(
+    ds: &Dataset,
+    frames: &[u32],
+    spec: SweepSpec,
+    rows: Vec<Row>,
+    pictures: Option<&Path>,
+) -> Result<EvalReport> {
+    // The ground truth of the evaluation grid, with its sky mask for the two protocols.
+    let eval = Evaluation::new(ds, frames, spec)?;
+    if let Some(out) = pictures {
+        let gt = &eval.truths[0].gt;
+        let path = out.join(format!("{:05}_gt.png", frames[0]));
+        write_index_png(&path, &gt.index, gt, spec.ndepth(), true)?;
+    }
     let mut results = Vec::new();
     let bar = ProgressBar::new(0);
     bar.set_style(ProgressStyle::with_template(
@@ -227,7 +249,7 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         results.push(scores.finish(&spec, seconds_per_frame)?);
     }
     bar.finish_and_clear();
-    report(&EvalReport::new(&eval, results), args.out.as_deref())
+    Ok(EvalReport::new(&eval, results))
 }
 
 /// Prints the evaluation's tables and speeds; writes `eval.json` and `eval.md` into `out`.

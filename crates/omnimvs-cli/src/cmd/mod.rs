@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod demo;
 pub mod eval;
+pub mod finetune;
 pub mod infer;
 pub mod info;
 pub mod lut;

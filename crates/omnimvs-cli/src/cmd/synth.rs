@@ -1,11 +1,12 @@
 //! `omnimvs synth`: render a synthetic omnidirectional stereo dataset.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::FrameRange;
+use omnimvs_synth::rig::RigSource;
 use omnimvs_synth::{DatasetWriter, Difficulty, FrameEvent, Shard, SynthOptions};
 
 use crate::args::{Kind, RigArg, Size};
@@ -115,7 +116,6 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         Some(s) => Shard::parse(s).context("--shard")?,
         None => Shard::ALL,
     };
-    let frames = shard.frames(&range);
     let meshes: Vec<String> = args
         .meshes
         .iter()
@@ -127,7 +127,24 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         difficulty: args.kind.difficulty.into(),
         ..SynthOptions::new(args.kind.kind.into(), args.seed)
     };
-    let writer = DatasetWriter::create_with(&args.out, &source, &options, &range)?;
+    render(&args.out, &source, &options, range, shard)
+}
+
+/// Renders `shard` of the frames `range` of the dataset `out` (created, or resumed where it
+/// stopped) with a progress bar, then prints what it did.
+///
+/// # Errors
+/// A folder that holds another dataset, a rig the renderer cannot take, a file that cannot
+/// be written.
+pub fn render(
+    out: &Path,
+    source: &RigSource,
+    options: &SynthOptions,
+    range: FrameRange,
+    shard: Shard,
+) -> Result<()> {
+    let frames = shard.frames(&range);
+    let writer = DatasetWriter::create_with(out, source, options, &range)?;
 
     let bar = ProgressBar::new(frames.len() as u64);
     bar.set_style(ProgressStyle::with_template(
@@ -146,13 +163,13 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     result.with_context(|| {
         format!(
             "after {rendered} new frame(s) (all finished frames are kept; run again to resume) in {}",
-            args.out.display()
+            out.display()
         )
     })?;
     let secs = t0.elapsed().as_secs_f64();
     outln!(
         "{}: {rendered} frame(s) rendered in {secs:.1} s ({:.2} s/frame), {skipped} already complete; shard {}/{} of frames {}..{}",
-        args.out.display(),
+        out.display(),
         secs / rendered.max(1) as f64,
         shard.index,
         shard.count,

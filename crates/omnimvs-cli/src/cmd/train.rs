@@ -239,9 +239,18 @@ fn backend_of(args: &Args) -> Result<Backend> {
     if let Some(backend) = args.backend {
         return Ok(backend);
     }
-    let Some(dir) = &args.resume else {
-        return Ok(Backend::Cpu);
-    };
+    match &args.resume {
+        Some(dir) => backend_of_run(dir),
+        None => Ok(Backend::Cpu),
+    }
+}
+
+/// The backend the run in `dir` last ran on: its `backend.txt`, else cpu (a new run, or one
+/// from before it was recorded).
+///
+/// # Errors
+/// A `backend.txt` that cannot be read or names no backend.
+pub fn backend_of_run(dir: &Path) -> Result<Backend> {
     let path = dir.join(BACKEND_FILE);
     let text = match std::fs::read_to_string(&path) {
         Ok(text) => text,
@@ -258,7 +267,7 @@ fn backend_of(args: &Args) -> Result<Backend> {
 }
 
 /// Records `backend` as the one the run in `run_dir` last ran on.
-fn record_backend(run_dir: &Path, backend: Backend) -> Result<()> {
+pub fn record_backend(run_dir: &Path, backend: Backend) -> Result<()> {
     let path = run_dir.join(BACKEND_FILE);
     write_atomic(&path, format!("{backend}\n").as_bytes())
         .with_context(|| format!("writing {}", path.display()))
@@ -537,7 +546,7 @@ fn train<M: Trainable>(args: &Args, backend: Backend, device: &Device) -> Result
     };
     record_backend(&trainer.run_dir, backend)?;
     print_run(&trainer, backend);
-    run_epochs(args, &mut trainer)
+    run_epochs(&mut trainer, args.stop_after)
 }
 
 /// The run in `dir` resumed, with the options that may change on the way (the column window,
@@ -676,7 +685,7 @@ fn train_config(args: &Args, net: NetConfig) -> TrainConfig {
 }
 
 /// Prints what the run trains on and how.
-fn print_run<M: Trainable>(trainer: &Trainer<M>, backend: Backend) {
+pub fn print_run<M: Trainable>(trainer: &Trainer<M>, backend: Backend) {
     let config = trainer.config.clone();
     let (train, val): (usize, usize) = trainer
         .splits
@@ -712,11 +721,11 @@ fn print_run<M: Trainable>(trainer: &Trainer<M>, backend: Backend) {
     );
 }
 
-/// Trains the epochs left (or `--stop-after` of them) with a progress bar, printing every
+/// Trains the epochs left (or `stop_after` of them) with a progress bar, printing every
 /// epoch's figures and, at the end, where the weights are.
-fn run_epochs<M: Trainable>(args: &Args, trainer: &mut Trainer<M>) -> Result<()> {
+pub fn run_epochs<M: Trainable>(trainer: &mut Trainer<M>, stop_after: Option<usize>) -> Result<()> {
     let config = trainer.config.clone();
-    let last = match args.stop_after {
+    let last = match stop_after {
         Some(n) => (trainer.state.epochs_done + n).min(config.epochs),
         None => config.epochs,
     };
