@@ -56,7 +56,7 @@ pub use error::CameraError;
 pub use frame::FrameChoice;
 pub use kalibr::{kalibr_camchain_yaml, parse_kalibr_camchain, read_kalibr_camchain};
 pub use mask::ValidityMask;
-pub use model::CameraModel;
+pub use model::{CameraModel, RESOLUTION_ANGLE_DEG};
 pub use models::{DoubleSphere, ExtendedUnified, KannalaBrandt4, PinholeRadtan, Unified};
 pub use ocam::OcamModel;
 pub use ocam_txt::{

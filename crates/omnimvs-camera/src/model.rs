@@ -2,6 +2,10 @@ use nalgebra::Vector3;
 
 use crate::{CentralCamera, OcamModel, Pixel, RadialProjection};
 
+/// The angle from the optical axis out to which [`CameraModel::angular_resolution`] measures
+/// a camera's pixels per radian: inside the field of view of every fisheye lens omnimvs takes.
+pub const RESOLUTION_ANGLE_DEG: f64 = 80.0;
+
 /// A camera's intrinsic model. An enum rather than a trait object so that a
 /// rig stays `Clone + PartialEq + Send + Sync` and can be hashed for caching.
 #[derive(Debug, Clone, PartialEq)]
@@ -106,11 +110,70 @@ impl CameraModel {
         }
     }
 
+    /// The image's mean angular resolution out to `angle_rad` from the optical axis, pixels
+    /// per radian: the distance from the axis's pixel to the pixels of the rays at that angle
+    /// (at eight azimuths), divided by the angle. For an equidistant lens it is the focal
+    /// length; it lets images of different lenses and sizes be brought to one angular
+    /// resolution. `None` when the camera does not see that angle all around.
+    pub fn pixels_per_radian(&self, angle_rad: f64) -> Option<f64> {
+        let centre = Pixel {
+            col: (f64::from(self.width()) - 1.0) / 2.0,
+            row: (f64::from(self.height()) - 1.0) / 2.0,
+        };
+        let axis = self.unproject(centre)?.normalize();
+        // Two directions across the axis.
+        let helper = if axis.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
+        let u = axis.cross(&helper).normalize();
+        let v = axis.cross(&u);
+        let at_axis = self.project(&axis)?;
+        let mut sum = 0.0;
+        const AZIMUTHS: usize = 8;
+        for k in 0..AZIMUTHS {
+            let phi = std::f64::consts::TAU * k as f64 / AZIMUTHS as f64;
+            let ray = axis * angle_rad.cos() + (u * phi.cos() + v * phi.sin()) * angle_rad.sin();
+            let px = self.project(&ray)?;
+            sum += (px.col - at_axis.col).hypot(px.row - at_axis.row);
+        }
+        Some(sum / AZIMUTHS as f64 / angle_rad)
+    }
+
+    /// [`Self::pixels_per_radian`] out to [`RESOLUTION_ANGLE_DEG`]: the measure the network's
+    /// input size goes by.
+    pub fn angular_resolution(&self) -> Option<f64> {
+        self.pixels_per_radian(RESOLUTION_ANGLE_DEG.to_radians())
+    }
+
     /// A short name of the model, as written in `config.yaml`.
     pub fn name(&self) -> &'static str {
         match self {
             Self::Ocam(_) => "ocam",
             Self::Central(c) => c.lens.name(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use crate::{KannalaBrandt4, Lens};
+
+    #[test]
+    fn an_equidistant_lens_has_its_focal_length_as_angular_resolution_at_every_size() {
+        let lens = KannalaBrandt4::new(250.0, 250.0, 399.5, 399.5, 0.0, 0.0, 0.0, 0.0).unwrap();
+        let camera = CameraModel::Central(
+            CentralCamera::new(Lens::KannalaBrandt4(lens), 800, 800, Some(220.0)).unwrap(),
+        );
+        let ppr = camera.pixels_per_radian(80f64.to_radians()).unwrap();
+        assert!((ppr - 250.0).abs() < 1e-6, "{ppr}");
+        let half = camera.resized(400, 400);
+        let ppr = half.pixels_per_radian(80f64.to_radians()).unwrap();
+        assert!((ppr - 125.0).abs() < 1e-6, "{ppr}");
+        // An angle beyond the field of view has no answer.
+        assert_eq!(camera.pixels_per_radian(115f64.to_radians()), None);
     }
 }

@@ -1,6 +1,7 @@
 //! `omnimvs infer --input-size`: a reference checkpoint runs at the cameras' native image size
 //! by default (as the reference runs it), our models at the size they were trained at, and
-//! either can be told; `infer.json` records what was used.
+//! either can be told, also as the size of the angular resolution the model was trained at;
+//! `infer.json` records what was used.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::{Path, PathBuf};
@@ -53,7 +54,7 @@ fn used_size(out: &Path) -> Vec<usize> {
 fn reference_checkpoints_run_at_native_size_and_every_size_can_be_asked() {
     let dir = tempfile::tempdir().unwrap();
     let pt = checkpoint().display().to_string();
-    let cases: [(&str, &[&str], [usize; 2]); 4] = [
+    let cases: [(&str, &[&str], [usize; 2]); 5] = [
         // A reference checkpoint: the cameras' own 768x800, as the reference runs it.
         (
             "pt-default",
@@ -86,6 +87,13 @@ fn reference_checkpoints_run_at_native_size_and_every_size_can_be_asked() {
         ),
         // Our bundled model: the size it was trained at.
         ("tiny-default", &["--weights", "tiny"], [192, 200]),
+        // The published rig's own cameras: the angular resolution the model was trained at is
+        // the one they show at the model's size.
+        (
+            "tiny-angular",
+            &["--weights", "tiny", "--input-size", "angular"],
+            [192, 200],
+        ),
     ];
     for (name, extra, expected) in cases {
         let out = dir.path().join(name);

@@ -15,6 +15,7 @@ use omnimvs_stereo::{SgmEstimator, SgmParams};
 use omnimvs_sweep::{LutCache, SweepSpec};
 
 use crate::args::{BACKEND_HELP, Method, Preset, SweepArgs, parse_backend};
+use crate::cmd::infer::{InputSize, input_size};
 use crate::weights::{BUNDLED, Weights, apply_pick, parse_pick};
 
 /// Evaluate methods against ground truth with the paper's metrics.
@@ -61,6 +62,10 @@ pub struct Args {
     /// Frames, A..B (inclusive) or a single frame.
     #[arg(long)]
     pub frames: FrameRange,
+    /// Size the images are fed to the networks at, as `infer --input-size`: `model`, `native`,
+    /// `angular` or HEIGHTxWIDTH.
+    #[arg(long)]
+    pub input_size: Option<InputSize>,
     /// Output grid and hypotheses.
     #[command(flatten)]
     pub sweep: SweepArgs,
@@ -95,6 +100,7 @@ pub fn rows(
     weights: &[Weights],
     pick: &PickChoice,
     preset: Preset,
+    input: Option<InputSize>,
     backend: &omnimvs_net::Backend,
     spec: SweepSpec,
 ) -> Result<Vec<Row>> {
@@ -104,7 +110,12 @@ pub fn rows(
         match method {
             Method::Net => {
                 for w in weights {
-                    let net = w.load_family(preset.name(), &device)?;
+                    let mut net = w.load_family(preset.name(), &device)?;
+                    let model_size = [net.config().input_height, net.config().input_width];
+                    if let Some(size) = input_size(input, w, model_size, ds)? {
+                        net.set_input_size(size)
+                            .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
+                    }
                     let (estimator, _) = NetEstimator::new(
                         net,
                         ds,
@@ -175,6 +186,7 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         &args.weights,
         &args.pick,
         args.preset,
+        args.input_size,
         &args.backend,
         spec,
     )?;

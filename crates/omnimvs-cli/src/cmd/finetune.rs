@@ -502,6 +502,7 @@ fn evaluate(
         &[weights],
         &pick,
         Preset::Cascade,
+        None,
         &backend,
         spec,
     )?;

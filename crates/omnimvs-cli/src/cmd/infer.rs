@@ -60,8 +60,10 @@ pub struct Args {
     pub order: Option<Vec<usize>>,
     /// Size the images are fed to the network at: `model` (the size the model's
     /// configuration names, e.g. 768x800, what our models were trained at), `native` (each
-    /// camera's own image size, as the reference implementation runs its checkpoints) or
-    /// HEIGHTxWIDTH. Default: `native` for a reference PyTorch checkpoint, `model` otherwise.
+    /// camera's own image size, as the reference implementation runs its checkpoints),
+    /// `angular` (the size at which the cameras show the angular resolution, in pixels per
+    /// radian, that the published rig shows at the model's size: for lenses and image sizes
+    /// unlike the published rig's; `omnimvs info` prints each camera's) or HEIGHTxWIDTH. Default: `native` for a reference PyTorch checkpoint, `model` otherwise.
     /// infer.json records the size used.
     #[arg(long)]
     pub input_size: Option<InputSize>,
@@ -144,6 +146,8 @@ pub enum InputSize {
     Model,
     /// The cameras' own image size.
     Native,
+    /// The size at which the cameras show the angular resolution the model was trained at.
+    Angular,
     /// A given size.
     Fixed(Size),
 }
@@ -155,10 +159,10 @@ impl std::str::FromStr for InputSize {
         match s {
             "model" => Ok(Self::Model),
             "native" => Ok(Self::Native),
-            size => size
-                .parse()
-                .map(Self::Fixed)
-                .map_err(|e: String| format!("expected `model`, `native` or HEIGHTxWIDTH: {e}")),
+            "angular" => Ok(Self::Angular),
+            size => size.parse().map(Self::Fixed).map_err(|e: String| {
+                format!("expected `model`, `native`, `angular` or HEIGHTxWIDTH: {e}")
+            }),
         }
     }
 }
@@ -168,18 +172,93 @@ impl std::fmt::Display for InputSize {
         match self {
             Self::Model => f.write_str("model"),
             Self::Native => f.write_str("native"),
+            Self::Angular => f.write_str("angular"),
             Self::Fixed(size) => write!(f, "{size}"),
         }
     }
 }
 
-/// The input size `--input-size` asks for with these weights (`None`: the model's own).
+/// The cameras' mean angular resolution (pixels per radian out to
+/// [`omnimvs_camera::RESOLUTION_ANGLE_DEG`] from the axis); `None` when a camera does not see
+/// that far.
+fn mean_resolution<'a>(
+    cameras: impl Iterator<Item = &'a omnimvs_camera::CameraModel>,
+) -> Option<f64> {
+    let mut n = 0.0;
+    let mut sum = 0.0;
+    for model in cameras {
+        sum += model.angular_resolution()?;
+        n += 1.0;
+    }
+    (n > 0.0).then(|| sum / n)
+}
+
+/// The input size at which the cameras of `rig` show the angular resolution that the
+/// published rig's cameras (what the bundled models were trained on) show at the model's input
+/// size `model_size`: the cameras' common image size times the ratio of the two resolutions.
 ///
 /// # Errors
-/// `native` on a rig whose cameras have different image sizes.
+/// Cameras of different image sizes, or a camera that sees less than
+/// [`omnimvs_camera::RESOLUTION_ANGLE_DEG`] from its axis.
+pub fn angular_input_size(
+    rig: &omnimvs_camera::Rig,
+    model_size: [usize; 2],
+    source: &Path,
+) -> Result<[usize; 2]> {
+    let published = omnimvs_synth::rig::preset_rig()?.rig;
+    let [rows, cols] = model_size.map(|v| u32::try_from(v).unwrap_or(u32::MAX));
+    let resized: Vec<_> = published
+        .cameras
+        .iter()
+        .map(|c| c.model.resized(rows, cols))
+        .collect();
+    let Some(reference) = mean_resolution(resized.iter()) else {
+        bail!("the published rig has no angular resolution at {rows}x{cols}");
+    };
+    let Some(ours) = mean_resolution(rig.cameras.iter().map(|c| &c.model)) else {
+        bail!(
+            "{}: --input-size angular needs cameras that see {} degrees from their axis",
+            source.display(),
+            omnimvs_camera::RESOLUTION_ANGLE_DEG
+        );
+    };
+    let [h, w] = common_size(rig, source, "angular")?;
+    let scale = reference / ours;
+    Ok([h, w].map(|v| ((v as f64 * scale).round() as usize).max(2)))
+}
+
+/// The image size every camera of `rig` shares, for `--input-size NAME`.
+fn common_size(rig: &omnimvs_camera::Rig, source: &Path, name: &str) -> Result<[usize; 2]> {
+    match common_image_size(rig) {
+        Ok(size) => Ok(size),
+        Err(sizes) => {
+            let Some(first) = sizes.first() else {
+                bail!("{}: the rig has no camera", source.display());
+            };
+            let other = sizes.iter().position(|s| s != first).unwrap_or_default();
+            bail!(
+                "{}: --input-size {name} needs one image size for every camera; camera 1 \
+                 is {}x{}, camera {} is {}x{} (give --input-size HEIGHTxWIDTH)",
+                source.display(),
+                first[0],
+                first[1],
+                other + 1,
+                sizes[other][0],
+                sizes[other][1]
+            );
+        }
+    }
+}
+
+/// The input size `--input-size` asks for with these weights, whose model takes
+/// `model_size` (`None`: the model's own).
+///
+/// # Errors
+/// `native` or `angular` on a rig whose cameras have different image sizes.
 pub fn input_size(
     asked: Option<InputSize>,
     weights: &Weights,
+    model_size: [usize; 2],
     ds: &Dataset,
 ) -> Result<Option<[usize; 2]>> {
     let is_pytorch = matches!(weights, Weights::File(p)
@@ -192,25 +271,8 @@ pub fn input_size(
     Ok(match asked {
         InputSize::Model => None,
         InputSize::Fixed(size) => Some([size.height, size.width]),
-        InputSize::Native => match common_image_size(&ds.rig) {
-            Ok(size) => Some(size),
-            Err(sizes) => {
-                let Some(first) = sizes.first() else {
-                    bail!("{}: the rig has no camera", ds.config_path.display());
-                };
-                let other = sizes.iter().position(|s| s != first).unwrap_or_default();
-                bail!(
-                    "{}: --input-size native needs one image size for every camera; camera 1 \
-                     is {}x{}, camera {} is {}x{} (give --input-size HEIGHTxWIDTH)",
-                    ds.config_path.display(),
-                    first[0],
-                    first[1],
-                    other + 1,
-                    sizes[other][0],
-                    sizes[other][1]
-                );
-            }
-        },
+        InputSize::Native => Some(common_size(&ds.rig, &ds.config_path, "native")?),
+        InputSize::Angular => Some(angular_input_size(&ds.rig, model_size, &ds.config_path)?),
     })
 }
 
@@ -292,7 +354,8 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     let device = args.backend.device()?;
     let ds = datasets.open(&args.dataset)?;
     let mut net = args.weights.load_family(args.preset.name(), &device)?;
-    if let Some(size) = input_size(args.input_size, &args.weights, &ds)? {
+    let model_size = [net.config().input_height, net.config().input_width];
+    if let Some(size) = input_size(args.input_size, &args.weights, model_size, &ds)? {
         net.set_input_size(size)
             .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
     }

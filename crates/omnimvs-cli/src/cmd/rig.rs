@@ -151,8 +151,11 @@ pub fn print_rig(rig: &Rig) {
         let c = cam.center_in_rig();
         let center_px = Pixel::new(f64::from(m.width()) / 2.0, f64::from(m.height()) / 2.0);
         let axis = cam.ray_in_rig(center_px).unwrap_or_default();
+        let resolution = m
+            .angular_resolution()
+            .map_or(String::new(), |r| format!(", {r:.0} px/rad"));
         outln!(
-            "  camera {} (id {}, {}): {}x{} px, FOV {:.1} deg, centre ({:+.3}, {:+.3}, {:+.3}) m, axis ({:+.2}, {:+.2}, {:+.2}), dir {}",
+            "  camera {} (id {}, {}): {}x{} px, FOV {:.1} deg{resolution}, centre ({:+.3}, {:+.3}, {:+.3}) m, axis ({:+.2}, {:+.2}, {:+.2}), dir {}",
             i + 1,
             cam.id,
             m.name(),
