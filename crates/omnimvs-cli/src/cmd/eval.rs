@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_data::{Dataset, DepthEstimator, FrameRange};
 use omnimvs_eval::output::evaluation::write_index_png;
 use omnimvs_eval::output::{EvalReport, Evaluation, MethodScores};
+use omnimvs_eval::photometric::{PhotometricReport, PhotometricRow, photometric_difference};
 use omnimvs_net::NetEstimator;
 use omnimvs_net::bundled::PickChoice;
 use omnimvs_stereo::{SgmEstimator, SgmParams};
@@ -76,6 +77,13 @@ pub struct Args {
     /// ground truth to OUT.
     #[arg(long)]
     pub pictures: bool,
+    /// Score how well each method's depth explains the images instead of comparing it with
+    /// ground truth: the cross-camera photometric difference (every output point projected into
+    /// the cameras that see it; the median gray difference over camera pairs divided by the
+    /// gray values' standard deviation; lower is better), beside a constant depth of 3 m as a
+    /// floor. What `eval` does on frames without ground truth (real recordings).
+    #[arg(long)]
+    pub photometric: bool,
     #[arg(long, default_value = "cpu", value_parser = parse_backend, help = BACKEND_HELP)]
     pub backend: omnimvs_net::Backend,
 }
@@ -171,6 +179,14 @@ pub fn rows(
 
 pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> {
     let ds = datasets.open(&args.data)?;
+    let with_truth = args
+        .frames
+        .indices()
+        .into_iter()
+        .any(|f| ds.gt_path(f).is_some());
+    if args.photometric || !with_truth {
+        return photometric(args, &ds);
+    }
     let frames = frames_with_truth(&ds, args.frames)?;
     let spec = args.sweep.spec(&ds)?;
     let pictures = match &args.out {
@@ -192,6 +208,84 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     )?;
     let evaluation = evaluate(&ds, &frames, spec, rows, pictures)?;
     report(&evaluation, args.out.as_deref())
+}
+
+/// The constant depth of the photometric evaluation's floor row, metres.
+const FLOOR_DEPTH_M: f32 = 3.0;
+
+/// `eval --photometric`, and `eval` on frames without ground truth: every method's
+/// cross-camera photometric difference, frame by frame, beside a constant depth.
+fn photometric(args: &Args, ds: &Dataset) -> Result<()> {
+    let found = ds.frames_found();
+    let frames: Vec<u32> = args
+        .frames
+        .indices()
+        .into_iter()
+        .filter(|f| found.contains(f))
+        .collect();
+    if frames.is_empty() {
+        bail!(
+            "no frame of {} has images in {}",
+            args.frames,
+            ds.root.display()
+        );
+    }
+    let spec = args.sweep.spec(ds)?;
+    let rows = rows(
+        ds,
+        &args.method,
+        &args.weights,
+        &args.pick,
+        args.preset,
+        args.input_size,
+        &args.backend,
+        spec,
+    )?;
+    let bar = ProgressBar::new(0);
+    bar.set_style(ProgressStyle::with_template(
+        "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} frames",
+    )?);
+    let mut results = Vec::new();
+    for row in rows {
+        bar.reset();
+        bar.set_length(frames.len() as u64);
+        bar.set_prefix(row.name.clone());
+        let start = Instant::now();
+        let mut per_frame = Vec::new();
+        for &f in &frames {
+            let context = || format!("{}: frame {f}", row.name);
+            let images = ds.read_frame(f).with_context(context)?;
+            let est = row.estimator.estimate(&images).with_context(context)?;
+            let value = photometric_difference(&ds.rig, &images, &est.spec.grid, &est.inv_depth);
+            per_frame.push((f, value));
+            bar.inc(1);
+        }
+        let seconds = start.elapsed().as_secs_f64() / frames.len() as f64;
+        results.push(PhotometricRow::new(row.name, per_frame, seconds));
+    }
+    bar.finish_and_clear();
+    let floor = vec![1.0 / FLOOR_DEPTH_M; spec.grid.height * spec.grid.width];
+    let mut per_frame = Vec::new();
+    for &f in &frames {
+        let images = ds.read_frame(f).with_context(|| format!("frame {f}"))?;
+        per_frame.push((
+            f,
+            photometric_difference(&ds.rig, &images, &spec.grid, &floor),
+        ));
+    }
+    results.push(PhotometricRow::new(
+        format!("a constant {FLOOR_DEPTH_M} m"),
+        per_frame,
+        0.0,
+    ));
+    let report = PhotometricReport::new(&ds.root, frames, results);
+    out!("{}", report.table());
+    if let Some(out) = &args.out {
+        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+        report.write(out)?;
+        outln!("wrote {}", out.join("eval.json").display());
+    }
+    Ok(())
 }
 
 /// The frames of `range` that have ground truth in `ds`.
