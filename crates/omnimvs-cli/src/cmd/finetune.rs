@@ -57,7 +57,8 @@ pub struct Args {
     /// Epochs (may be raised when continuing a run).
     #[arg(long)]
     pub epochs: Option<usize>,
-    /// Training steps per epoch (one frame each).
+    /// Training steps per epoch at most (one frame each; an epoch is every training frame
+    /// once).
     #[arg(long)]
     pub steps: Option<usize>,
     /// Learning rate of the first two thirds of the epochs (then a tenth of it).
