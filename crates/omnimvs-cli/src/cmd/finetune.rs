@@ -328,7 +328,7 @@ pub fn run(args: &Args, datasets: &DatasetOpener) -> Result<()> {
         let dir = data.join(name);
         let options = SynthOptions {
             difficulty,
-            ..SynthOptions::new(kind, plan.seed * 100 + k as u64)
+            ..SynthOptions::new(kind, set_seed(plan.seed, k))
         };
         crate::cmd::synth::render(
             &dir,
@@ -340,7 +340,7 @@ pub fn run(args: &Args, datasets: &DatasetOpener) -> Result<()> {
         train_sets.push(dir);
     }
     for (k, (name, kind)) in TEST_SETS.into_iter().enumerate() {
-        let options = SynthOptions::new(kind, plan.seed * 100 + 50 + k as u64);
+        let options = SynthOptions::new(kind, set_seed(plan.seed, 50 + k));
         crate::cmd::synth::render(
             &data.join(name),
             &source,
@@ -429,6 +429,12 @@ pub fn run(args: &Args, datasets: &DatasetOpener) -> Result<()> {
         md.display()
     );
     Ok(())
+}
+
+/// The scene seed of the `k`-th rendered set of a run of seed `seed`: training sets from
+/// `100 seed`, held-out sets from `100 seed + 50`, so that no held-out scene is a training one.
+fn set_seed(seed: u64, k: usize) -> u64 {
+    seed.wrapping_mul(100).wrapping_add(k as u64)
 }
 
 /// Writes the bundled network's weights and configuration into `dir` (once) and returns the
