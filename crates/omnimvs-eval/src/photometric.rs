@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::Point3;
 use omnimvs_camera::Rig;
 use omnimvs_core::GrayImage;
+use omnimvs_core::interp::sample_inside_f64;
 use omnimvs_data::DataError;
 use omnimvs_sweep::EquirectGrid;
 use serde::Serialize;
@@ -24,26 +25,6 @@ pub const MIN_SHARED_POINTS: usize = 100;
 
 /// The smallest inverse depth (1/m) that counts as a depth; below it (and NaN) a pixel has none.
 const MIN_INV_DEPTH: f32 = 1e-6;
-
-/// Bilinear sample of `image` at `(col, row)`; `None` unless the 2x2 neighbourhood lies inside.
-fn bilinear(image: &GrayImage, col: f64, row: f64) -> Option<f64> {
-    let (c0, r0) = (col.floor(), row.floor());
-    if c0 < 0.0 || r0 < 0.0 {
-        return None;
-    }
-    let (c, r) = (c0 as usize, r0 as usize);
-    if c + 1 >= image.width || r + 1 >= image.height {
-        return None;
-    }
-    let (fc, fr) = (col - c0, row - r0);
-    let at = |r: usize, c: usize| f64::from(image.data[r * image.width + c]);
-    Some(
-        at(r, c) * (1.0 - fc) * (1.0 - fr)
-            + at(r, c + 1) * fc * (1.0 - fr)
-            + at(r + 1, c) * (1.0 - fc) * fr
-            + at(r + 1, c + 1) * fc * fr,
-    )
-}
 
 /// The cross-camera photometric difference of `inv_depth` (1/m on `grid`, row-major) with the
 /// frame's `images` (rig order). `None` when no two cameras share more than
@@ -76,7 +57,7 @@ pub fn photometric_difference(
                 .iter()
                 .map(|p| {
                     let px = camera.project_rig(p)?;
-                    bilinear(image, px.col, px.row)
+                    sample_inside_f64(image, px.col, px.row)
                 })
                 .collect()
         })
@@ -216,18 +197,5 @@ mod tests {
     fn the_median_is_numpys() {
         assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
-    }
-
-    #[test]
-    fn bilinear_samples_inside_the_image_only() {
-        let image = GrayImage {
-            width: 2,
-            height: 2,
-            data: vec![0.0, 10.0, 20.0, 30.0],
-        };
-        assert_eq!(bilinear(&image, 0.5, 0.5), Some(15.0));
-        assert_eq!(bilinear(&image, 0.0, 0.0), Some(0.0));
-        assert_eq!(bilinear(&image, 1.0, 0.0), None);
-        assert_eq!(bilinear(&image, -0.5, 0.0), None);
     }
 }

@@ -119,3 +119,44 @@ pub fn evaluate<'py>(
     dict.set_item("valid_pixels", metrics.valid_pixels)?;
     Ok(dict)
 }
+
+/// How well a predicted inverse-depth map explains the frame's images, without ground truth,
+/// as `omnimvs eval` scores real recordings: every pixel with a depth is a point in the rig
+/// frame, sampled (bilinear) in every camera that sees it; the median absolute gray difference
+/// over camera pairs that see a point, divided by the standard deviation of the gray values
+/// sampled. Lower is better; compare methods on the same frame, and against a constant depth.
+///
+/// Args:
+///     prediction: inverse depth (1/m), a 2-D `numpy.float32` (or float64) array on its own
+///         equirectangular grid over `+-phi_deg` (e.g. `sgm`'s or `infer`'s 160x640).
+///     dataset: the `omnimvs.Dataset` whose frame it is.
+///     frame: the frame.
+///     phi_deg: latitude range of the prediction, +-degrees.
+///
+/// Returns:
+///     The difference, or `None` when no two cameras share more than 100 points.
+///
+/// Raises:
+///     ValueError: a bad argument. FileNotFoundError / OSError: images that cannot be read.
+#[pyfunction]
+#[pyo3(signature = (prediction, dataset, frame, phi_deg=45.0))]
+pub fn photometric_difference(
+    py: Python<'_>,
+    prediction: &Bound<'_, PyAny>,
+    dataset: PyRef<'_, PyDataset>,
+    frame: i64,
+    phi_deg: f64,
+) -> PyResult<Option<f64>> {
+    let frame = frame_number(frame)?;
+    let (inv_depth, rows, cols) = prediction_values(prediction)?;
+    let ds = &dataset.inner;
+    detached(py, || {
+        let grid =
+            EquirectGrid::new(rows, cols, phi_deg).map_err(|e| bad_argument("prediction", e))?;
+        let images = ds.read_frame(frame).py_err()?;
+        let inv_depth: Vec<f32> = inv_depth.iter().map(|&v| v as f32).collect();
+        Ok(omnimvs_eval::photometric::photometric_difference(
+            &ds.rig, &images, &grid, &inv_depth,
+        ))
+    })
+}

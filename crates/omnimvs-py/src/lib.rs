@@ -32,6 +32,7 @@ fn _omnimvs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sgm::sgm, m)?)?;
     m.add_function(wrap_pyfunction!(infer::infer, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate::photometric_difference, m)?)?;
     m.add_function(wrap_pyfunction!(synth::synth, m)?)?;
     Ok(())
 }

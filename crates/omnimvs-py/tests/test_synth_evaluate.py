@@ -110,3 +110,16 @@ def test_a_random_three_camera_rig_through_synth_and_infer(tmp_path):
     inv_depth = omnimvs.infer(ds, 1)
     assert inv_depth.shape == (160, 640) and np.isfinite(inv_depth).all()
     assert inv_depth.std() > 0
+
+
+def test_photometric_difference_on_a_real_frame(itbt_path):
+    """A constant 3 m on itbt_sample frame 1 scores as the independent NumPy reading does
+    (scripts/photometric_golden/make_photometric_golden.py), and ZNCC+SGM's depth explains the
+    images better."""
+    ds = omnimvs.Dataset(itbt_path)
+    const = np.full((160, 640), np.float32(1.0 / 3.0), np.float32)
+    value = omnimvs.photometric_difference(const, ds, 1)
+    assert abs(value - 0.19175727033170414) < 1e-6
+    assert omnimvs.photometric_difference(omnimvs.sgm(ds, 1), ds, 1) < value
+    # No depth anywhere: no point two cameras share.
+    assert omnimvs.photometric_difference(np.zeros((160, 640), np.float32), ds, 1) is None

@@ -210,6 +210,22 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     report(&evaluation, args.out.as_deref())
 }
 
+/// The progress bar of the rows' frames, one row at a time (see [`start_row`]).
+fn rows_bar() -> Result<ProgressBar> {
+    let bar = ProgressBar::new(0);
+    bar.set_style(ProgressStyle::with_template(
+        "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} frames",
+    )?);
+    Ok(bar)
+}
+
+/// Restarts `bar` for `row` over `frames` frames.
+fn start_row(bar: &ProgressBar, row: &Row, frames: usize) {
+    bar.reset();
+    bar.set_length(frames as u64);
+    bar.set_prefix(row.name.clone());
+}
+
 /// The constant depth of the photometric evaluation's floor row, metres.
 const FLOOR_DEPTH_M: f32 = 3.0;
 
@@ -241,15 +257,10 @@ fn photometric(args: &Args, ds: &Dataset) -> Result<()> {
         &args.backend,
         spec,
     )?;
-    let bar = ProgressBar::new(0);
-    bar.set_style(ProgressStyle::with_template(
-        "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} frames",
-    )?);
+    let bar = rows_bar()?;
     let mut results = Vec::new();
     for row in rows {
-        bar.reset();
-        bar.set_length(frames.len() as u64);
-        bar.set_prefix(row.name.clone());
+        start_row(&bar, &row, frames.len());
         let start = Instant::now();
         let mut per_frame = Vec::new();
         for &f in &frames {
@@ -327,14 +338,9 @@ pub fn evaluate(
         write_index_png(&path, &gt.index, gt, spec.ndepth(), true)?;
     }
     let mut results = Vec::new();
-    let bar = ProgressBar::new(0);
-    bar.set_style(ProgressStyle::with_template(
-        "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} frames",
-    )?);
+    let bar = rows_bar()?;
     for row in rows {
-        bar.reset();
-        bar.set_length(frames.len() as u64);
-        bar.set_prefix(row.name.clone());
+        start_row(&bar, &row, frames.len());
         let mut scores = MethodScores::new(&row.name, *row.estimator.spec());
         let start = Instant::now();
         for (k, &f) in frames.iter().enumerate() {

@@ -20,6 +20,7 @@ from ._omnimvs import (
     evaluate,
     infer,
     lookup_table,
+    photometric_difference,
     sgm,
     synth,
 )
@@ -31,6 +32,7 @@ __all__ = [
     "evaluate",
     "infer",
     "lookup_table",
+    "photometric_difference",
     "sgm",
     "synth",
 ]

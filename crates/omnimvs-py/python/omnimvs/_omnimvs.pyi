@@ -236,6 +236,17 @@ def evaluate(
     ground truth, as ``omnimvs eval`` scores a method; ``protocol`` is ``"reference"`` (the
     paper's: sky not scored) or ``"with-sky"``."""
 
+def photometric_difference(
+    prediction: Union[npt.NDArray[np.float32], npt.NDArray[np.float64]],
+    dataset: Dataset,
+    frame: int,
+    phi_deg: float = 45.0,
+) -> Optional[float]:
+    """How well a predicted inverse-depth map (on its own grid over ``+-phi_deg``) explains the
+    frame's images, without ground truth, as ``omnimvs eval`` scores real recordings: the
+    median gray difference over camera pairs seeing each point, divided by the gray values'
+    standard deviation (lower is better); ``None`` when no two cameras share enough points."""
+
 def synth(
     kind: str,
     out: PathLike,
