@@ -395,7 +395,8 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     // Frames read one ahead and written one behind on threads of their own (see
     // `crate::pipeline`): decoding and encoding overlap the network's work.
     // Colour is decoded (with the gray, in one read) only for the point clouds.
-    crate::pipeline::run_frames(
+    crate::pipeline::stop_on_ctrl_c();
+    let report = crate::pipeline::run_frames(
         &frames,
         |f| {
             if args.ply {
@@ -424,6 +425,7 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     )?;
     bar.finish();
     finish(&inference, run)?;
-    outln!("wrote {} frames to {}", frames.len(), args.out.display());
-    Ok(())
+    outln!("wrote {} frames to {}", report.frames, args.out.display());
+    outln!("{}", report.summary());
+    crate::pipeline::check_not_stopped(&report, frames.len(), &args.out.join("infer.json"))
 }

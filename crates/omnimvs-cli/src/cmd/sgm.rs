@@ -15,6 +15,7 @@ use omnimvs_stereo::{Directions, SgmEstimator, SgmParams, SweepStep};
 use omnimvs_sweep::SweepSpec;
 
 use crate::args::{Cost, SweepArgs};
+use crate::pipeline::RunReport;
 
 /// Depth by the classical method, ZNCC + SGM (no network, no GPU).
 ///
@@ -250,8 +251,11 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     } else {
         None
     };
-    let run = pipelined(&ds, &stereo, run, &frames, clouds.as_ref())?;
-    finish(&ds, &stereo, run, &args.out)
+    crate::pipeline::stop_on_ctrl_c();
+    let (run, report) = pipelined(&ds, &stereo, run, &frames, clouds.as_ref())?;
+    finish(&ds, &stereo, run, &args.out)?;
+    outln!("{}", report.summary());
+    crate::pipeline::check_not_stopped(&report, frames.len(), &args.out.join("sgm.json"))
 }
 
 /// Where `--ply` writes its point clouds, and the cameras' masks their panoramas need.
@@ -294,8 +298,8 @@ fn pipelined(
     mut run: ConfidenceRun,
     frames: &[u32],
     clouds: Option<&PointClouds<'_>>,
-) -> Result<ConfidenceRun> {
-    crate::pipeline::run_frames(
+) -> Result<(ConfidenceRun, RunReport)> {
+    let report = crate::pipeline::run_frames(
         frames,
         |f| {
             // Colour is decoded (with the gray, in one read) only for the point clouds.
@@ -317,5 +321,5 @@ fn pipelined(
             Ok(())
         },
     )?;
-    Ok(run)
+    Ok((run, report))
 }
