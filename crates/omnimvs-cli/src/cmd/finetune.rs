@@ -94,7 +94,7 @@ struct Plan {
     size: Option<String>,
 }
 
-/// The defaults: on two CPU cores, about an hour for a four-camera rig of 800x800 images.
+/// The defaults: on two CPU cores, 40 minutes for the compact four-camera example rig.
 const FRAMES: u32 = 24;
 const TEST_FRAMES: u32 = 5;
 const EPOCHS: usize = 4;
