@@ -24,6 +24,7 @@ pub mod gt;
 pub mod image_io;
 pub mod layout;
 mod open;
+pub mod speed;
 
 pub use config::{DatasetConfig, FrameRange, Split, write_config_yaml};
 pub use dataset::Dataset;
@@ -34,3 +35,4 @@ pub use estimate::{
 };
 pub use format::format_printf;
 pub use open::{Found, OpenOptions, RELEASED_MAX_FOV_DEG, RELEASED_MIN_DEPTH_M, RigFrame};
+pub use speed::Speed;

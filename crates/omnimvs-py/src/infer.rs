@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use numpy::PyArray2;
-use omnimvs_data::{DepthEstimator, Finishing};
+use omnimvs_data::{DepthEstimator, Finishing, Speed};
 use omnimvs_net::bundled::{BundledModel, PickChoice};
 use omnimvs_net::pick::PickRefiner;
 use omnimvs_net::weights::{AnyNet, common_image_size, load_family};
@@ -89,12 +89,15 @@ fn load_network(
 ///         the network has none: `inv_depth`, `index` (hypothesis index, N units), `entropy`
 ///         (nats) and `spread` (standard deviation, index units; the cascade's), the files
 ///         `omnimvs infer` writes.
+///     speed: `None`, or a speed preset instead of `pick` (and the input size), as `omnimvs
+///         infer --speed`: `"fast"` (half the model's input size, no pick), `"balanced"` (no
+///         pick) or `"accurate"` (the defaults).
 ///
 /// Raises:
 ///     FileNotFoundError: the weights file or an image of the frame is missing.
 ///     ValueError: a bad argument or array, or a rig that does not fit the network.
 #[pyfunction]
-#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None, max_entropy=None, max_spread=None, pick="auto", maps=false))]
+#[pyo3(signature = (source, frame=None, weights=None, *, preset="paper", backend="cpu", rig=None, snap_edges=None, max_entropy=None, max_spread=None, pick="auto", maps=false, speed=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn infer<'py>(
     py: Python<'py>,
@@ -109,7 +112,18 @@ pub fn infer<'py>(
     max_spread: Option<f32>,
     pick: &str,
     maps: bool,
+    speed: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let speed = speed
+        .map(|s| s.parse::<Speed>().map_err(|e| bad_argument("speed", e)))
+        .transpose()?;
+    let pick = match speed {
+        Some(_) if pick != "auto" => {
+            return Err(bad_argument("speed", "give speed or pick, not both"));
+        }
+        Some(speed) if !speed.net_picks() => "off",
+        _ => pick,
+    };
     let finishing = Finishing {
         snap_edges_pct: snap_edges,
         max_entropy,
@@ -130,6 +144,11 @@ pub fn infer<'py>(
             .is_some_and(|e| e == "pt" || e == "pth");
         if is_pytorch && let Ok(size) = common_image_size(&ds.rig) {
             net.set_input_size(size).py_err()?;
+        }
+        if let Some(speed) = speed {
+            let model_size = [net.config().input_height, net.config().input_width];
+            net.set_input_size(speed.net_input_size(model_size))
+                .py_err()?;
         }
         let (estimator, _status) = NetEstimator::new(
             net,

@@ -103,3 +103,15 @@ def test_learned_costs_equal_the_command_line(itbt_path, itbt, cost, cli, tmp_pa
 def test_an_unknown_cost_is_named(itbt):
     with pytest.raises(ValueError, match="cost.*sweepnet"):
         omnimvs.sgm(itbt, 1, cost="sad")
+
+
+def test_speed_presets_are_the_settings_they_name(itbt_path):
+    ds = omnimvs.Dataset(itbt_path)
+    fast = omnimvs.sgm(ds, 1, height=40, width=160, speed="fast")
+    np.testing.assert_array_equal(fast, omnimvs.sgm(ds, 1, height=40, width=160, ndepth=32))
+    with pytest.raises(ValueError, match="speed"):
+        omnimvs.sgm(ds, 1, speed="fast", ndepth=64)
+    with pytest.raises(ValueError, match="speed"):
+        omnimvs.sgm(ds, 1, speed="quick")
+    with pytest.raises(ValueError, match="speed"):
+        omnimvs.infer(ds, 1, speed="fast", pick="off")

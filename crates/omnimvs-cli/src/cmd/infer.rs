@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use omnimvs_core::{ColourPlanes, GrayImage};
-use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, Finishing, FinishingError, FrameRange};
+use omnimvs_data::{
+    Dataset, DepthEstimate, DepthEstimator, Finishing, FinishingError, FrameRange, Speed,
+};
 use omnimvs_eval::metrics::ProtocolMetrics;
 use omnimvs_eval::output::{DepthRun, FrameScene, protocol_tables};
 use omnimvs_net::bundled::PickChoice;
@@ -67,6 +69,11 @@ pub struct Args {
     /// infer.json records the size used.
     #[arg(long)]
     pub input_size: Option<InputSize>,
+    /// Speed preset, traded against accuracy: `fast` (half the model's input size, no learnt
+    /// pick), `balanced` (no learnt pick) or `accurate` (the defaults); the README's
+    /// speed/accuracy table scores each. Instead of --input-size and --pick.
+    #[arg(long, conflicts_with_all = ["input_size", "pick"])]
+    pub speed: Option<Speed>,
     /// Depth edges without blends: where a pixel's 3x3 neighbourhood spans more than PCT
     /// percent of the hypotheses (default 8 when the flag is given alone), the pixel takes
     /// the neighbourhood's nearer extreme, so that no point floats between two surfaces
@@ -355,10 +362,24 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     let ds = datasets.open(&args.dataset)?;
     let mut net = args.weights.load_family(args.preset.name(), &device)?;
     let model_size = [net.config().input_height, net.config().input_width];
-    if let Some(size) = input_size(args.input_size, &args.weights, model_size, &ds)? {
+    let asked_size = match args.speed {
+        Some(speed) => {
+            let [h, w] = speed.net_input_size(model_size);
+            Some(InputSize::Fixed(Size {
+                height: h,
+                width: w,
+            }))
+        }
+        None => args.input_size,
+    };
+    if let Some(size) = input_size(asked_size, &args.weights, model_size, &ds)? {
         net.set_input_size(size)
             .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
     }
+    let pick = match args.speed {
+        Some(speed) if !speed.net_picks() => PickChoice::Off,
+        _ => args.pick.clone(),
+    };
     let (inference, status) = NetEstimator::new(
         net,
         &ds,
@@ -367,7 +388,7 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         args.backend.is_gpu(),
     )?;
     report_cache(status);
-    let mut inference = apply_pick(&args.pick, &args.weights, inference)?;
+    let mut inference = apply_pick(&pick, &args.weights, inference)?;
     if let Some(order) = &args.order {
         inference.set_order(order)?;
     }
@@ -382,6 +403,7 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     settings["max_entropy"] = serde_json::json!(finishing.max_entropy);
     settings["max_spread"] = serde_json::json!(finishing.max_spread);
     settings["pick"] = serde_json::json!(inference.has_pick());
+    settings["speed"] = serde_json::json!(args.speed.map(Speed::name));
     let mut run = DepthRun::new(&args.out, "infer.json", &settings, args.ply)?;
 
     let frames: Vec<u32> = args.frames.indices();

@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use omnimvs_camera::ValidityMask;
 use omnimvs_core::{ColourPlanes, GrayImage};
 use omnimvs_data::gt::EvalTruth;
-use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, StageTimes};
+use omnimvs_data::{Dataset, DepthEstimate, DepthEstimator, FrameRange, Speed, StageTimes};
 use omnimvs_eval::output::{ConfidenceRun, FrameScene};
 use omnimvs_net::NetError;
 use omnimvs_net::learned_sgm::{MatchingCost, sgm_estimator};
@@ -52,6 +52,11 @@ pub struct Args {
     /// Output grid and hypotheses.
     #[command(flatten)]
     pub sweep: SweepArgs,
+    /// Speed preset, traded against accuracy: `fast` (32 spheres), `balanced` (64) or
+    /// `accurate` (192, the paper's and the default); the README's speed/accuracy table scores
+    /// each. Instead of --ndepth.
+    #[arg(long, conflicts_with = "ndepth")]
+    pub speed: Option<Speed>,
     /// Matching cost: zncc (9x9 ZNCC, the paper's ZNCC+SGM), mccnn (the MC-CNN-style
     /// learned cost, MC-CNN+SGM) or sweepnet (the SweepNet-style learned cost on the warped
     /// images, SweepNet+SGM); learned weights from --cost-weights.
@@ -239,7 +244,11 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     if frames.is_empty() {
         bail!("{}: no frame found", ds.root.display());
     }
-    let spec = args.sweep.spec(&ds)?;
+    let mut sweep = args.sweep;
+    if let Some(speed) = args.speed {
+        sweep.ndepth = speed.sgm_ndepth();
+    }
+    let spec = sweep.spec(&ds)?;
     let stereo = estimator(&ds, spec, args.cost, &args.cost_weights, |d| args.params(d))?;
     let run = ConfidenceRun::new(&args.out, spec)?;
     outln!("{}", header(&ds, &stereo));

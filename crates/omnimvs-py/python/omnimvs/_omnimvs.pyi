@@ -135,10 +135,12 @@ def sgm(
     frame: int,
     height: int = 160,
     width: int = 640,
-    ndepth: int = 192,
+    ndepth: Optional[int] = None,
     phi_deg: float = 45.0,
     *,
     cost: Literal["zncc", "mccnn", "sweepnet"] = "zncc",
+    # None, or "fast" (32 spheres), "balanced" (64), "accurate" (192): instead of ndepth.
+    speed: Optional[Literal["fast", "balanced", "accurate"]] = None,
 ) -> FloatMap: ...
 @overload
 def sgm(
@@ -146,11 +148,12 @@ def sgm(
     frame: None = None,
     height: int = 160,
     width: int = 640,
-    ndepth: int = 192,
+    ndepth: Optional[int] = None,
     phi_deg: float = 45.0,
     *,
     rig: Rig,
     cost: Literal["zncc", "mccnn", "sweepnet"] = "zncc",
+    speed: Optional[Literal["fast", "balanced", "accurate"]] = None,
 ) -> FloatMap: ...
 @overload
 def infer(
@@ -174,6 +177,8 @@ def infer(
     pick: str = "auto",
     # True: a dict of every map (Maps) instead of the inverse depth alone.
     maps: Literal[False] = False,
+    # None, or "fast" (half input size, no pick), "balanced" (no pick), "accurate": instead of pick.
+    speed: Optional[Literal["fast", "balanced", "accurate"]] = None,
 ) -> FloatMap: ...
 @overload
 def infer(
@@ -188,6 +193,7 @@ def infer(
     max_spread: Optional[float] = None,
     pick: str = "auto",
     maps: Literal[True],
+    speed: Optional[Literal["fast", "balanced", "accurate"]] = None,
 ) -> Maps: ...
 @overload
 def infer(
@@ -205,6 +211,7 @@ def infer(
     max_spread: Optional[float] = None,
     pick: str = "auto",
     maps: Literal[False] = False,
+    speed: Optional[Literal["fast", "balanced", "accurate"]] = None,
 ) -> FloatMap: ...
 @overload
 def infer(
@@ -220,6 +227,7 @@ def infer(
     max_spread: Optional[float] = None,
     pick: str = "auto",
     maps: Literal[True],
+    speed: Optional[Literal["fast", "balanced", "accurate"]] = None,
 ) -> Maps: ...
 def evaluate(
     prediction: Union[npt.NDArray[np.float32], npt.NDArray[np.float64]],
