@@ -1,6 +1,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::disallowed_methods)]
 //! `--speed fast|balanced|accurate` of `sgm` and `infer` are the settings they name: the same
-//! files as the explicit options, byte for byte; given beside those options they are refused.
+//! files as the explicit options, byte for byte; `eval --speed` scores them; given beside those
+//! options they are refused.
 
 mod support;
 
@@ -44,6 +45,28 @@ fn speed_presets_are_the_settings_they_name() {
         &["--pick", "off", "--input-size", "384x400"],
     );
     same_file(&out("net-fast/00001.tiff"), &out("net-half/00001.tiff"));
+
+    // eval scores a preset's rows: ZNCC+SGM over its 32 spheres, in the evaluation's N.
+    let eval = out("eval");
+    run_ok(
+        &[
+            "eval",
+            "--data",
+            data_s,
+            "--frames",
+            "1",
+            "--method",
+            "sgm",
+            "--speed",
+            "fast",
+            "--out",
+            eval.to_str().unwrap(),
+        ],
+        &cache,
+    );
+    let report = support::read_json(&eval.join("eval.json"));
+    assert_eq!(report["methods"][0]["native"]["ndepth"], 32, "{report}");
+    assert_eq!(report["ndepth"], 192, "{report}");
 
     for args in [
         vec![

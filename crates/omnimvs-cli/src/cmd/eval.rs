@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use omnimvs_data::{Dataset, DepthEstimator, FrameRange};
+use omnimvs_data::{Dataset, DepthEstimator, FrameRange, Speed};
 use omnimvs_eval::output::evaluation::write_index_png;
 use omnimvs_eval::output::{EvalReport, Evaluation, MethodScores};
 use omnimvs_eval::photometric::{PhotometricReport, PhotometricRow, photometric_difference};
@@ -67,6 +67,11 @@ pub struct Args {
     /// `angular` or HEIGHTxWIDTH.
     #[arg(long)]
     pub input_size: Option<InputSize>,
+    /// Speed preset of every row, as `sgm --speed` and `infer --speed`: ZNCC+SGM over its
+    /// preset's spheres (scored in the evaluation's N), the network at its preset's input size
+    /// and picks. Instead of --input-size and --pick.
+    #[arg(long, conflicts_with_all = ["input_size", "pick"])]
+    pub speed: Option<Speed>,
     /// Output grid and hypotheses.
     #[command(flatten)]
     pub sweep: SweepArgs,
@@ -109,9 +114,14 @@ pub fn rows(
     pick: &PickChoice,
     preset: Preset,
     input: Option<InputSize>,
+    speed: Option<Speed>,
     backend: &omnimvs_net::Backend,
     spec: SweepSpec,
 ) -> Result<Vec<Row>> {
+    let pick = match speed {
+        Some(speed) if !speed.net_picks() => &PickChoice::Off,
+        _ => pick,
+    };
     let device = backend.device()?;
     let mut rows: Vec<Row> = Vec::new();
     for method in methods {
@@ -120,6 +130,13 @@ pub fn rows(
                 for w in weights {
                     let mut net = w.load_family(preset.name(), &device)?;
                     let model_size = [net.config().input_height, net.config().input_width];
+                    let input = match speed {
+                        Some(speed) => {
+                            let [height, width] = speed.net_input_size(model_size);
+                            Some(InputSize::Fixed(crate::args::Size { height, width }))
+                        }
+                        None => input,
+                    };
                     if let Some(size) = input_size(input, w, model_size, ds)? {
                         net.set_input_size(size)
                             .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
@@ -150,7 +167,15 @@ pub fn rows(
                 estimator: Box::new(SgmEstimator::new(
                     &ds.rig,
                     Some(ds.masks()?),
-                    spec,
+                    match speed {
+                        Some(speed) => ds.sweep_spec(
+                            spec.height(),
+                            spec.width(),
+                            spec.grid.phi_deg,
+                            speed.sgm_ndepth(),
+                        )?,
+                        None => spec,
+                    },
                     SgmParams::default(),
                 )?),
             }),
@@ -203,6 +228,7 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         &args.pick,
         args.preset,
         args.input_size,
+        args.speed,
         &args.backend,
         spec,
     )?;
@@ -254,6 +280,7 @@ fn photometric(args: &Args, ds: &Dataset) -> Result<()> {
         &args.pick,
         args.preset,
         args.input_size,
+        args.speed,
         &args.backend,
         spec,
     )?;

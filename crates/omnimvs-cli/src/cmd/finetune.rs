@@ -510,6 +510,7 @@ fn evaluate(
         &pick,
         Preset::Cascade,
         None,
+        None,
         &backend,
         spec,
     )?;
