@@ -221,19 +221,29 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
         }
         None => None,
     };
-    let rows = rows(
-        &ds,
-        &args.method,
-        &args.weights,
-        &args.pick,
-        args.preset,
-        args.input_size,
-        args.speed,
-        &args.backend,
-        spec,
-    )?;
+    let rows = args.rows(&ds, spec)?;
     let evaluation = evaluate(&ds, &frames, spec, rows, pictures)?;
     report(&evaluation, args.out.as_deref())
+}
+
+impl Args {
+    /// The rows these options ask for on `ds`, scored at `spec`.
+    ///
+    /// # Errors
+    /// As [`rows`].
+    fn rows(&self, ds: &Dataset, spec: SweepSpec) -> Result<Vec<Row>> {
+        rows(
+            ds,
+            &self.method,
+            &self.weights,
+            &self.pick,
+            self.preset,
+            self.input_size,
+            self.speed,
+            &self.backend,
+            spec,
+        )
+    }
 }
 
 /// The progress bar of the rows' frames, one row at a time (see [`start_row`]).
@@ -273,17 +283,7 @@ fn photometric(args: &Args, ds: &Dataset) -> Result<()> {
         );
     }
     let spec = args.sweep.spec(ds)?;
-    let rows = rows(
-        ds,
-        &args.method,
-        &args.weights,
-        &args.pick,
-        args.preset,
-        args.input_size,
-        args.speed,
-        &args.backend,
-        spec,
-    )?;
+    let rows = args.rows(ds, spec)?;
     let bar = rows_bar()?;
     let mut results = Vec::new();
     for row in rows {
