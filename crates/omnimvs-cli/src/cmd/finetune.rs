@@ -8,6 +8,7 @@ use omnimvs_camera::FrameChoice;
 use omnimvs_core::fs::write_atomic;
 use omnimvs_data::FrameRange;
 use omnimvs_eval::metrics::Metrics;
+use omnimvs_eval::output::{write_json, write_text};
 use omnimvs_net::bundled::{BundledModel, PickChoice};
 use omnimvs_net::weights::read_config;
 use omnimvs_net::{Backend, CascadeNet};
@@ -190,9 +191,9 @@ fn rig_text(rig: &RigArg) -> Result<String> {
     })
 }
 
-/// The plan of the run in `out`: a new one written there, or the stored one, checked against
-/// what the command line states.
-fn plan(args: &Args, datasets: &DatasetOpener) -> Result<Plan> {
+/// The plan of the run in `out`, and whether it is new: a new one from the command line (not
+/// written yet), or the stored one, checked against what the command line states.
+fn plan(args: &Args, datasets: &DatasetOpener) -> Result<(Plan, bool)> {
     let path = args.out.join(PLAN_FILE);
     if !path.exists() {
         let Some(rig) = &args.rig else {
@@ -203,12 +204,7 @@ fn plan(args: &Args, datasets: &DatasetOpener) -> Result<Plan> {
         };
         let plan = Plan::new(args, rig, datasets)?;
         plan.check(&path)?;
-        // A rig that cannot be read leaves no run folder behind.
-        plan.rig_source()?;
-        std::fs::create_dir_all(&args.out)
-            .with_context(|| format!("creating {}", args.out.display()))?;
-        write_json(&path, &plan)?;
-        return Ok(plan);
+        return Ok((plan, true));
     }
     let text =
         std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
@@ -233,52 +229,47 @@ fn plan(args: &Args, datasets: &DatasetOpener) -> Result<Plan> {
     if options.min_depth_m.is_some() && options.min_depth_m != stored.min_depth_m {
         differs.push(format!("--min-depth (the run's: {:?})", stored.min_depth_m));
     }
-    let same = |given: Option<String>, kept: String, flag: &str, differs: &mut Vec<String>| {
-        if let Some(given) = given
-            && given != kept
-        {
+    // Each option as given and as the run keeps it.
+    let kept = [
+        (
+            "--frames",
+            args.frames.map(|v| v.to_string()),
+            stored.frames.to_string(),
+        ),
+        (
+            "--test-frames",
+            args.test_frames.map(|v| v.to_string()),
+            stored.test_frames.to_string(),
+        ),
+        (
+            "--steps",
+            args.steps.map(|v| v.to_string()),
+            stored.steps.to_string(),
+        ),
+        (
+            "--lr",
+            args.lr.map(|v| v.to_string()),
+            stored.lr.to_string(),
+        ),
+        (
+            "--seed",
+            args.seed.map(|v| v.to_string()),
+            stored.seed.to_string(),
+        ),
+        (
+            "--size",
+            args.size.map(|v| v.to_string()),
+            stored
+                .size
+                .clone()
+                .unwrap_or_else(|| "the rig's own".into()),
+        ),
+    ];
+    for (flag, given, kept) in kept {
+        if given.is_some_and(|given| given != kept) {
             differs.push(format!("{flag} (the run's: {kept})"));
         }
-    };
-    same(
-        args.frames.map(|v| v.to_string()),
-        stored.frames.to_string(),
-        "--frames",
-        &mut differs,
-    );
-    same(
-        args.test_frames.map(|v| v.to_string()),
-        stored.test_frames.to_string(),
-        "--test-frames",
-        &mut differs,
-    );
-    same(
-        args.steps.map(|v| v.to_string()),
-        stored.steps.to_string(),
-        "--steps",
-        &mut differs,
-    );
-    same(
-        args.lr.map(|v| v.to_string()),
-        stored.lr.to_string(),
-        "--lr",
-        &mut differs,
-    );
-    same(
-        args.seed.map(|v| v.to_string()),
-        stored.seed.to_string(),
-        "--seed",
-        &mut differs,
-    );
-    same(
-        args.size.map(|v| v.to_string()),
-        stored
-            .size
-            .clone()
-            .unwrap_or_else(|| "the rig's own".into()),
-        "--size",
-        &mut differs,
-    );
+    }
     if !differs.is_empty() {
         bail!(
             "{} continues a run with other options: {}; leave them out to continue it, or \
@@ -294,26 +285,25 @@ fn plan(args: &Args, datasets: &DatasetOpener) -> Result<Plan> {
             bail!("--epochs: expected at least 1");
         }
         stored.epochs = epochs;
-        write_json(&path, &stored)?;
+        write_json(&path, &stored, true)?;
     }
-    Ok(stored)
-}
-
-fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
-    let mut text = serde_json::to_string_pretty(value)?;
-    text.push('\n');
-    write_atomic(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
+    Ok((stored, false))
 }
 
 pub fn run(args: &Args, datasets: &DatasetOpener) -> Result<()> {
     let started = Instant::now();
-    let plan = plan(args, datasets)?;
+    let (plan, new) = plan(args, datasets)?;
     let out = &args.out;
     let backend = match args.backend {
         Some(backend) => backend,
         None => crate::cmd::train::backend_of_run(&out.join("train"))?,
     };
+    // Read before a new run's folder is made: a rig that cannot be read leaves none behind.
     let source = plan.rig_source()?;
+    if new {
+        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+        write_json(&out.join(PLAN_FILE), &plan, true)?;
+    }
     outln!(
         "fine-tuning the bundled network for {} ({} cameras) in {} on {backend}",
         plan.rig,
@@ -410,17 +400,16 @@ pub fn run(args: &Args, datasets: &DatasetOpener) -> Result<()> {
                 &after.join(name),
             )?;
         }
-        write_atomic(&stamp, stamp_text.as_bytes())
-            .with_context(|| format!("writing {}", stamp.display()))?;
+        write_text(&stamp, &stamp_text)?;
     }
 
     // 6. The report.
     let report = Report::read(out, &plan, best_epoch)?;
-    out!("{}", report.markdown());
-    write_json(&out.join("report.json"), &report)?;
+    let table = report.markdown();
+    out!("{table}");
+    write_json(&out.join("report.json"), &report, true)?;
     let md = out.join("report.md");
-    write_atomic(&md, report.markdown().as_bytes())
-        .with_context(|| format!("writing {}", md.display()))?;
+    write_text(&md, &table)?;
     outln!(
         "done in {:.0} s; weights {} (omnimvs infer DATASET --weights {}); report {}",
         started.elapsed().as_secs_f64(),
