@@ -93,6 +93,7 @@ pub struct PhotometricRow {
     pub per_frame: Vec<(u32, Option<f64>)>,
     /// The mean over the frames that have a value.
     pub mean: Option<f64>,
+    /// The method's estimate per frame, seconds (0 for a constant depth).
     pub seconds_per_frame: f64,
 }
 

@@ -16,7 +16,7 @@ use omnimvs_stereo::{SgmEstimator, SgmParams};
 use omnimvs_sweep::{LutCache, SweepSpec};
 
 use crate::args::{BACKEND_HELP, Method, Preset, SweepArgs, parse_backend};
-use crate::cmd::infer::{InputSize, input_size};
+use crate::cmd::infer::{InputSize, input_size, speed_input_size, speed_pick};
 use crate::weights::{BUNDLED, Weights, apply_pick, parse_pick};
 
 /// Evaluate methods against ground truth with the paper's metrics.
@@ -118,10 +118,7 @@ pub fn rows(
     backend: &omnimvs_net::Backend,
     spec: SweepSpec,
 ) -> Result<Vec<Row>> {
-    let pick = match speed {
-        Some(speed) if !speed.net_picks() => &PickChoice::Off,
-        _ => pick,
-    };
+    let pick = &speed_pick(speed, pick);
     let device = backend.device()?;
     let mut rows: Vec<Row> = Vec::new();
     for method in methods {
@@ -130,13 +127,7 @@ pub fn rows(
                 for w in weights {
                     let mut net = w.load_family(preset.name(), &device)?;
                     let model_size = [net.config().input_height, net.config().input_width];
-                    let input = match speed {
-                        Some(speed) => {
-                            let [height, width] = speed.net_input_size(model_size);
-                            Some(InputSize::Fixed(crate::args::Size { height, width }))
-                        }
-                        None => input,
-                    };
+                    let input = speed_input_size(speed, input, model_size);
                     if let Some(size) = input_size(input, w, model_size, ds)? {
                         net.set_input_size(size)
                             .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
@@ -246,20 +237,13 @@ impl Args {
     }
 }
 
-/// The progress bar of the rows' frames, one row at a time (see [`start_row`]).
-fn rows_bar() -> Result<ProgressBar> {
+/// A progress bar over frames, named by its prefix.
+fn frames_bar() -> Result<ProgressBar> {
     let bar = ProgressBar::new(0);
     bar.set_style(ProgressStyle::with_template(
         "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} frames",
     )?);
     Ok(bar)
-}
-
-/// Restarts `bar` for `row` over `frames` frames.
-fn start_row(bar: &ProgressBar, row: &Row, frames: usize) {
-    bar.reset();
-    bar.set_length(frames as u64);
-    bar.set_prefix(row.name.clone());
 }
 
 /// The constant depth of the photometric evaluation's floor row, metres.
@@ -284,38 +268,42 @@ fn photometric(args: &Args, ds: &Dataset) -> Result<()> {
     }
     let spec = args.sweep.spec(ds)?;
     let rows = args.rows(ds, spec)?;
-    let bar = rows_bar()?;
-    let mut results = Vec::new();
-    for row in rows {
-        start_row(&bar, &row, frames.len());
-        let start = Instant::now();
-        let mut per_frame = Vec::new();
-        for &f in &frames {
-            let context = || format!("{}: frame {f}", row.name);
-            let images = ds.read_frame(f).with_context(context)?;
-            let est = row.estimator.estimate(&images).with_context(context)?;
-            let value = photometric_difference(&ds.rig, &images, &est.spec.grid, &est.inv_depth);
-            per_frame.push((f, value));
-            bar.inc(1);
-        }
-        let seconds = start.elapsed().as_secs_f64() / frames.len() as f64;
-        results.push(PhotometricRow::new(row.name, per_frame, seconds));
-    }
-    bar.finish_and_clear();
+    // Each frame read once for every row and the constant depth.
     let floor = vec![1.0 / FLOOR_DEPTH_M; spec.grid.height * spec.grid.width];
-    let mut per_frame = Vec::new();
+    let mut values = vec![Vec::new(); rows.len() + 1];
+    let mut seconds = vec![0.0; rows.len()];
+    let bar = frames_bar()?;
+    bar.set_length(frames.len() as u64);
+    bar.set_prefix("photometric");
     for &f in &frames {
         let images = ds.read_frame(f).with_context(|| format!("frame {f}"))?;
-        per_frame.push((
+        for (k, row) in rows.iter().enumerate() {
+            let start = Instant::now();
+            let est = row
+                .estimator
+                .estimate(&images)
+                .with_context(|| format!("{}: frame {f}", row.name))?;
+            seconds[k] += start.elapsed().as_secs_f64();
+            let value = photometric_difference(&ds.rig, &images, &est.spec.grid, &est.inv_depth);
+            values[k].push((f, value));
+        }
+        values[rows.len()].push((
             f,
             photometric_difference(&ds.rig, &images, &spec.grid, &floor),
         ));
+        bar.inc(1);
     }
-    results.push(PhotometricRow::new(
-        format!("a constant {FLOOR_DEPTH_M} m"),
-        per_frame,
-        0.0,
-    ));
+    bar.finish_and_clear();
+    let per_frame = |s: f64| s / frames.len() as f64;
+    let names = rows
+        .iter()
+        .map(|row| row.name.clone())
+        .chain([format!("a constant {FLOOR_DEPTH_M} m")]);
+    let results = names
+        .zip(values)
+        .zip(seconds.into_iter().chain([0.0]))
+        .map(|((name, values), s)| PhotometricRow::new(name, values, per_frame(s)))
+        .collect();
     let report = PhotometricReport::new(&ds.root, frames, results);
     out!("{}", report.table());
     if let Some(out) = &args.out {
@@ -365,9 +353,11 @@ pub fn evaluate(
         write_index_png(&path, &gt.index, gt, spec.ndepth(), true)?;
     }
     let mut results = Vec::new();
-    let bar = rows_bar()?;
+    let bar = frames_bar()?;
     for row in rows {
-        start_row(&bar, &row, frames.len());
+        bar.reset();
+        bar.set_length(frames.len() as u64);
+        bar.set_prefix(row.name.clone());
         let mut scores = MethodScores::new(&row.name, *row.estimator.spec());
         let start = Instant::now();
         for (k, &f) in frames.iter().enumerate() {

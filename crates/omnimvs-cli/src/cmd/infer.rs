@@ -185,6 +185,30 @@ impl std::fmt::Display for InputSize {
     }
 }
 
+/// `--input-size` as a `--speed` preset chooses it for a model trained at `model_size`
+/// (`asked` without a preset).
+pub fn speed_input_size(
+    speed: Option<Speed>,
+    asked: Option<InputSize>,
+    model_size: [usize; 2],
+) -> Option<InputSize> {
+    match speed {
+        Some(speed) => {
+            let [height, width] = speed.net_input_size(model_size);
+            Some(InputSize::Fixed(Size { height, width }))
+        }
+        None => asked,
+    }
+}
+
+/// `--pick` as a `--speed` preset chooses it (`asked` without a preset, or with `accurate`).
+pub fn speed_pick(speed: Option<Speed>, asked: &PickChoice) -> PickChoice {
+    match speed {
+        Some(speed) if !speed.net_picks() => PickChoice::Off,
+        _ => asked.clone(),
+    }
+}
+
 /// The cameras' mean angular resolution (pixels per radian out to
 /// [`omnimvs_camera::RESOLUTION_ANGLE_DEG`] from the axis); `None` when a camera does not see
 /// that far.
@@ -362,24 +386,12 @@ pub fn run(args: &Args, datasets: &crate::dataset::DatasetOpener) -> Result<()> 
     let ds = datasets.open(&args.dataset)?;
     let mut net = args.weights.load_family(args.preset.name(), &device)?;
     let model_size = [net.config().input_height, net.config().input_width];
-    let asked_size = match args.speed {
-        Some(speed) => {
-            let [h, w] = speed.net_input_size(model_size);
-            Some(InputSize::Fixed(Size {
-                height: h,
-                width: w,
-            }))
-        }
-        None => args.input_size,
-    };
+    let asked_size = speed_input_size(args.speed, args.input_size, model_size);
     if let Some(size) = input_size(asked_size, &args.weights, model_size, &ds)? {
         net.set_input_size(size)
             .with_context(|| format!("--input-size {}x{}", size[0], size[1]))?;
     }
-    let pick = match args.speed {
-        Some(speed) if !speed.net_picks() => PickChoice::Off,
-        _ => args.pick.clone(),
-    };
+    let pick = speed_pick(args.speed, &args.pick);
     let (inference, status) = NetEstimator::new(
         net,
         &ds,
